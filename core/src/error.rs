@@ -1,0 +1,67 @@
+//! The one error type of the core.
+
+use core::fmt;
+
+/// Everything that can go wrong in a core stage. Each variant carries enough
+/// context for a host to print a useful message without a debugger.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Error {
+    /// The caller's arena or output buffer is too small.
+    CapacityExceeded {
+        /// Bytes (or elements, for output buffers) the operation needs.
+        needed: usize,
+        /// Bytes (or elements) that were provided.
+        available: usize,
+    },
+    /// A parameter is outside its documented domain.
+    InvalidArgument(&'static str),
+    /// An input value is NaN or infinite.
+    NonFinite {
+        /// Which input holds the value.
+        what: &'static str,
+        /// Element index within that input.
+        index: usize,
+    },
+    /// An index refers past the end of the array it indexes.
+    OutOfRange {
+        /// Which input holds the bad index.
+        what: &'static str,
+        /// Element index within that input.
+        index: usize,
+        /// The offending value.
+        value: usize,
+        /// The exclusive upper bound it had to respect.
+        bound: usize,
+    },
+    /// A strided view does not fit its buffer or has a stride below the element size.
+    BadStride {
+        /// Which input is malformed.
+        what: &'static str,
+    },
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Error::CapacityExceeded { needed, available } => {
+                write!(f, "capacity exceeded: {needed} needed, {available} available")
+            }
+            Error::InvalidArgument(why) => write!(f, "invalid argument: {why}"),
+            Error::NonFinite { what, index } => {
+                write!(f, "non-finite value in {what} at element {index}")
+            }
+            Error::OutOfRange {
+                what,
+                index,
+                value,
+                bound,
+            } => write!(
+                f,
+                "{what}[{index}] = {value} is out of range (must be below {bound})"
+            ),
+            Error::BadStride { what } => {
+                write!(f, "{what}: stride smaller than the element or buffer too short")
+            }
+        }
+    }
+}

@@ -1,0 +1,85 @@
+//! A hashed 3D uniform grid over points, built incrementally in an arena.
+
+use glam::Vec3;
+
+const EMPTY: u32 = u32::MAX;
+
+/// Buckets of point indices keyed by integer cell, as singly linked lists
+/// threaded through a `next` array (one slot per point).
+///
+/// Collisions between cells only add candidates, never lose them, so a query
+/// visits every point inserted into the cells it asks for.
+pub struct HashGrid<'a> {
+    heads: &'a mut [u32],
+    next: &'a mut [u32],
+    inv_cell: f32,
+}
+
+impl<'a> HashGrid<'a> {
+    /// Bucket count to allocate for `points` points (a power of two).
+    pub fn buckets_for(points: usize) -> usize {
+        points.max(16).next_power_of_two()
+    }
+
+    /// A grid with cells of side `cell`, over caller-provided storage:
+    /// `heads.len()` must be a power of two, `next` one slot per point index.
+    pub fn new(heads: &'a mut [u32], next: &'a mut [u32], cell: f32) -> Self {
+        debug_assert!(heads.len().is_power_of_two());
+        heads.fill(EMPTY);
+        HashGrid {
+            heads,
+            next,
+            inv_cell: 1.0 / cell,
+        }
+    }
+
+    /// Empties the grid and changes its cell size.
+    pub fn reset(&mut self, cell: f32) {
+        self.heads.fill(EMPTY);
+        self.inv_cell = 1.0 / cell;
+    }
+
+    /// Integer cell of `p`.
+    #[inline]
+    pub fn cell_of(&self, p: Vec3) -> [i32; 3] {
+        let q = p * self.inv_cell;
+        [libm::floorf(q.x) as i32, libm::floorf(q.y) as i32, libm::floorf(q.z) as i32]
+    }
+
+    #[inline]
+    fn bucket(&self, c: [i32; 3]) -> usize {
+        let h = (c[0] as u32).wrapping_mul(0x8DA6_B343)
+            ^ (c[1] as u32).wrapping_mul(0xD816_3841)
+            ^ (c[2] as u32).wrapping_mul(0xCB1A_B31F);
+        (h ^ (h >> 15)) as usize & (self.heads.len() - 1)
+    }
+
+    /// Inserts point `index` at `p`.
+    #[inline]
+    pub fn insert(&mut self, index: u32, p: Vec3) {
+        let b = self.bucket(self.cell_of(p));
+        self.next[index as usize] = self.heads[b];
+        self.heads[b] = index;
+    }
+
+    /// Calls `f` for every point inserted in the cells within `reach` cells of
+    /// the cell of `p`, stopping early when `f` returns true; returns whether it did.
+    #[inline]
+    pub fn any_near(&self, p: Vec3, reach: i32, mut f: impl FnMut(u32) -> bool) -> bool {
+        let c = self.cell_of(p);
+        for dz in -reach..=reach {
+            for dy in -reach..=reach {
+                for dx in -reach..=reach {
+                    let mut i = self.heads[self.bucket([c[0] + dx, c[1] + dy, c[2] + dz])];
+                    while i != EMPTY {
+                        if f(i) {
+                            return true;
+                        }
+                        i = self.next[i as usize];
+                    }
+                }
+            }
+        }
+        false
+    }
+}

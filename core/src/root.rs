@@ -1,0 +1,25 @@
+//! The hair root record: where a strand grows, and who it is.
+
+use bytemuck::{Pod, Zeroable};
+
+/// One hair root on the mesh: a point in barycentric form plus its identity.
+///
+/// The position is `(1 - u - v) p0 + u p1 + v p2` on triangle `face`, so it
+/// follows the mesh through any deformation that keeps the topology.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Root {
+    /// Triangle index.
+    pub face: u32,
+    /// Barycentric weight of the triangle's second vertex.
+    pub u: f32,
+    /// Barycentric weight of the triangle's third vertex.
+    pub v: f32,
+    /// Permanent strand identity: seeds every per-strand random number.
+    pub id: u32,
+    /// LOD rank, a permutation of `0..n`: the roots with `rank < k` are an
+    /// evenly spread subset of `k` roots, for any `k`.
+    pub rank: u32,
+}
+
+const _: () = assert!(core::mem::size_of::<Root>() == 20);

@@ -1,0 +1,765 @@
+//! Poisson stamping of hair roots (paper section 2.3), with the edge
+//! violations removed and a nested LOD order.
+//!
+//! Every triangle is laid flat, scaled by its density, rotated and translated
+//! at random (keyed by its index) inside a periodic Poisson tile, and takes the
+//! tile points that fall inside it. Then:
+//! 1. **Edge pass.** Points of different triangles closer than the disk radius
+//!    (in 3D) are resolved by dropping the later one, in face order.
+//! 2. **Count.** The radius is derived so the *expected* number of stamped
+//!    points equals the target: for a uniform random placement in a periodic
+//!    tile of density `rho` points per `r^2`, a triangle of flattened area `A`
+//!    scaled by `s` receives `rho * A * s^2 / r^2` points on average, hence
+//!    `r = sqrt(rho * sum(A_i s_i^2) / N)`. The edge pass removes a
+//!    mesh-dependent share, so the radius is then corrected by the measured
+//!    count (`r *= sqrt(kept / N)`) until the count is within
+//!    [`COUNT_TOLERANCE`] of the target. (The paper's
+//!    `0.35 / (sqrt(N) * A_max_normalized)` is not dimensionally a length.)
+//! 3. **LOD.** Each tile point carries a nested level; the levels are
+//!    re-checked in 3D across triangles, coarse to fine, demoting points that
+//!    conflict, and the rank sorts by (level, hash of id).
+//!
+//! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
+//! spread it over threads; the result is bitwise identical for any split.
+
+use crate::arena::{Arena, ArenaLayout};
+use crate::grid::HashGrid;
+use crate::rng::{self, Purpose};
+use crate::tile::{Tile, LOD_LEVELS, TILE_SIDE};
+use crate::{Error, Mesh, Root, ScalarMap};
+use bytemuck::{Pod, Zeroable};
+use core::ops::Range;
+use glam::{Vec2, Vec3};
+
+/// Relative count error at which the radius correction stops.
+pub const COUNT_TOLERANCE: f32 = 0.01;
+/// Radius corrections tried before accepting the closest count.
+const MAX_PASSES: u32 = 6;
+/// Lowest radius, relative to the first estimate, a correction may reach
+/// (bounds the candidate memory).
+const MIN_RADIUS_FACTOR: f32 = 0.7;
+
+/// Stamping parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct StampParams<'a> {
+    /// Number of roots wanted on the whole mesh.
+    pub target_count: u32,
+    /// Seed of every random choice; same seed, same roots.
+    pub seed: u64,
+    /// Grayscale density in `[0, 1]`, sampled at each triangle's centroid.
+    pub density: ScalarMap<'a>,
+    /// Triangle scale for black (density 0); white is 1, gray interpolates
+    /// linearly. The paper's "black = half size" is 0.5.
+    pub black_scale: f32,
+    /// Triangles whose density is below this value get no roots (bald
+    /// regions such as faces and palms). 0 disables it.
+    pub bald_below: f32,
+}
+
+impl Default for StampParams<'_> {
+    fn default() -> Self {
+        StampParams {
+            target_count: 0,
+            seed: 0,
+            density: ScalarMap::Constant(1.0),
+            black_scale: 0.5,
+            bald_below: 1.0 / 512.0,
+        }
+    }
+}
+
+/// What stamping did, for logs and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StampReport {
+    /// Final disk radius (the minimum 3D spacing in white regions).
+    pub radius: f32,
+    /// Points taken from the stamp in the last pass.
+    pub candidates: u32,
+    /// Points the edge pass removed in the last pass.
+    pub pruned: u32,
+    /// Degenerate triangles skipped.
+    pub degenerate_triangles: u32,
+    /// Stamping passes run (radius corrections + 1).
+    pub passes: u32,
+}
+
+/// A stamped point before the edge pass: where it is and which tile level it had.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Candidate {
+    /// World position at rest.
+    pub position: [f32; 3],
+    /// Triangle index.
+    pub face: u32,
+    /// Barycentric coordinates on the triangle.
+    pub uv: [f32; 2],
+    /// LOD level inherited from the tile (0 = coarsest).
+    pub level: u32,
+}
+
+/// Per-face data the stages share.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+struct Face {
+    normal: [f32; 3],
+    /// 0 for a skipped (degenerate or bald) face.
+    scale: f32,
+}
+
+/// The stamping state for one mesh and parameter set: the tile, per-face
+/// scales and the current radius.
+pub struct Stamper<'m, 'a> {
+    mesh: Mesh<'m>,
+    seed: u64,
+    target: u32,
+    tile: Tile<'a>,
+    faces: &'a [Face],
+    scaled_area: f64,
+    first_radius: f32,
+    radius: f32,
+    passes: u32,
+    degenerate: u32,
+}
+
+fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
+    if !(params.black_scale > 0.0 && params.black_scale <= 1.0) {
+        return Err(Error::InvalidArgument("black_scale must be in (0, 1]"));
+    }
+    if !params.bald_below.is_finite() {
+        return Err(Error::NonFinite { what: "bald_below", index: 0 });
+    }
+    let report = mesh.validate()?;
+    params.density.validate(mesh, "density")?;
+    Ok(report.degenerate_triangles as u32)
+}
+
+/// Scale of a face from its density (0 = no roots).
+fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
+    if mesh.is_degenerate(face) {
+        return 0.0;
+    }
+    let d = params.density.sample(mesh, face, 1.0 / 3.0, 1.0 / 3.0);
+    if d < params.bald_below || d <= 0.0 && params.black_scale <= 0.0 {
+        return 0.0;
+    }
+    params.black_scale + (1.0 - params.black_scale) * d.clamp(0.0, 1.0)
+}
+
+/// Upper bound on the points a face can take at radius `r` (hexagonal
+/// packing of the face dilated by r/2).
+fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize {
+    if scale == 0.0 {
+        return 0;
+    }
+    let [a, b, c] = mesh.corners(face);
+    let k = scale / r;
+    let area = mesh.area(face) * k * k;
+    let perimeter = ((b - a).length() + (c - b).length() + (a - c).length()) * k;
+    let dilated = area + 0.5 * perimeter + core::f32::consts::FRAC_PI_4;
+    (dilated * 1.154_700_6) as usize + 2
+}
+
+/// Upper bound on the candidates and output roots of [`stamp`].
+pub fn max_roots(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
+    validate(mesh, params)?;
+    let area = scaled_area(mesh, params);
+    let Some(r) = first_radius(area, params.target_count, tile_density_lower_bound()) else {
+        return Ok(0);
+    };
+    let r_min = r * MIN_RADIUS_FACTOR;
+    Ok((0..mesh.triangle_count())
+        .map(|f| face_bound(mesh, f, face_scale(mesh, params, f), r_min))
+        .sum())
+}
+
+/// The tile's density is not known before it is built, only bounded;
+/// sizing with the bound keeps `max_roots` cheap and still an upper bound.
+fn tile_density_lower_bound() -> f32 {
+    0.5
+}
+
+fn scaled_area(mesh: &Mesh, params: &StampParams) -> f64 {
+    (0..mesh.triangle_count())
+        .map(|f| {
+            let s = face_scale(mesh, params, f) as f64;
+            mesh.area(f) as f64 * s * s
+        })
+        .sum()
+}
+
+fn first_radius(scaled_area: f64, target: u32, density: f32) -> Option<f32> {
+    if target == 0 || !(scaled_area > 0.0) {
+        return None;
+    }
+    Some(libm::sqrt(density as f64 * scaled_area / target as f64) as f32)
+}
+
+/// Arena bytes [`stamp`] needs for `mesh` and `params`.
+pub fn required_bytes(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
+    let bound = max_roots(mesh, params)?;
+    let mut layout = ArenaLayout::new();
+    Stamper::layout(&mut layout, mesh.triangle_count());
+    select_layout(&mut layout, bound);
+    layout.add::<Candidate>(bound);
+    Ok(layout.bytes())
+}
+
+fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
+    layout
+        .add::<u32>(HashGrid::buckets_for(candidates))
+        .add::<u32>(candidates)
+        .add::<u8>(candidates)
+        .add::<u64>(candidates);
+}
+
+/// Working memory of the edge pass and the LOD pass, sized for a candidate
+/// bound once and reused by every pass.
+pub struct Scratch<'a> {
+    heads: &'a mut [u32],
+    next: &'a mut [u32],
+    level: &'a mut [u8],
+    keys: &'a mut [u64],
+}
+
+impl<'a> Scratch<'a> {
+    /// Takes scratch for up to `candidates` candidates from `arena`.
+    pub fn new(arena: &mut Arena<'a>, candidates: usize) -> Result<Self, Error> {
+        Ok(Scratch {
+            heads: arena.alloc::<u32>(HashGrid::buckets_for(candidates))?,
+            next: arena.alloc::<u32>(candidates)?,
+            level: arena.alloc::<u8>(candidates)?,
+            keys: arena.alloc::<u64>(candidates)?,
+        })
+    }
+
+    fn check(&self, n: usize) -> Result<(), Error> {
+        if n > self.next.len() {
+            return Err(Error::CapacityExceeded {
+                needed: n,
+                available: self.next.len(),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl<'m, 'a> Stamper<'m, 'a> {
+    /// Adds the bytes [`Stamper::new`] takes from the arena.
+    pub fn layout(layout: &mut ArenaLayout, faces: usize) {
+        Tile::layout(layout);
+        layout.add::<Face>(faces);
+    }
+
+    /// Validates the inputs, builds the tile and the per-face data, and picks
+    /// the first radius. Returns `Ok(None)` when there is nothing to stamp
+    /// (target 0, or every face bald or degenerate).
+    pub fn new(mesh: Mesh<'m>, params: &StampParams, arena: &mut Arena<'a>) -> Result<Option<Self>, Error> {
+        let degenerate = validate(&mesh, params)?;
+        let tile = Tile::build(params.seed, arena)?;
+        let faces = arena.alloc::<Face>(mesh.triangle_count())?;
+        let mut area = 0.0f64;
+        for (f, face) in faces.iter_mut().enumerate() {
+            let scale = face_scale(&mesh, params, f);
+            *face = Face {
+                normal: mesh.face_normal(f).into(),
+                scale,
+            };
+            area += mesh.area(f) as f64 * (scale as f64) * (scale as f64);
+        }
+        let Some(radius) = first_radius(area, params.target_count, tile.density()) else {
+            return Ok(None);
+        };
+        Ok(Some(Stamper {
+            mesh,
+            seed: params.seed,
+            target: params.target_count,
+            tile,
+            faces,
+            scaled_area: area,
+            first_radius: radius,
+            radius,
+            passes: 0,
+            degenerate,
+        }))
+    }
+
+    /// Current disk radius.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
+    /// Sum of triangle areas weighted by squared density scale.
+    pub fn scaled_area(&self) -> f64 {
+        self.scaled_area
+    }
+
+    /// Upper bound on the candidates [`stamp_faces`](Self::stamp_faces) writes
+    /// for `faces`, valid for every radius the correction can reach.
+    pub fn candidate_bound(&self, faces: Range<usize>) -> usize {
+        let r_min = self.first_radius * MIN_RADIUS_FACTOR;
+        faces.map(|f| face_bound(&self.mesh, f, self.faces[f].scale, r_min)).sum()
+    }
+
+    /// Stamps the triangles in `faces` at the current radius into `out`, in
+    /// face order; returns how many were written. Pure: safe to run disjoint
+    /// ranges on different threads.
+    pub fn stamp_faces(&self, faces: Range<usize>, out: &mut [Candidate]) -> Result<usize, Error> {
+        let mut n = 0;
+        for f in faces {
+            let scale = self.faces[f].scale;
+            if scale == 0.0 {
+                continue;
+            }
+            n = self.stamp_face(f, scale, out, n)?;
+        }
+        Ok(n)
+    }
+
+    fn stamp_face(&self, f: usize, scale: f32, out: &mut [Candidate], mut n: usize) -> Result<usize, Error> {
+        let [a, b, c] = self.mesh.corners(f);
+        let (e1, e2) = (b - a, c - a);
+        let len1 = e1.length();
+        let x = e1 / len1;
+        let y = x.cross(e2).cross(x).normalize();
+        let k = scale / self.radius;
+        let angle = rng::unit(self.seed, f as u64, Purpose::StampRotation, 0) * core::f32::consts::TAU;
+        let rot = Vec2::new(libm::cosf(angle), libm::sinf(angle));
+        let offset = Vec2::new(
+            rng::unit(self.seed, f as u64, Purpose::StampOffsetX, 0),
+            rng::unit(self.seed, f as u64, Purpose::StampOffsetY, 0),
+        ) * TILE_SIDE as f32;
+        let eb = rot.rotate(Vec2::new(len1 * k, 0.0));
+        let ec = rot.rotate(Vec2::new(e2.dot(x) * k, e2.dot(y) * k));
+        let pa = offset;
+        let inv_det = 1.0 / eb.perp_dot(ec);
+        let lo = pa.min(pa + eb).min(pa + ec);
+        let hi = pa.max(pa + eb).max(pa + ec);
+        let side = TILE_SIDE as i32;
+        for cy in libm::floorf(lo.y) as i32..=libm::floorf(hi.y) as i32 {
+            let wy = cy.rem_euclid(side);
+            let shift_y = (cy - wy) as f32;
+            for cx in libm::floorf(lo.x) as i32..=libm::floorf(hi.x) as i32 {
+                let wx = cx.rem_euclid(side);
+                let shift = Vec2::new((cx - wx) as f32, shift_y);
+                for (p, level) in self.tile.cell(wx as usize, wy as usize) {
+                    let d = Vec2::from(p) + shift - pa;
+                    let u = d.perp_dot(ec) * inv_det;
+                    let v = eb.perp_dot(d) * inv_det;
+                    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
+                        let available = out.len();
+                        let slot = out.get_mut(n).ok_or(Error::CapacityExceeded {
+                            needed: n + 1,
+                            available,
+                        })?;
+                        *slot = Candidate {
+                            position: (a + e1 * u + e2 * v).into(),
+                            face: f as u32,
+                            uv: [u, v],
+                            level: level as u32,
+                        };
+                        n += 1;
+                    }
+                }
+            }
+        }
+        Ok(n)
+    }
+
+    /// Radius within which candidates `i` and `j` must not both survive: the
+    /// smaller of their local spacings.
+    #[inline]
+    fn pair_radius(&self, i: &Candidate, j: &Candidate) -> f32 {
+        let si = self.faces[i.face as usize].scale;
+        let sj = self.faces[j.face as usize].scale;
+        self.radius / si.max(sj)
+    }
+
+    /// Whether two candidates of different faces violate the spacing `r`.
+    /// Faces whose normals oppose (the two sides of an ear) never conflict.
+    #[inline]
+    fn conflict(&self, i: &Candidate, j: &Candidate, r: f32) -> bool {
+        if i.face == j.face {
+            return false;
+        }
+        let ni = Vec3::from(self.faces[i.face as usize].normal);
+        let nj = Vec3::from(self.faces[j.face as usize].normal);
+        ni.dot(nj) > 0.0 && Vec3::from(i.position).distance_squared(Vec3::from(j.position)) < r * r
+    }
+
+    /// Reach in grid cells of side `cell` needed for candidate `c`'s local spacing.
+    #[inline]
+    fn reach(&self, c: &Candidate, cell: f32) -> i32 {
+        let local = self.radius / self.faces[c.face as usize].scale;
+        libm::ceilf(local / cell) as i32
+    }
+
+    /// The edge pass: keeps, in order, every candidate that is not closer
+    /// than the disk radius to an earlier kept one, compacting them to the
+    /// front of `cands`. Returns the number kept.
+    pub fn prune(&self, cands: &mut [Candidate], scratch: &mut Scratch) -> Result<usize, Error> {
+        scratch.check(cands.len())?;
+        let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
+        let mut kept = 0usize;
+        for j in 0..cands.len() {
+            let c = cands[j];
+            let p = Vec3::from(c.position);
+            let clash = grid.any_near(p, self.reach(&c, self.radius), |i| {
+                let o = &cands[i as usize];
+                self.conflict(o, &c, self.pair_radius(o, &c))
+            });
+            if !clash {
+                cands[kept] = c;
+                grid.insert(kept as u32, p);
+                kept += 1;
+            }
+        }
+        Ok(kept)
+    }
+
+    /// Feeds back the count of the last pass. Returns true when it is close
+    /// enough to the target; otherwise adjusts the radius for another pass.
+    pub fn converged(&mut self, kept: usize) -> bool {
+        self.passes += 1;
+        let target = self.target as f32;
+        let err = (kept as f32 - target) / target;
+        if libm::fabsf(err) <= COUNT_TOLERANCE || self.passes >= MAX_PASSES || kept == 0 {
+            return true;
+        }
+        let corrected = self.radius * libm::sqrtf(kept as f32 / target);
+        let clamped = corrected.max(self.first_radius * MIN_RADIUS_FACTOR);
+        if clamped == self.radius {
+            return true;
+        }
+        self.radius = clamped;
+        false
+    }
+
+    /// Assigns LOD levels across triangles and writes the roots, in
+    /// candidate order, with ids `0..n` and ranks.
+    pub fn finish(&self, cands: &[Candidate], scratch: &mut Scratch, out: &mut [Root]) -> Result<(), Error> {
+        let n = cands.len();
+        if out.len() < n {
+            return Err(Error::CapacityExceeded { needed: n, available: out.len() });
+        }
+        scratch.check(n)?;
+        let level = &mut scratch.level[..n];
+        let keys = &mut scratch.keys[..n];
+        let finest = (LOD_LEVELS - 1) as u8;
+        level.fill(u8::MAX);
+        let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
+        for k in 0..finest {
+            let spacing = libm::powf(2.0, 0.5 * (finest - k) as f32);
+            let cell = self.radius * spacing;
+            grid.reset(cell);
+            for (i, c) in cands.iter().enumerate() {
+                if level[i] < k {
+                    grid.insert(i as u32, Vec3::from(c.position));
+                }
+            }
+            for (j, c) in cands.iter().enumerate() {
+                if level[j] != u8::MAX || c.level > k as u32 {
+                    continue;
+                }
+                let p = Vec3::from(c.position);
+                let clash = grid.any_near(p, self.reach(c, cell), |i| {
+                    let o = &cands[i as usize];
+                    self.conflict(o, c, self.pair_radius(o, c) * spacing)
+                });
+                if !clash {
+                    level[j] = k;
+                    grid.insert(j as u32, p);
+                }
+            }
+        }
+        for (j, key) in keys.iter_mut().enumerate() {
+            let l = level[j].min(finest) as u64;
+            let h = rng::hash(self.seed, j as u64, Purpose::LodOrder, 0) >> 40;
+            *key = (l << 56) | (h << 32) | j as u64;
+        }
+        keys.sort_unstable();
+        for (rank, key) in keys.iter().enumerate() {
+            let j = (*key & 0xFFFF_FFFF) as usize;
+            let c = &cands[j];
+            out[j] = Root {
+                face: c.face,
+                u: c.uv[0],
+                v: c.uv[1],
+                id: j as u32,
+                rank: rank as u32,
+            };
+        }
+        Ok(())
+    }
+
+    fn report(&self, candidates: usize, kept: usize) -> StampReport {
+        StampReport {
+            radius: self.radius,
+            candidates: candidates as u32,
+            pruned: (candidates - kept) as u32,
+            degenerate_triangles: self.degenerate,
+            passes: self.passes,
+        }
+    }
+}
+
+/// Stamps roots on `mesh` into `out` (capacity from [`max_roots`]) using an
+/// arena of [`required_bytes`]. Returns the number of roots written and a report.
+///
+/// Nothing is written to `out` unless the call succeeds.
+pub fn stamp(mesh: Mesh, params: &StampParams, arena: &mut Arena, out: &mut [Root]) -> Result<(usize, StampReport), Error> {
+    let need = required_bytes(&mesh, params)?;
+    if arena.remaining() < need {
+        return Err(Error::CapacityExceeded {
+            needed: need,
+            available: arena.remaining(),
+        });
+    }
+    let degenerate = validate(&mesh, params)?;
+    let Some(mut stamper) = Stamper::new(mesh, params, arena)? else {
+        let report = StampReport {
+            degenerate_triangles: degenerate,
+            ..StampReport::default()
+        };
+        return Ok((0, report));
+    };
+    let faces = 0..mesh.triangle_count();
+    let bound = stamper.candidate_bound(faces.clone());
+    let mut scratch = Scratch::new(arena, bound)?;
+    let cands = arena.alloc::<Candidate>(bound)?;
+    loop {
+        let n = stamper.stamp_faces(faces.clone(), cands)?;
+        let kept = stamper.prune(&mut cands[..n], &mut scratch)?;
+        if stamper.converged(kept) {
+            if out.len() < kept {
+                return Err(Error::CapacityExceeded { needed: kept, available: out.len() });
+            }
+            stamper.finish(&cands[..kept], &mut scratch, &mut out[..kept])?;
+            return Ok((kept, stamper.report(n, kept)));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Strided;
+
+    pub(crate) struct TestMesh {
+        pub p: Vec<[f32; 3]>,
+        pub t: Vec<[u32; 3]>,
+        pub uv: Vec<[f32; 2]>,
+    }
+
+    impl TestMesh {
+        pub fn mesh(&self) -> Mesh<'_> {
+            let mut m = Mesh::new(Strided::from_slice(&self.p), Strided::from_slice(&self.t));
+            m.uvs = Some(Strided::from_slice(&self.uv));
+            m
+        }
+    }
+
+    /// A grid over [0,1]^2 (z = 0) whose column and row widths grow
+    /// geometrically by `ratio` overall, so triangle areas vary by ratio^2.
+    pub(crate) fn graded_plane(n: usize, ratio: f32) -> TestMesh {
+        let g = libm::powf(ratio, 1.0 / (n as f32 - 1.0));
+        let mut xs = vec![0.0f32];
+        let mut w = 1.0f32;
+        for _ in 0..n {
+            let last = *xs.last().unwrap();
+            xs.push(last + w);
+            w *= g;
+        }
+        let total = *xs.last().unwrap();
+        let xs: Vec<f32> = xs.iter().map(|x| x / total).collect();
+        let mut p = vec![];
+        let mut uv = vec![];
+        for &y in &xs {
+            for &x in &xs {
+                p.push([x, y, 0.0]);
+                uv.push([x, y]);
+            }
+        }
+        let mut t = vec![];
+        let s = (n + 1) as u32;
+        for j in 0..n as u32 {
+            for i in 0..n as u32 {
+                let a = j * s + i;
+                t.push([a, a + 1, a + s + 1]);
+                t.push([a, a + s + 1, a + s]);
+            }
+        }
+        TestMesh { p, t, uv }
+    }
+
+    /// A UV sphere with single-vertex poles.
+    pub(crate) fn sphere(rows: usize, cols: usize) -> TestMesh {
+        let mut p = vec![[0.0, 1.0, 0.0]];
+        let mut uv = vec![[0.5, 0.0]];
+        for r in 1..rows {
+            let th = core::f32::consts::PI * r as f32 / rows as f32;
+            for c in 0..cols {
+                let ph = core::f32::consts::TAU * c as f32 / cols as f32;
+                p.push([libm::sinf(th) * libm::cosf(ph), libm::cosf(th), libm::sinf(th) * libm::sinf(ph)]);
+                uv.push([c as f32 / cols as f32, r as f32 / rows as f32]);
+            }
+        }
+        p.push([0.0, -1.0, 0.0]);
+        uv.push([0.5, 1.0]);
+        let last = (p.len() - 1) as u32;
+        let at = |r: usize, c: usize| (1 + (r - 1) * cols + c % cols) as u32;
+        let mut t = vec![];
+        for c in 0..cols {
+            t.push([0, at(1, c + 1), at(1, c)]);
+            t.push([last, at(rows - 1, c), at(rows - 1, c + 1)]);
+        }
+        for r in 1..rows - 1 {
+            for c in 0..cols {
+                t.push([at(r, c), at(r, c + 1), at(r + 1, c + 1)]);
+                t.push([at(r, c), at(r + 1, c + 1), at(r + 1, c)]);
+            }
+        }
+        TestMesh { p, t, uv }
+    }
+
+    pub(crate) fn run(mesh: Mesh, params: &StampParams) -> (Vec<Root>, StampReport) {
+        let mut buf = vec![0u8; required_bytes(&mesh, params).unwrap()];
+        let mut out = vec![Root::default(); max_roots(&mesh, params).unwrap()];
+        let mut arena = Arena::new(&mut buf);
+        let (n, report) = stamp(mesh, params, &mut arena, &mut out).unwrap();
+        out.truncate(n);
+        (out, report)
+    }
+
+    /// Minimum 3D distance between same-side roots (normals not opposed).
+    fn min_spacing(mesh: &Mesh, roots: &[Root]) -> f32 {
+        let pts: Vec<(Vec3, Vec3)> = roots
+            .iter()
+            .map(|r| (mesh.point(r.face as usize, r.u, r.v), mesh.face_normal(r.face as usize)))
+            .collect();
+        let mut best = f32::INFINITY;
+        for (i, a) in pts.iter().enumerate() {
+            for b in &pts[i + 1..] {
+                if a.1.dot(b.1) > 0.0 {
+                    best = best.min(a.0.distance(b.0));
+                }
+            }
+        }
+        best
+    }
+
+    fn params(target: u32) -> StampParams<'static> {
+        StampParams {
+            target_count: target,
+            seed: 11,
+            ..StampParams::default()
+        }
+    }
+
+    #[test]
+    fn count_hits_target_on_uniform_and_graded_meshes() {
+        for (name, m) in [
+            ("sphere", sphere(24, 48)),
+            ("graded 1e4", graded_plane(40, 100.0)),
+            ("coarse plane", graded_plane(2, 1.0)),
+        ] {
+            for target in [500u32, 3000, 20000] {
+                let (roots, report) = run(m.mesh(), &params(target));
+                let err = (roots.len() as f32 - target as f32) / target as f32;
+                assert!(err.abs() <= 0.03, "{name} {target}: {} roots ({report:?})", roots.len());
+            }
+        }
+    }
+
+    #[test]
+    fn no_two_roots_closer_than_the_radius_and_lod_prefixes_spread() {
+        let m = sphere(16, 32);
+        let mesh = m.mesh();
+        let (roots, report) = run(mesh, &params(4000));
+        let min = min_spacing(&mesh, &roots);
+        assert!(min >= report.radius * 0.999, "min {min} < r {}", report.radius);
+        let n = roots.len();
+        for frac in [2usize, 4, 16] {
+            let prefix: Vec<Root> = roots.iter().copied().filter(|r| (r.rank as usize) < n / frac).collect();
+            let spacing = min_spacing(&mesh, &prefix);
+            // a Poisson set of n/frac roots has spacing ~ r * sqrt(frac)
+            let expect = report.radius * libm::sqrtf(frac as f32);
+            assert!(spacing >= 0.5 * expect, "1/{frac}: {spacing} vs {expect}");
+        }
+        let mut ranks: Vec<u32> = roots.iter().map(|r| r.rank).collect();
+        ranks.sort_unstable();
+        assert!(ranks.iter().enumerate().all(|(i, &r)| r == i as u32));
+        assert!(roots.iter().enumerate().all(|(i, r)| r.id == i as u32));
+    }
+
+    #[test]
+    fn identical_for_any_face_chunking() {
+        let m = graded_plane(30, 10.0);
+        let mesh = m.mesh();
+        let p = params(6000);
+        let (reference, _) = run(mesh, &p);
+        for chunks in [2usize, 7, 64] {
+            let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+            let mut arena = Arena::new(&mut buf);
+            let mut stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
+            let faces = mesh.triangle_count();
+            let bound = stamper.candidate_bound(0..faces);
+            let mut scratch = Scratch::new(&mut arena, bound).unwrap();
+            let mut cands = vec![Candidate::default(); bound];
+            let kept = loop {
+                let mut n = 0;
+                for c in 0..chunks {
+                    let range = c * faces / chunks..(c + 1) * faces / chunks;
+                    let mut part = vec![Candidate::default(); stamper.candidate_bound(range.clone())];
+                    let k = stamper.stamp_faces(range, &mut part).unwrap();
+                    cands[n..n + k].copy_from_slice(&part[..k]);
+                    n += k;
+                }
+                let kept = stamper.prune(&mut cands[..n], &mut scratch).unwrap();
+                if stamper.converged(kept) {
+                    break kept;
+                }
+            };
+            let mut out = vec![Root::default(); kept];
+            stamper.finish(&cands[..kept], &mut scratch, &mut out).unwrap();
+            assert_eq!(out, reference, "{chunks} chunks");
+        }
+    }
+
+    #[test]
+    fn density_map_scales_and_bald_regions_stay_bald() {
+        let m = graded_plane(20, 1.0);
+        let mesh = m.mesh();
+        // left half black, right half white
+        let values: Vec<f32> = m.p.iter().map(|p| if p[0] < 0.5 { 0.0 } else { 1.0 }).collect();
+        let mut p = params(4000);
+        p.density = ScalarMap::PerVertex(Strided::from_slice(&values));
+        let (roots, _) = run(mesh, &p);
+        assert!(roots.iter().all(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.44));
+        p.bald_below = 0.0;
+        let (roots, _) = run(mesh, &p);
+        let left = roots.iter().filter(|r| mesh.point(r.face as usize, r.u, r.v).x < 0.45).count();
+        let right = roots.iter().filter(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.55).count();
+        // black = half size: a quarter of the density
+        let ratio = left as f32 / right as f32;
+        assert!((ratio - 0.25).abs() < 0.05, "left/right = {ratio}");
+    }
+
+    #[test]
+    fn rejects_bad_input_before_writing() {
+        let m = sphere(8, 16);
+        let mut bad = m.p.clone();
+        bad[3][1] = f32::NAN;
+        let mesh = Mesh::new(Strided::from_slice(&bad), Strided::from_slice(&m.t));
+        assert!(matches!(required_bytes(&mesh, &params(100)), Err(Error::NonFinite { .. })));
+        let mesh = m.mesh();
+        let mut buf = vec![0u8; 100];
+        let mut out = vec![Root::default(); 10];
+        let mut arena = Arena::new(&mut buf);
+        let err = stamp(mesh, &params(100), &mut arena, &mut out).unwrap_err();
+        assert!(matches!(err, Error::CapacityExceeded { available: 100, .. }));
+        assert!(out.iter().all(|r| *r == Root::default()));
+        let mut p = params(100);
+        p.black_scale = 0.0;
+        assert!(matches!(required_bytes(&mesh, &p), Err(Error::InvalidArgument(_))));
+    }
+}
