@@ -1,1 +1,36 @@
+//! pelage C API: a thin layer that validates host buffers, calls
+//! `pelage-core`, and maps errors to [`PelageStatus`] codes.
+//!
+//! Every exported function runs inside [`ffi_boundary!`], so a panic becomes
+//! `PELAGE_STATUS_PANIC` instead of unwinding into the host.
+#![deny(missing_docs)]
 
+#[macro_use]
+mod status;
+mod buffers;
+mod map;
+mod mesh;
+mod roots;
+mod stamp;
+
+pub use map::{PelageMap, PelageMapKind};
+pub use mesh::PelageMeshDesc;
+pub use roots::{pelage_roots_evaluate, PelageRoot};
+pub use stamp::{pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageStampInfo, PelageStampParams};
+pub use status::{pelage_last_error, pelage_status_string, PelageStatus};
+
+/// Major version of the library this header belongs to.
+pub const PELAGE_VERSION_MAJOR: u32 = 0;
+/// Minor version.
+pub const PELAGE_VERSION_MINOR: u32 = 1;
+/// Patch version.
+pub const PELAGE_VERSION_PATCH: u32 = 0;
+
+/// The library's version as `major * 10000 + minor * 100 + patch`; compare it
+/// with the header's PELAGE_VERSION_* macros to detect a mismatched binary.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_version() -> u32 {
+    PELAGE_VERSION_MAJOR * 10000 + PELAGE_VERSION_MINOR * 100 + PELAGE_VERSION_PATCH
+}

@@ -25,7 +25,7 @@
 //! and `cols` longitude segments.  Longitude sampling is *non-uniform*: the
 //! columns are about 4x denser around the two sides (u = 0.25 and u = 0.75)
 //! where the ears and fingers are, so that the thin parts span several grid
-//! cells across (an ear is ~12 columns across at its base and ~5 at half
+//! cells across (an ear is ~9 columns across at its base and ~5 at half
 //! height in the default mesh; a finger ~10 columns and ~5 rows).
 //!
 //! The seam column is duplicated (u = 0 and u = 1) with bit-identical
@@ -47,7 +47,6 @@
 //!
 //! Triangles are wound counter-clockwise seen from outside (outward normals).
 
-use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
@@ -605,6 +604,7 @@ fn normalize(a: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::HashMap;
     use std::sync::OnceLock;
 
     fn mesh() -> &'static CreatureMesh {

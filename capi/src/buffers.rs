@@ -1,0 +1,151 @@
+//! Turning host pointers into checked Rust views.
+
+use crate::status::Failure;
+use crate::PelageStatus;
+use pelage_core::Strided;
+use std::mem::size_of;
+
+/// `*const T` to `&T`, or NULL_PARAMETER naming the argument.
+pub(crate) fn req<'a, T>(ptr: *const T, name: &str) -> Result<&'a T, Failure> {
+    // SAFETY: the C contract requires a non-NULL pointer to a live, initialised T
+    // that outlives the call; NULL is rejected here.
+    unsafe { ptr.as_ref() }.ok_or_else(|| Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")))
+}
+
+/// `*mut T` to `&mut T`, or NULL_PARAMETER naming the argument.
+pub(crate) fn req_mut<'a, T>(ptr: *mut T, name: &str) -> Result<&'a mut T, Failure> {
+    // SAFETY: as `req`, and the host grants exclusive access for the call.
+    unsafe { ptr.as_mut() }.ok_or_else(|| Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")))
+}
+
+fn check_align(ptr: usize, stride: usize, name: &str) -> Result<(), Failure> {
+    if ptr % 4 != 0 || stride % 4 != 0 {
+        return Err(Failure::new(
+            PelageStatus::Misaligned,
+            format!("{name}: pointer and stride must be multiples of 4"),
+        ));
+    }
+    Ok(())
+}
+
+fn byte_len<T>(stride: usize, count: usize, name: &str) -> Result<usize, Failure> {
+    if count == 0 {
+        return Ok(0);
+    }
+    if stride < size_of::<T>() {
+        return Err(Failure::new(
+            PelageStatus::InvalidArgument,
+            format!("{name}: stride {stride} is smaller than the element ({} bytes)", size_of::<T>()),
+        ));
+    }
+    stride
+        .checked_mul(count - 1)
+        .and_then(|b| b.checked_add(size_of::<T>()))
+        .filter(|&b| b <= isize::MAX as usize)
+        .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, format!("{name}: buffer size overflows")))
+}
+
+/// A strided input buffer of `count` elements. `(NULL, 0)` is a valid empty view.
+pub(crate) fn strided<'a, T: bytemuck::Pod>(
+    ptr: *const std::ffi::c_void,
+    stride: usize,
+    count: usize,
+    name: &'static str,
+) -> Result<Strided<'a, T>, Failure> {
+    if count == 0 {
+        return Ok(Strided::empty());
+    }
+    if ptr.is_null() {
+        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+    }
+    check_align(ptr as usize, stride, name)?;
+    let len = byte_len::<T>(stride, count, name)?;
+    // SAFETY: the host promises `count` elements `stride` bytes apart starting at
+    // `ptr`, alive and unmodified for the duration of the call.
+    let bytes = unsafe { std::slice::from_raw_parts(ptr.cast::<u8>(), len) };
+    Ok(Strided::new(bytes, stride, count, name)?)
+}
+
+/// Raw bytes of an input buffer. `(NULL, 0)` is valid.
+pub(crate) fn bytes<'a>(ptr: *const std::ffi::c_void, len: usize, name: &str) -> Result<&'a [u8], Failure> {
+    if len == 0 {
+        return Ok(&[]);
+    }
+    if ptr.is_null() {
+        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+    }
+    // SAFETY: the host promises `len` readable bytes at `ptr` for the call.
+    Ok(unsafe { std::slice::from_raw_parts(ptr.cast::<u8>(), len) })
+}
+
+/// A writable byte buffer (an arena). `(NULL, 0)` is valid.
+pub(crate) fn bytes_mut<'a>(ptr: *mut std::ffi::c_void, len: usize, name: &str) -> Result<&'a mut [u8], Failure> {
+    if len == 0 {
+        return Ok(&mut []);
+    }
+    if ptr.is_null() {
+        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+    }
+    // SAFETY: the host grants exclusive access to `len` bytes at `ptr` for the call.
+    Ok(unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), len) })
+}
+
+/// A contiguous input array of Pod `T`. `(NULL, 0)` is valid.
+pub(crate) fn slice<'a, T: bytemuck::Pod>(ptr: *const T, count: usize, name: &str) -> Result<&'a [T], Failure> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    if ptr.is_null() {
+        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+    }
+    check_align(ptr as usize, 0, name)?;
+    if count.checked_mul(size_of::<T>()).is_none_or(|b| b > isize::MAX as usize) {
+        return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: size overflows")));
+    }
+    // SAFETY: non-NULL, aligned for T (4-byte Pod types), and the host promises
+    // `count` initialised elements for the duration of the call.
+    Ok(unsafe { std::slice::from_raw_parts(ptr, count) })
+}
+
+/// A writable array of Pod `T`. `(NULL, 0)` is valid.
+pub(crate) fn slice_mut<'a, T: bytemuck::Pod>(ptr: *mut T, count: usize, name: &str) -> Result<&'a mut [T], Failure> {
+    if count == 0 {
+        return Ok(&mut []);
+    }
+    if ptr.is_null() {
+        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+    }
+    check_align(ptr as usize, 0, name)?;
+    if count.checked_mul(size_of::<T>()).is_none_or(|b| b > isize::MAX as usize) {
+        return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: size overflows")));
+    }
+    // SAFETY: non-NULL, aligned, and the host grants exclusive access to `count`
+    // elements for the duration of the call.
+    Ok(unsafe { std::slice::from_raw_parts_mut(ptr, count) })
+}
+
+/// A strided float3 output buffer, checked but not yet written.
+pub(crate) struct Float3Out<'a> {
+    bytes: &'a mut [u8],
+    stride: usize,
+}
+
+impl<'a> Float3Out<'a> {
+    /// `count` float3 slots `stride` bytes apart; NULL gives `None` (output not wanted).
+    pub fn new(ptr: *mut std::ffi::c_void, stride: usize, count: usize, name: &str) -> Result<Option<Self>, Failure> {
+        if ptr.is_null() || count == 0 {
+            return Ok(None);
+        }
+        check_align(ptr as usize, stride, name)?;
+        let len = byte_len::<[f32; 3]>(stride, count, name)?;
+        // SAFETY: the host grants exclusive access to `count` float3 slots at
+        // `stride` bytes apart for the duration of the call.
+        let bytes = unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), len) };
+        Ok(Some(Float3Out { bytes, stride }))
+    }
+
+    pub fn set(&mut self, i: usize, v: [f32; 3]) {
+        let at = i * self.stride;
+        self.bytes[at..at + 12].copy_from_slice(bytemuck::bytes_of(&v));
+    }
+}

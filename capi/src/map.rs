@@ -1,0 +1,88 @@
+//! Grayscale maps (density and, later, groom parameters).
+
+use crate::buffers::{bytes, strided};
+use crate::status::Failure;
+use crate::PelageStatus;
+use pelage_core::map::{Texels, Texture};
+use pelage_core::ScalarMap;
+use std::ffi::c_void;
+
+/// How a [`PelageMap`] stores its values.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PelageMapKind {
+    /// `constant` everywhere; `data` is ignored.
+    Constant = 0,
+    /// 8-bit grayscale texture over UV (0..255 -> 0..1), `width` x `height`,
+    /// `stride` bytes per row; row 0 is v = 0. Needs mesh UVs.
+    TextureU8 = 1,
+    /// 32-bit float texture over UV, as `TextureU8` otherwise.
+    TextureF32 = 2,
+    /// One float per mesh vertex, `stride` bytes apart, interpolated over triangles.
+    PerVertex = 3,
+}
+
+/// A scalar value over the mesh surface: a constant, a texture, or per-vertex values.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageMap {
+    /// Storage kind.
+    pub kind: PelageMapKind,
+    /// The value for PELAGE_MAP_KIND_CONSTANT.
+    pub constant: f32,
+    /// Texels or per-vertex values; borrowed for the call.
+    pub data: *const c_void,
+    /// Texture width in texels.
+    pub width: usize,
+    /// Texture height in texels.
+    pub height: usize,
+    /// Bytes per texture row, or between per-vertex values.
+    pub stride: usize,
+}
+
+impl PelageMap {
+    /// A constant map.
+    pub(crate) fn constant(value: f32) -> Self {
+        PelageMap {
+            kind: PelageMapKind::Constant,
+            constant: value,
+            data: std::ptr::null(),
+            width: 0,
+            height: 0,
+            stride: 0,
+        }
+    }
+
+    fn texture<'a>(&self, texels: Texels<'a>) -> Texture<'a> {
+        Texture {
+            texels,
+            width: self.width,
+            height: self.height,
+            row_stride: self.stride,
+        }
+    }
+
+    /// Wraps the host's storage; `vertex_count` sizes per-vertex maps.
+    pub(crate) fn view(&self, vertex_count: usize, name: &'static str) -> Result<ScalarMap<'_>, Failure> {
+        let texels = |size: usize| -> Result<&[u8], Failure> {
+            if self.width == 0 || self.height == 0 {
+                return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: texture has zero size")));
+            }
+            let len = self
+                .stride
+                .checked_mul(self.height - 1)
+                .and_then(|b| b.checked_add(self.width.checked_mul(size)?))
+                .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, format!("{name}: size overflows")))?;
+            if self.stride < self.width * size {
+                return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: row stride too small")));
+            }
+            bytes(self.data, len, name)
+        };
+        Ok(match self.kind {
+            PelageMapKind::Constant => ScalarMap::Constant(self.constant),
+            PelageMapKind::TextureU8 => ScalarMap::Texture(self.texture(Texels::U8(texels(1)?))),
+            PelageMapKind::TextureF32 => ScalarMap::Texture(self.texture(Texels::F32(texels(4)?))),
+            PelageMapKind::PerVertex => ScalarMap::PerVertex(strided(self.data, self.stride, vertex_count, name)?),
+        })
+    }
+}

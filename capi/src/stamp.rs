@@ -1,0 +1,159 @@
+//! Poisson stamping of hair roots.
+
+use crate::buffers::{bytes_mut, req, slice_mut};
+use crate::status::Failure;
+use crate::{PelageMap, PelageMeshDesc, PelageRoot, PelageStatus};
+use pelage_core::{stamp, Arena, Root, StampParams};
+
+/// Stamping parameters; start from pelage_stamp_params_defaults().
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageStampParams {
+    /// Number of roots wanted on the whole mesh (the result is within 1-3%).
+    pub target_count: u32,
+    /// Seed of every random choice; same inputs and seed give the same bits.
+    pub seed: u64,
+    /// Grayscale density in [0, 1], sampled at each triangle's centroid.
+    pub density: PelageMap,
+    /// Triangle scale for black; white is 1. The paper's "black = half size" is 0.5.
+    pub black_scale: f32,
+    /// Triangles with density below this get no roots (bald regions); 0 disables it.
+    pub bald_below: f32,
+}
+
+/// What a stamping call did.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PelageStampInfo {
+    /// Disk radius: no two roots (on the same side of a surface) are closer.
+    pub radius: f32,
+    /// Points taken from the stamp in the final pass.
+    pub candidates: u32,
+    /// Points removed by the edge pass in the final pass.
+    pub pruned: u32,
+    /// Degenerate triangles skipped.
+    pub degenerate_triangles: u32,
+    /// Stamping passes (radius corrections + 1).
+    pub passes: u32,
+}
+
+/// Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
+/// seed 0, target_count 0.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_stamp_params_defaults() -> PelageStampParams {
+    let d = StampParams::default();
+    PelageStampParams {
+        target_count: d.target_count,
+        seed: d.seed,
+        density: PelageMap::constant(1.0),
+        black_scale: d.black_scale,
+        bald_below: d.bald_below,
+    }
+}
+
+fn core_params<'a>(mesh: &PelageMeshDesc, p: &'a PelageStampParams) -> Result<StampParams<'a>, Failure> {
+    Ok(StampParams {
+        target_count: p.target_count,
+        seed: p.seed,
+        density: p.density.view(mesh.vertex_count, "density map")?,
+        black_scale: p.black_scale,
+        bald_below: p.bald_below,
+    })
+}
+
+/// Sizes a stamping call: the arena bytes `pelage_stamp` needs and an upper
+/// bound on the roots it writes. Validates the mesh and parameters.
+///
+/// Thread safety: reentrant; the inputs must not change during the call.
+#[no_mangle]
+pub extern "C" fn pelage_stamp_query(
+    mesh: *const PelageMeshDesc,
+    params: *const PelageStampParams,
+    arena_bytes: *mut usize,
+    max_roots: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let desc = req(mesh, "mesh")?;
+        let params = req(params, "params")?;
+        let arena_bytes = req_mut_usize(arena_bytes, "arena_bytes")?;
+        let max_roots = req_mut_usize(max_roots, "max_roots")?;
+        let mesh = desc.view()?;
+        let p = core_params(desc, params)?;
+        let bytes = stamp::required_bytes(&mesh, &p)?;
+        let roots = stamp::max_roots(&mesh, &p)?;
+        *arena_bytes = bytes;
+        *max_roots = roots;
+        Ok(())
+    }
+}
+
+fn req_mut_usize<'a>(p: *mut usize, name: &str) -> Result<&'a mut usize, Failure> {
+    crate::buffers::req_mut(p, name)
+}
+
+/// Stamps Poisson-distributed roots on `mesh` (paper section 2.3, without its
+/// edge violations), in face order, each with a stable id (its index) and an
+/// LOD rank: the roots with rank < k are an evenly spread subset of k roots.
+///
+/// `arena`/`arena_bytes`: scratch memory of at least the size from
+/// `pelage_stamp_query` (any alignment). `roots`: capacity `roots_capacity`;
+/// the max_roots bound from the query always suffices. On success
+/// `*root_count` is the number written and `info` (optional, may be NULL) is
+/// filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
+/// of roots needed when the root buffer was the limit; nothing else is written.
+///
+/// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+#[no_mangle]
+pub extern "C" fn pelage_stamp(
+    mesh: *const PelageMeshDesc,
+    params: *const PelageStampParams,
+    arena: *mut std::ffi::c_void,
+    arena_bytes: usize,
+    roots: *mut PelageRoot,
+    roots_capacity: usize,
+    root_count: *mut usize,
+    info: *mut PelageStampInfo,
+) -> PelageStatus {
+    ffi_boundary! {
+        let desc = req(mesh, "mesh")?;
+        let params = req(params, "params")?;
+        let root_count = req_mut_usize(root_count, "root_count")?;
+        let mesh = desc.view()?;
+        let p = core_params(desc, params)?;
+        let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        let out = slice_mut(roots, roots_capacity, "roots")?;
+        let out: &mut [Root] = bytemuck::cast_slice_mut(out);
+        let mut arena = Arena::new(arena);
+        match stamp::stamp(mesh, &p, &mut arena, out) {
+            Ok((n, report)) => {
+                *root_count = n;
+                // SAFETY: `info` is NULL or points to a PelageStampInfo the host owns.
+                if let Some(info) = unsafe { info.as_mut() } {
+                    *info = PelageStampInfo {
+                        radius: report.radius,
+                        candidates: report.candidates,
+                        pruned: report.pruned,
+                        degenerate_triangles: report.degenerate_triangles,
+                        passes: report.passes,
+                    };
+                }
+                Ok(())
+            }
+            Err(e @ pelage_core::Error::CapacityExceeded { needed, available })
+                if available == roots_capacity && needed > roots_capacity =>
+            {
+                *root_count = needed;
+                Err(Failure::from(e))
+            }
+            Err(e) => {
+                let mut f = Failure::from(e);
+                if f.status == PelageStatus::CapacityExceeded {
+                    f.message = format!("arena too small: {}", f.message);
+                }
+                Err(f)
+            }
+        }
+    }
+}

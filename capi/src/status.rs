@@ -1,0 +1,147 @@
+//! Status codes, messages and the panic boundary.
+
+use pelage_core::Error;
+use std::cell::RefCell;
+use std::ffi::{c_char, CString};
+
+/// Result of every pelage call. Values are stable: a retired code is never reused.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PelageStatus {
+    /// Success; outputs were written.
+    Ok = 0,
+    /// A required pointer was NULL.
+    NullParameter = 1,
+    /// A parameter is outside its documented domain (including bad strides).
+    InvalidArgument = 2,
+    /// An input holds NaN or infinity.
+    NonFinite = 3,
+    /// An index in the input is out of range.
+    OutOfRange = 4,
+    /// The arena or an output buffer is too small; required sizes were reported.
+    CapacityExceeded = 5,
+    /// A pointer or stride is not 4-byte aligned.
+    Misaligned = 6,
+    /// Serialized data is truncated or corrupt.
+    CorruptData = 7,
+    /// Serialized data or a struct comes from an incompatible version.
+    VersionMismatch = 8,
+    /// A progress callback asked to stop.
+    Cancelled = 9,
+    /// An internal error (a bug in pelage); the call had no effect on outputs.
+    Panic = 10,
+}
+
+/// A static, human-readable description of a PelageStatus value (never NULL;
+/// "unknown status" for values this library does not define).
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_status_string(status: i32) -> *const c_char {
+    const ALL: [PelageStatus; 11] = [
+        PelageStatus::Ok,
+        PelageStatus::NullParameter,
+        PelageStatus::InvalidArgument,
+        PelageStatus::NonFinite,
+        PelageStatus::OutOfRange,
+        PelageStatus::CapacityExceeded,
+        PelageStatus::Misaligned,
+        PelageStatus::CorruptData,
+        PelageStatus::VersionMismatch,
+        PelageStatus::Cancelled,
+        PelageStatus::Panic,
+    ];
+    let Some(&status) = ALL.iter().find(|s| **s as i32 == status) else {
+        return b"unknown status\0".as_ptr().cast();
+    };
+    let s: &'static [u8] = match status {
+        PelageStatus::Ok => b"ok\0",
+        PelageStatus::NullParameter => b"a required pointer is NULL\0",
+        PelageStatus::InvalidArgument => b"invalid argument\0",
+        PelageStatus::NonFinite => b"input holds NaN or infinity\0",
+        PelageStatus::OutOfRange => b"index out of range\0",
+        PelageStatus::CapacityExceeded => b"arena or output buffer too small\0",
+        PelageStatus::Misaligned => b"pointer or stride not 4-byte aligned\0",
+        PelageStatus::CorruptData => b"data truncated or corrupt\0",
+        PelageStatus::VersionMismatch => b"version mismatch\0",
+        PelageStatus::Cancelled => b"cancelled\0",
+        PelageStatus::Panic => b"internal error (panic caught)\0",
+    };
+    s.as_ptr().cast()
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+/// The detailed message of the last failed call on the calling thread ("" if
+/// none). The pointer stays valid until the next pelage call on this thread.
+///
+/// Thread safety: per-thread; may be called from any thread.
+#[no_mangle]
+pub extern "C" fn pelage_last_error() -> *const c_char {
+    LAST_ERROR.with(|m| m.borrow().as_ptr())
+}
+
+/// A failed call: its status and a message for `pelage_last_error`.
+pub(crate) struct Failure {
+    pub status: PelageStatus,
+    pub message: String,
+}
+
+impl Failure {
+    pub fn new(status: PelageStatus, message: impl Into<String>) -> Self {
+        Failure {
+            status,
+            message: message.into(),
+        }
+    }
+}
+
+impl From<Error> for Failure {
+    fn from(e: Error) -> Self {
+        let status = match e {
+            Error::CapacityExceeded { .. } => PelageStatus::CapacityExceeded,
+            Error::InvalidArgument(_) | Error::BadStride { .. } => PelageStatus::InvalidArgument,
+            Error::NonFinite { .. } => PelageStatus::NonFinite,
+            Error::OutOfRange { .. } => PelageStatus::OutOfRange,
+        };
+        Failure::new(status, e.to_string())
+    }
+}
+
+pub(crate) fn set_last_error(message: &str) {
+    let c = CString::new(message.replace('\0', " ")).unwrap_or_default();
+    LAST_ERROR.with(|m| *m.borrow_mut() = c);
+}
+
+/// Runs a fallible FFI body, catching panics, recording the message of a
+/// failure and returning its status.
+pub(crate) fn boundary(body: impl FnOnce() -> Result<(), Failure>) -> PelageStatus {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(body)) {
+        Ok(Ok(())) => {
+            set_last_error("");
+            PelageStatus::Ok
+        }
+        Ok(Err(f)) => {
+            set_last_error(&f.message);
+            f.status
+        }
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            set_last_error(&format!("internal error: {what}"));
+            PelageStatus::Panic
+        }
+    }
+}
+
+/// Wraps an `extern "C"` body in [`boundary`].
+macro_rules! ffi_boundary {
+    ($($body:tt)*) => {
+        $crate::status::boundary(move || -> Result<(), $crate::status::Failure> { $($body)* })
+    };
+}
