@@ -9,13 +9,22 @@ use std::mem::size_of;
 pub(crate) fn req<'a, T>(ptr: *const T, name: &str) -> Result<&'a T, Failure> {
     // SAFETY: the C contract requires a non-NULL pointer to a live, initialised T
     // that outlives the call; NULL is rejected here.
-    unsafe { ptr.as_ref() }.ok_or_else(|| Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")))
+    unsafe { ptr.as_ref() }
+        .ok_or_else(|| Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")))
+}
+
+/// An optional output: `None` for NULL.
+pub(crate) fn opt_mut<'a, T>(ptr: *mut T) -> Option<&'a mut T> {
+    // SAFETY: the C contract allows NULL or a pointer to a live T the host
+    // lets us write for the duration of the call.
+    unsafe { ptr.as_mut() }
 }
 
 /// `*mut T` to `&mut T`, or NULL_PARAMETER naming the argument.
 pub(crate) fn req_mut<'a, T>(ptr: *mut T, name: &str) -> Result<&'a mut T, Failure> {
     // SAFETY: as `req`, and the host grants exclusive access for the call.
-    unsafe { ptr.as_mut() }.ok_or_else(|| Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")))
+    unsafe { ptr.as_mut() }
+        .ok_or_else(|| Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")))
 }
 
 fn check_align(ptr: usize, stride: usize, name: &str) -> Result<(), Failure> {
@@ -35,14 +44,22 @@ fn byte_len<T>(stride: usize, count: usize, name: &str) -> Result<usize, Failure
     if stride < size_of::<T>() {
         return Err(Failure::new(
             PelageStatus::InvalidArgument,
-            format!("{name}: stride {stride} is smaller than the element ({} bytes)", size_of::<T>()),
+            format!(
+                "{name}: stride {stride} is smaller than the element ({} bytes)",
+                size_of::<T>()
+            ),
         ));
     }
     stride
         .checked_mul(count - 1)
         .and_then(|b| b.checked_add(size_of::<T>()))
         .filter(|&b| b <= isize::MAX as usize)
-        .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, format!("{name}: buffer size overflows")))
+        .ok_or_else(|| {
+            Failure::new(
+                PelageStatus::InvalidArgument,
+                format!("{name}: buffer size overflows"),
+            )
+        })
 }
 
 /// A strided input buffer of `count` elements. `(NULL, 0)` is a valid empty view.
@@ -56,7 +73,10 @@ pub(crate) fn strided<'a, T: bytemuck::Pod>(
         return Ok(Strided::empty());
     }
     if ptr.is_null() {
-        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+        return Err(Failure::new(
+            PelageStatus::NullParameter,
+            format!("{name} is NULL"),
+        ));
     }
     check_align(ptr as usize, stride, name)?;
     let len = byte_len::<T>(stride, count, name)?;
@@ -67,40 +87,67 @@ pub(crate) fn strided<'a, T: bytemuck::Pod>(
 }
 
 /// Raw bytes of an input buffer. `(NULL, 0)` is valid.
-pub(crate) fn bytes<'a>(ptr: *const std::ffi::c_void, len: usize, name: &str) -> Result<&'a [u8], Failure> {
+pub(crate) fn bytes<'a>(
+    ptr: *const std::ffi::c_void,
+    len: usize,
+    name: &str,
+) -> Result<&'a [u8], Failure> {
     if len == 0 {
         return Ok(&[]);
     }
     if ptr.is_null() {
-        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+        return Err(Failure::new(
+            PelageStatus::NullParameter,
+            format!("{name} is NULL"),
+        ));
     }
     // SAFETY: the host promises `len` readable bytes at `ptr` for the call.
     Ok(unsafe { std::slice::from_raw_parts(ptr.cast::<u8>(), len) })
 }
 
 /// A writable byte buffer (an arena). `(NULL, 0)` is valid.
-pub(crate) fn bytes_mut<'a>(ptr: *mut std::ffi::c_void, len: usize, name: &str) -> Result<&'a mut [u8], Failure> {
+pub(crate) fn bytes_mut<'a>(
+    ptr: *mut std::ffi::c_void,
+    len: usize,
+    name: &str,
+) -> Result<&'a mut [u8], Failure> {
     if len == 0 {
         return Ok(&mut []);
     }
     if ptr.is_null() {
-        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+        return Err(Failure::new(
+            PelageStatus::NullParameter,
+            format!("{name} is NULL"),
+        ));
     }
     // SAFETY: the host grants exclusive access to `len` bytes at `ptr` for the call.
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), len) })
 }
 
 /// A contiguous input array of Pod `T`. `(NULL, 0)` is valid.
-pub(crate) fn slice<'a, T: bytemuck::Pod>(ptr: *const T, count: usize, name: &str) -> Result<&'a [T], Failure> {
+pub(crate) fn slice<'a, T: bytemuck::Pod>(
+    ptr: *const T,
+    count: usize,
+    name: &str,
+) -> Result<&'a [T], Failure> {
     if count == 0 {
         return Ok(&[]);
     }
     if ptr.is_null() {
-        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+        return Err(Failure::new(
+            PelageStatus::NullParameter,
+            format!("{name} is NULL"),
+        ));
     }
     check_align(ptr as usize, 0, name)?;
-    if count.checked_mul(size_of::<T>()).is_none_or(|b| b > isize::MAX as usize) {
-        return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: size overflows")));
+    if count
+        .checked_mul(size_of::<T>())
+        .is_none_or(|b| b > isize::MAX as usize)
+    {
+        return Err(Failure::new(
+            PelageStatus::InvalidArgument,
+            format!("{name}: size overflows"),
+        ));
     }
     // SAFETY: non-NULL, aligned for T (4-byte Pod types), and the host promises
     // `count` initialised elements for the duration of the call.
@@ -108,16 +155,29 @@ pub(crate) fn slice<'a, T: bytemuck::Pod>(ptr: *const T, count: usize, name: &st
 }
 
 /// A writable array of Pod `T`. `(NULL, 0)` is valid.
-pub(crate) fn slice_mut<'a, T: bytemuck::Pod>(ptr: *mut T, count: usize, name: &str) -> Result<&'a mut [T], Failure> {
+pub(crate) fn slice_mut<'a, T: bytemuck::Pod>(
+    ptr: *mut T,
+    count: usize,
+    name: &str,
+) -> Result<&'a mut [T], Failure> {
     if count == 0 {
         return Ok(&mut []);
     }
     if ptr.is_null() {
-        return Err(Failure::new(PelageStatus::NullParameter, format!("{name} is NULL")));
+        return Err(Failure::new(
+            PelageStatus::NullParameter,
+            format!("{name} is NULL"),
+        ));
     }
     check_align(ptr as usize, 0, name)?;
-    if count.checked_mul(size_of::<T>()).is_none_or(|b| b > isize::MAX as usize) {
-        return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: size overflows")));
+    if count
+        .checked_mul(size_of::<T>())
+        .is_none_or(|b| b > isize::MAX as usize)
+    {
+        return Err(Failure::new(
+            PelageStatus::InvalidArgument,
+            format!("{name}: size overflows"),
+        ));
     }
     // SAFETY: non-NULL, aligned, and the host grants exclusive access to `count`
     // elements for the duration of the call.
@@ -132,7 +192,12 @@ pub(crate) struct Float3Out<'a> {
 
 impl<'a> Float3Out<'a> {
     /// `count` float3 slots `stride` bytes apart; NULL gives `None` (output not wanted).
-    pub fn new(ptr: *mut std::ffi::c_void, stride: usize, count: usize, name: &str) -> Result<Option<Self>, Failure> {
+    pub fn new(
+        ptr: *mut std::ffi::c_void,
+        stride: usize,
+        count: usize,
+        name: &str,
+    ) -> Result<Option<Self>, Failure> {
         if ptr.is_null() || count == 0 {
             return Ok(None);
         }

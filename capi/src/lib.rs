@@ -16,7 +16,10 @@ mod stamp;
 pub use map::{PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
 pub use roots::{pelage_roots_evaluate, PelageRoot};
-pub use stamp::{pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageStampInfo, PelageStampParams};
+pub use stamp::{
+    pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageStampInfo,
+    PelageStampParams,
+};
 pub use status::{pelage_last_error, pelage_status_string, PelageStatus};
 
 /// Major version of the library this header belongs to.

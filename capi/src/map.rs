@@ -63,18 +63,33 @@ impl PelageMap {
     }
 
     /// Wraps the host's storage; `vertex_count` sizes per-vertex maps.
-    pub(crate) fn view(&self, vertex_count: usize, name: &'static str) -> Result<ScalarMap<'_>, Failure> {
+    pub(crate) fn view(
+        &self,
+        vertex_count: usize,
+        name: &'static str,
+    ) -> Result<ScalarMap<'_>, Failure> {
         let texels = |size: usize| -> Result<&[u8], Failure> {
             if self.width == 0 || self.height == 0 {
-                return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: texture has zero size")));
+                return Err(Failure::new(
+                    PelageStatus::InvalidArgument,
+                    format!("{name}: texture has zero size"),
+                ));
             }
             let len = self
                 .stride
                 .checked_mul(self.height - 1)
                 .and_then(|b| b.checked_add(self.width.checked_mul(size)?))
-                .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, format!("{name}: size overflows")))?;
+                .ok_or_else(|| {
+                    Failure::new(
+                        PelageStatus::InvalidArgument,
+                        format!("{name}: size overflows"),
+                    )
+                })?;
             if self.stride < self.width * size {
-                return Err(Failure::new(PelageStatus::InvalidArgument, format!("{name}: row stride too small")));
+                return Err(Failure::new(
+                    PelageStatus::InvalidArgument,
+                    format!("{name}: row stride too small"),
+                ));
             }
             bytes(self.data, len, name)
         };
@@ -82,7 +97,9 @@ impl PelageMap {
             PelageMapKind::Constant => ScalarMap::Constant(self.constant),
             PelageMapKind::TextureU8 => ScalarMap::Texture(self.texture(Texels::U8(texels(1)?))),
             PelageMapKind::TextureF32 => ScalarMap::Texture(self.texture(Texels::F32(texels(4)?))),
-            PelageMapKind::PerVertex => ScalarMap::PerVertex(strided(self.data, self.stride, vertex_count, name)?),
+            PelageMapKind::PerVertex => {
+                ScalarMap::PerVertex(strided(self.data, self.stride, vertex_count, name)?)
+            }
         })
     }
 }

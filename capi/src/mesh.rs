@@ -43,13 +43,23 @@ impl PelageMeshDesc {
         let nv = self.vertex_count;
         let mut mesh = Mesh::new(
             strided(self.positions, self.position_stride, nv, "mesh positions")?,
-            strided(self.indices, self.index_stride, self.triangle_count, "mesh indices")?,
+            strided(
+                self.indices,
+                self.index_stride,
+                self.triangle_count,
+                "mesh indices",
+            )?,
         );
         if !self.uvs.is_null() {
             mesh.uvs = Some(strided(self.uvs, self.uv_stride, nv, "mesh uvs")?);
         }
         if !self.normals.is_null() {
-            mesh.normals = Some(strided(self.normals, self.normal_stride, nv, "mesh normals")?);
+            mesh.normals = Some(strided(
+                self.normals,
+                self.normal_stride,
+                nv,
+                "mesh normals",
+            )?);
         }
         Ok(mesh)
     }

@@ -23,8 +23,10 @@ pub struct PelageRoot {
     pub rank: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<PelageRoot>() == std::mem::size_of::<pelage_core::Root>());
-const _: () = assert!(std::mem::align_of::<PelageRoot>() == std::mem::align_of::<pelage_core::Root>());
+const _: () =
+    assert!(std::mem::size_of::<PelageRoot>() == std::mem::size_of::<pelage_core::Root>());
+const _: () =
+    assert!(std::mem::align_of::<PelageRoot>() == std::mem::align_of::<pelage_core::Root>());
 
 /// Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 /// positions into `positions` (float3, `position_stride` bytes apart) and, if

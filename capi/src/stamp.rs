@@ -1,6 +1,6 @@
 //! Poisson stamping of hair roots.
 
-use crate::buffers::{bytes_mut, req, slice_mut};
+use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice_mut};
 use crate::status::Failure;
 use crate::{PelageMap, PelageMeshDesc, PelageRoot, PelageStatus};
 use pelage_core::{stamp, Arena, Root, StampParams};
@@ -53,7 +53,10 @@ pub extern "C" fn pelage_stamp_params_defaults() -> PelageStampParams {
     }
 }
 
-fn core_params<'a>(mesh: &PelageMeshDesc, p: &'a PelageStampParams) -> Result<StampParams<'a>, Failure> {
+fn core_params<'a>(
+    mesh: &PelageMeshDesc,
+    p: &'a PelageStampParams,
+) -> Result<StampParams<'a>, Failure> {
     Ok(StampParams {
         target_count: p.target_count,
         seed: p.seed,
@@ -77,8 +80,8 @@ pub extern "C" fn pelage_stamp_query(
     ffi_boundary! {
         let desc = req(mesh, "mesh")?;
         let params = req(params, "params")?;
-        let arena_bytes = req_mut_usize(arena_bytes, "arena_bytes")?;
-        let max_roots = req_mut_usize(max_roots, "max_roots")?;
+        let arena_bytes = req_mut(arena_bytes, "arena_bytes")?;
+        let max_roots = req_mut(max_roots, "max_roots")?;
         let mesh = desc.view()?;
         let p = core_params(desc, params)?;
         let bytes = stamp::required_bytes(&mesh, &p)?;
@@ -87,10 +90,6 @@ pub extern "C" fn pelage_stamp_query(
         *max_roots = roots;
         Ok(())
     }
-}
-
-fn req_mut_usize<'a>(p: *mut usize, name: &str) -> Result<&'a mut usize, Failure> {
-    crate::buffers::req_mut(p, name)
 }
 
 /// Stamps Poisson-distributed roots on `mesh` (paper section 2.3, without its
@@ -119,7 +118,7 @@ pub extern "C" fn pelage_stamp(
     ffi_boundary! {
         let desc = req(mesh, "mesh")?;
         let params = req(params, "params")?;
-        let root_count = req_mut_usize(root_count, "root_count")?;
+        let root_count = req_mut(root_count, "root_count")?;
         let mesh = desc.view()?;
         let p = core_params(desc, params)?;
         let arena = bytes_mut(arena, arena_bytes, "arena")?;
@@ -129,8 +128,7 @@ pub extern "C" fn pelage_stamp(
         match stamp::stamp(mesh, &p, &mut arena, out) {
             Ok((n, report)) => {
                 *root_count = n;
-                // SAFETY: `info` is NULL or points to a PelageStampInfo the host owns.
-                if let Some(info) = unsafe { info.as_mut() } {
+                if let Some(info) = opt_mut(info) {
                     *info = PelageStampInfo {
                         radius: report.radius,
                         candidates: report.candidates,

@@ -52,22 +52,22 @@ pub extern "C" fn pelage_status_string(status: i32) -> *const c_char {
         PelageStatus::Panic,
     ];
     let Some(&status) = ALL.iter().find(|s| **s as i32 == status) else {
-        return b"unknown status\0".as_ptr().cast();
+        return c"unknown status".as_ptr();
     };
-    let s: &'static [u8] = match status {
-        PelageStatus::Ok => b"ok\0",
-        PelageStatus::NullParameter => b"a required pointer is NULL\0",
-        PelageStatus::InvalidArgument => b"invalid argument\0",
-        PelageStatus::NonFinite => b"input holds NaN or infinity\0",
-        PelageStatus::OutOfRange => b"index out of range\0",
-        PelageStatus::CapacityExceeded => b"arena or output buffer too small\0",
-        PelageStatus::Misaligned => b"pointer or stride not 4-byte aligned\0",
-        PelageStatus::CorruptData => b"data truncated or corrupt\0",
-        PelageStatus::VersionMismatch => b"version mismatch\0",
-        PelageStatus::Cancelled => b"cancelled\0",
-        PelageStatus::Panic => b"internal error (panic caught)\0",
+    let s: &'static std::ffi::CStr = match status {
+        PelageStatus::Ok => c"ok",
+        PelageStatus::NullParameter => c"a required pointer is NULL",
+        PelageStatus::InvalidArgument => c"invalid argument",
+        PelageStatus::NonFinite => c"input holds NaN or infinity",
+        PelageStatus::OutOfRange => c"index out of range",
+        PelageStatus::CapacityExceeded => c"arena or output buffer too small",
+        PelageStatus::Misaligned => c"pointer or stride not 4-byte aligned",
+        PelageStatus::CorruptData => c"data truncated or corrupt",
+        PelageStatus::VersionMismatch => c"version mismatch",
+        PelageStatus::Cancelled => c"cancelled",
+        PelageStatus::Panic => c"internal error (panic caught)",
     };
-    s.as_ptr().cast()
+    s.as_ptr()
 }
 
 thread_local! {

@@ -44,7 +44,10 @@ impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Error::CapacityExceeded { needed, available } => {
-                write!(f, "capacity exceeded: {needed} needed, {available} available")
+                write!(
+                    f,
+                    "capacity exceeded: {needed} needed, {available} available"
+                )
             }
             Error::InvalidArgument(why) => write!(f, "invalid argument: {why}"),
             Error::NonFinite { what, index } => {
@@ -60,7 +63,10 @@ impl fmt::Display for Error {
                 "{what}[{index}] = {value} is out of range (must be below {bound})"
             ),
             Error::BadStride { what } => {
-                write!(f, "{what}: stride smaller than the element or buffer too short")
+                write!(
+                    f,
+                    "{what}: stride smaller than the element or buffer too short"
+                )
             }
         }
     }

@@ -76,7 +76,9 @@ impl ScalarMap<'_> {
             ScalarMap::Constant(_) => Ok(()),
             ScalarMap::PerVertex(values) => {
                 if values.len() != mesh.positions.len() {
-                    return Err(Error::InvalidArgument("per-vertex map size differs from vertex count"));
+                    return Err(Error::InvalidArgument(
+                        "per-vertex map size differs from vertex count",
+                    ));
                 }
                 match values.iter().position(|x| !x.is_finite()) {
                     Some(index) => Err(Error::NonFinite { what, index }),
@@ -90,7 +92,10 @@ impl ScalarMap<'_> {
                 if mesh.uvs.is_none() {
                     return Err(Error::InvalidArgument("texture map needs mesh UVs"));
                 }
-                let row = t.width.checked_mul(t.texel_size()).ok_or(Error::BadStride { what })?;
+                let row = t
+                    .width
+                    .checked_mul(t.texel_size())
+                    .ok_or(Error::BadStride { what })?;
                 let bytes = match t.texels {
                     Texels::U8(b) | Texels::F32(b) => b,
                 };
@@ -106,7 +111,10 @@ impl ScalarMap<'_> {
                     for y in 0..t.height {
                         for x in 0..t.width {
                             if !t.texel(x, y).is_finite() {
-                                return Err(Error::NonFinite { what, index: y * t.width + x });
+                                return Err(Error::NonFinite {
+                                    what,
+                                    index: y * t.width + x,
+                                });
                             }
                         }
                     }

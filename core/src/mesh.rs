@@ -54,7 +54,10 @@ impl<'a> Mesh<'a> {
         let nv = self.positions.len();
         for (i, p) in self.positions.iter().enumerate() {
             if !p.iter().all(|c| c.is_finite()) {
-                return Err(Error::NonFinite { what: "positions", index: i });
+                return Err(Error::NonFinite {
+                    what: "positions",
+                    index: i,
+                });
             }
         }
         if let Some(uvs) = self.uvs {
@@ -62,15 +65,26 @@ impl<'a> Mesh<'a> {
                 return Err(Error::InvalidArgument("uv count differs from vertex count"));
             }
             if let Some(i) = uvs.iter().position(|t| !t.iter().all(|c| c.is_finite())) {
-                return Err(Error::NonFinite { what: "uvs", index: i });
+                return Err(Error::NonFinite {
+                    what: "uvs",
+                    index: i,
+                });
             }
         }
         if let Some(normals) = self.normals {
             if normals.len() != nv {
-                return Err(Error::InvalidArgument("normal count differs from vertex count"));
+                return Err(Error::InvalidArgument(
+                    "normal count differs from vertex count",
+                ));
             }
-            if let Some(i) = normals.iter().position(|t| !t.iter().all(|c| c.is_finite())) {
-                return Err(Error::NonFinite { what: "normals", index: i });
+            if let Some(i) = normals
+                .iter()
+                .position(|t| !t.iter().all(|c| c.is_finite()))
+            {
+                return Err(Error::NonFinite {
+                    what: "normals",
+                    index: i,
+                });
             }
         }
         let mut report = MeshReport::default();
@@ -121,9 +135,12 @@ impl<'a> Mesh<'a> {
         }
         let [a, b, c] = self.corners(face);
         let (e1, e2) = (b - a, c - a);
-        let scale = e1.length_squared().max(e2.length_squared()).max((c - b).length_squared());
+        let scale = e1
+            .length_squared()
+            .max(e2.length_squared())
+            .max((c - b).length_squared());
         let twice_area = e1.cross(e2).length();
-        !(twice_area > 1e-6 * scale)
+        twice_area.is_nan() || twice_area <= 1e-6 * scale
     }
 
     /// Unit geometric normal of `face` (zero for a degenerate face).
@@ -176,7 +193,12 @@ impl<'a> Mesh<'a> {
 mod tests {
     use super::*;
 
-    const P: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [2.0, 0.0, 0.0]];
+    const P: [[f32; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [2.0, 0.0, 0.0],
+    ];
 
     #[test]
     fn validates_indices_finiteness_and_degeneracy() {
@@ -187,10 +209,20 @@ mod tests {
         assert!((r.area - 0.5).abs() < 1e-9);
         let bad = [[0u32, 1, 4]];
         let mesh = Mesh::new(Strided::from_slice(&P), Strided::from_slice(&bad));
-        assert!(matches!(mesh.validate(), Err(Error::OutOfRange { value: 4, bound: 4, .. })));
+        assert!(matches!(
+            mesh.validate(),
+            Err(Error::OutOfRange {
+                value: 4,
+                bound: 4,
+                ..
+            })
+        ));
         let nan = [[0.0, f32::NAN, 0.0]];
         let mesh = Mesh::new(Strided::from_slice(&nan), Strided::from_slice(&[]));
-        assert!(matches!(mesh.validate(), Err(Error::NonFinite { index: 0, .. })));
+        assert!(matches!(
+            mesh.validate(),
+            Err(Error::NonFinite { index: 0, .. })
+        ));
     }
 
     #[test]

@@ -66,6 +66,9 @@ mod tests {
             hash(1, 2, Purpose::StampOffsetX, 0),
             hash(1, 2, Purpose::StampOffsetY, 0)
         );
-        assert_ne!(hash(1, 2, Purpose::LodOrder, 0), hash(2, 2, Purpose::LodOrder, 0));
+        assert_ne!(
+            hash(1, 2, Purpose::LodOrder, 0),
+            hash(2, 2, Purpose::LodOrder, 0)
+        );
     }
 }

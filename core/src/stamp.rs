@@ -32,7 +32,7 @@ use core::ops::Range;
 use glam::{Vec2, Vec3};
 
 /// Relative count error at which the radius correction stops.
-pub const COUNT_TOLERANCE: f32 = 0.01;
+pub const COUNT_TOLERANCE: f32 = 0.015;
 /// Radius corrections tried before accepting the closest count.
 const MAX_PASSES: u32 = 6;
 /// Lowest radius, relative to the first estimate, a correction may reach
@@ -95,15 +95,54 @@ pub struct Candidate {
     pub uv: [f32; 2],
     /// LOD level inherited from the tile (0 = coarsest).
     pub level: u32,
+    /// Distance to the triangle's boundary in units of the local disk radius:
+    /// only points closer than a spacing to the boundary can conflict with
+    /// points of other triangles.
+    pub edge_distance: f32,
 }
 
-/// Per-face data the stages share.
+/// Per-face data the stages share, computed once for every pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 struct Face {
     normal: [f32; 3],
     /// 0 for a skipped (degenerate or bald) face.
     scale: f32,
+    /// Edges p1 - p0 and p2 - p0 laid flat, rotated and scaled by `scale`
+    /// (world units; a pass divides by the radius).
+    eb: [f32; 2],
+    ec: [f32; 2],
+    /// Where p0 lands in the tile.
+    offset: [f32; 2],
+}
+
+impl Face {
+    fn new(mesh: &Mesh, seed: u64, f: usize, scale: f32) -> Self {
+        let normal = mesh.face_normal(f).into();
+        if scale == 0.0 {
+            return Face {
+                normal,
+                ..Face::default()
+            };
+        }
+        let [a, b, c] = mesh.corners(f);
+        let (e1, e2) = (b - a, c - a);
+        let x = e1.normalize();
+        let y = x.cross(e2).cross(x).normalize();
+        let angle = rng::unit(seed, f as u64, Purpose::StampRotation, 0) * core::f32::consts::TAU;
+        let rot = Vec2::new(libm::cosf(angle), libm::sinf(angle));
+        let offset = Vec2::new(
+            rng::unit(seed, f as u64, Purpose::StampOffsetX, 0),
+            rng::unit(seed, f as u64, Purpose::StampOffsetY, 0),
+        ) * TILE_SIDE as f32;
+        Face {
+            normal,
+            scale,
+            eb: rot.rotate(Vec2::new(e1.length(), 0.0) * scale).into(),
+            ec: rot.rotate(Vec2::new(e2.dot(x), e2.dot(y)) * scale).into(),
+            offset: offset.into(),
+        }
+    }
 }
 
 /// The stamping state for one mesh and parameter set: the tile, per-face
@@ -126,7 +165,10 @@ fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
         return Err(Error::InvalidArgument("black_scale must be in (0, 1]"));
     }
     if !params.bald_below.is_finite() {
-        return Err(Error::NonFinite { what: "bald_below", index: 0 });
+        return Err(Error::NonFinite {
+            what: "bald_below",
+            index: 0,
+        });
     }
     let report = mesh.validate()?;
     params.density.validate(mesh, "density")?;
@@ -188,7 +230,7 @@ fn scaled_area(mesh: &Mesh, params: &StampParams) -> f64 {
 }
 
 fn first_radius(scaled_area: f64, target: u32, density: f32) -> Option<f32> {
-    if target == 0 || !(scaled_area > 0.0) {
+    if target == 0 || scaled_area.is_nan() || scaled_area <= 0.0 {
         return None;
     }
     Some(libm::sqrt(density as f64 * scaled_area / target as f64) as f32)
@@ -197,11 +239,15 @@ fn first_radius(scaled_area: f64, target: u32, density: f32) -> Option<f32> {
 /// Arena bytes [`stamp`] needs for `mesh` and `params`.
 pub fn required_bytes(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
     let bound = max_roots(mesh, params)?;
+    Ok(bytes_for(mesh.triangle_count(), bound))
+}
+
+fn bytes_for(faces: usize, bound: usize) -> usize {
     let mut layout = ArenaLayout::new();
-    Stamper::layout(&mut layout, mesh.triangle_count());
+    Stamper::layout(&mut layout, faces);
     select_layout(&mut layout, bound);
     layout.add::<Candidate>(bound);
-    Ok(layout.bytes())
+    layout.bytes()
 }
 
 fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
@@ -253,17 +299,18 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// Validates the inputs, builds the tile and the per-face data, and picks
     /// the first radius. Returns `Ok(None)` when there is nothing to stamp
     /// (target 0, or every face bald or degenerate).
-    pub fn new(mesh: Mesh<'m>, params: &StampParams, arena: &mut Arena<'a>) -> Result<Option<Self>, Error> {
+    pub fn new(
+        mesh: Mesh<'m>,
+        params: &StampParams,
+        arena: &mut Arena<'a>,
+    ) -> Result<Option<Self>, Error> {
         let degenerate = validate(&mesh, params)?;
         let tile = Tile::build(params.seed, arena)?;
         let faces = arena.alloc::<Face>(mesh.triangle_count())?;
         let mut area = 0.0f64;
         for (f, face) in faces.iter_mut().enumerate() {
             let scale = face_scale(&mesh, params, f);
-            *face = Face {
-                normal: mesh.face_normal(f).into(),
-                scale,
-            };
+            *face = Face::new(&mesh, params.seed, f, scale);
             area += mesh.area(f) as f64 * (scale as f64) * (scale as f64);
         }
         let Some(radius) = first_radius(area, params.target_count, tile.density()) else {
@@ -297,7 +344,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// for `faces`, valid for every radius the correction can reach.
     pub fn candidate_bound(&self, faces: Range<usize>) -> usize {
         let r_min = self.first_radius * MIN_RADIUS_FACTOR;
-        faces.map(|f| face_bound(&self.mesh, f, self.faces[f].scale, r_min)).sum()
+        faces
+            .map(|f| face_bound(&self.mesh, f, self.faces[f].scale, r_min))
+            .sum()
     }
 
     /// Stamps the triangles in `faces` at the current radius into `out`, in
@@ -306,32 +355,30 @@ impl<'m, 'a> Stamper<'m, 'a> {
     pub fn stamp_faces(&self, faces: Range<usize>, out: &mut [Candidate]) -> Result<usize, Error> {
         let mut n = 0;
         for f in faces {
-            let scale = self.faces[f].scale;
-            if scale == 0.0 {
+            if self.faces[f].scale == 0.0 {
                 continue;
             }
-            n = self.stamp_face(f, scale, out, n)?;
+            n = self.stamp_face(f, out, n)?;
         }
         Ok(n)
     }
 
-    fn stamp_face(&self, f: usize, scale: f32, out: &mut [Candidate], mut n: usize) -> Result<usize, Error> {
+    fn stamp_face(&self, f: usize, out: &mut [Candidate], mut n: usize) -> Result<usize, Error> {
+        let face = &self.faces[f];
         let [a, b, c] = self.mesh.corners(f);
         let (e1, e2) = (b - a, c - a);
-        let len1 = e1.length();
-        let x = e1 / len1;
-        let y = x.cross(e2).cross(x).normalize();
-        let k = scale / self.radius;
-        let angle = rng::unit(self.seed, f as u64, Purpose::StampRotation, 0) * core::f32::consts::TAU;
-        let rot = Vec2::new(libm::cosf(angle), libm::sinf(angle));
-        let offset = Vec2::new(
-            rng::unit(self.seed, f as u64, Purpose::StampOffsetX, 0),
-            rng::unit(self.seed, f as u64, Purpose::StampOffsetY, 0),
-        ) * TILE_SIDE as f32;
-        let eb = rot.rotate(Vec2::new(len1 * k, 0.0));
-        let ec = rot.rotate(Vec2::new(e2.dot(x) * k, e2.dot(y) * k));
-        let pa = offset;
-        let inv_det = 1.0 / eb.perp_dot(ec);
+        let k = 1.0 / self.radius;
+        let eb = Vec2::from(face.eb) * k;
+        let ec = Vec2::from(face.ec) * k;
+        let pa = Vec2::from(face.offset);
+        let det = eb.perp_dot(ec);
+        let inv_det = 1.0 / det;
+        // altitudes onto the edges opposite each corner, in stamp units
+        let alt = [
+            det / (ec - eb).length(),
+            det / ec.length(),
+            det / eb.length(),
+        ];
         let lo = pa.min(pa + eb).min(pa + ec);
         let hi = pa.max(pa + eb).max(pa + ec);
         let side = TILE_SIDE as i32;
@@ -356,6 +403,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                             face: f as u32,
                             uv: [u, v],
                             level: level as u32,
+                            edge_distance: ((1.0 - u - v) * alt[0]).min(u * alt[1]).min(v * alt[2]),
                         };
                         n += 1;
                     }
@@ -396,12 +444,22 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// The edge pass: keeps, in order, every candidate that is not closer
     /// than the disk radius to an earlier kept one, compacting them to the
     /// front of `cands`. Returns the number kept.
+    ///
+    /// Points of one triangle are spaced by the tile, so only points within a
+    /// disk radius of their triangle's boundary take part: this is exact on any
+    /// surface whose dihedral angles are above 90 degrees and whose separate
+    /// same-facing sheets are a radius apart.
     pub fn prune(&self, cands: &mut [Candidate], scratch: &mut Scratch) -> Result<usize, Error> {
         scratch.check(cands.len())?;
         let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
         let mut kept = 0usize;
         for j in 0..cands.len() {
             let c = cands[j];
+            if c.edge_distance >= 1.0 {
+                cands[kept] = c;
+                kept += 1;
+                continue;
+            }
             let p = Vec3::from(c.position);
             let clash = grid.any_near(p, self.reach(&c, self.radius), |i| {
                 let o = &cands[i as usize];
@@ -436,10 +494,18 @@ impl<'m, 'a> Stamper<'m, 'a> {
 
     /// Assigns LOD levels across triangles and writes the roots, in
     /// candidate order, with ids `0..n` and ranks.
-    pub fn finish(&self, cands: &[Candidate], scratch: &mut Scratch, out: &mut [Root]) -> Result<(), Error> {
+    pub fn finish(
+        &self,
+        cands: &[Candidate],
+        scratch: &mut Scratch,
+        out: &mut [Root],
+    ) -> Result<(), Error> {
         let n = cands.len();
         if out.len() < n {
-            return Err(Error::CapacityExceeded { needed: n, available: out.len() });
+            return Err(Error::CapacityExceeded {
+                needed: n,
+                available: out.len(),
+            });
         }
         scratch.check(n)?;
         let level = &mut scratch.level[..n];
@@ -452,12 +518,16 @@ impl<'m, 'a> Stamper<'m, 'a> {
             let cell = self.radius * spacing;
             grid.reset(cell);
             for (i, c) in cands.iter().enumerate() {
-                if level[i] < k {
+                if level[i] < k && c.edge_distance < spacing {
                     grid.insert(i as u32, Vec3::from(c.position));
                 }
             }
             for (j, c) in cands.iter().enumerate() {
                 if level[j] != u8::MAX || c.level > k as u32 {
+                    continue;
+                }
+                if c.edge_distance >= spacing {
+                    level[j] = k;
                     continue;
                 }
                 let p = Vec3::from(c.position);
@@ -506,7 +576,12 @@ impl<'m, 'a> Stamper<'m, 'a> {
 /// arena of [`required_bytes`]. Returns the number of roots written and a report.
 ///
 /// Nothing is written to `out` unless the call succeeds.
-pub fn stamp(mesh: Mesh, params: &StampParams, arena: &mut Arena, out: &mut [Root]) -> Result<(usize, StampReport), Error> {
+pub fn stamp(
+    mesh: Mesh,
+    params: &StampParams,
+    arena: &mut Arena,
+    out: &mut [Root],
+) -> Result<(usize, StampReport), Error> {
     let need = required_bytes(&mesh, params)?;
     if arena.remaining() < need {
         return Err(Error::CapacityExceeded {
@@ -514,10 +589,9 @@ pub fn stamp(mesh: Mesh, params: &StampParams, arena: &mut Arena, out: &mut [Roo
             available: arena.remaining(),
         });
     }
-    let degenerate = validate(&mesh, params)?;
     let Some(mut stamper) = Stamper::new(mesh, params, arena)? else {
         let report = StampReport {
-            degenerate_triangles: degenerate,
+            degenerate_triangles: mesh.validate()?.degenerate_triangles as u32,
             ..StampReport::default()
         };
         return Ok((0, report));
@@ -531,7 +605,10 @@ pub fn stamp(mesh: Mesh, params: &StampParams, arena: &mut Arena, out: &mut [Roo
         let kept = stamper.prune(&mut cands[..n], &mut scratch)?;
         if stamper.converged(kept) {
             if out.len() < kept {
-                return Err(Error::CapacityExceeded { needed: kept, available: out.len() });
+                return Err(Error::CapacityExceeded {
+                    needed: kept,
+                    available: out.len(),
+                });
             }
             stamper.finish(&cands[..kept], &mut scratch, &mut out[..kept])?;
             return Ok((kept, stamper.report(n, kept)));
@@ -599,7 +676,11 @@ mod tests {
             let th = core::f32::consts::PI * r as f32 / rows as f32;
             for c in 0..cols {
                 let ph = core::f32::consts::TAU * c as f32 / cols as f32;
-                p.push([libm::sinf(th) * libm::cosf(ph), libm::cosf(th), libm::sinf(th) * libm::sinf(ph)]);
+                p.push([
+                    libm::sinf(th) * libm::cosf(ph),
+                    libm::cosf(th),
+                    libm::sinf(th) * libm::sinf(ph),
+                ]);
                 uv.push([c as f32 / cols as f32, r as f32 / rows as f32]);
             }
         }
@@ -634,7 +715,12 @@ mod tests {
     fn min_spacing(mesh: &Mesh, roots: &[Root]) -> f32 {
         let pts: Vec<(Vec3, Vec3)> = roots
             .iter()
-            .map(|r| (mesh.point(r.face as usize, r.u, r.v), mesh.face_normal(r.face as usize)))
+            .map(|r| {
+                (
+                    mesh.point(r.face as usize, r.u, r.v),
+                    mesh.face_normal(r.face as usize),
+                )
+            })
             .collect();
         let mut best = f32::INFINITY;
         for (i, a) in pts.iter().enumerate() {
@@ -665,7 +751,11 @@ mod tests {
             for target in [500u32, 3000, 20000] {
                 let (roots, report) = run(m.mesh(), &params(target));
                 let err = (roots.len() as f32 - target as f32) / target as f32;
-                assert!(err.abs() <= 0.03, "{name} {target}: {} roots ({report:?})", roots.len());
+                assert!(
+                    err.abs() <= 0.03,
+                    "{name} {target}: {} roots ({report:?})",
+                    roots.len()
+                );
             }
         }
     }
@@ -676,10 +766,18 @@ mod tests {
         let mesh = m.mesh();
         let (roots, report) = run(mesh, &params(4000));
         let min = min_spacing(&mesh, &roots);
-        assert!(min >= report.radius * 0.999, "min {min} < r {}", report.radius);
+        assert!(
+            min >= report.radius * 0.999,
+            "min {min} < r {}",
+            report.radius
+        );
         let n = roots.len();
         for frac in [2usize, 4, 16] {
-            let prefix: Vec<Root> = roots.iter().copied().filter(|r| (r.rank as usize) < n / frac).collect();
+            let prefix: Vec<Root> = roots
+                .iter()
+                .copied()
+                .filter(|r| (r.rank as usize) < n / frac)
+                .collect();
             let spacing = min_spacing(&mesh, &prefix);
             // a Poisson set of n/frac roots has spacing ~ r * sqrt(frac)
             let expect = report.radius * libm::sqrtf(frac as f32);
@@ -709,7 +807,8 @@ mod tests {
                 let mut n = 0;
                 for c in 0..chunks {
                     let range = c * faces / chunks..(c + 1) * faces / chunks;
-                    let mut part = vec![Candidate::default(); stamper.candidate_bound(range.clone())];
+                    let mut part =
+                        vec![Candidate::default(); stamper.candidate_bound(range.clone())];
                     let k = stamper.stamp_faces(range, &mut part).unwrap();
                     cands[n..n + k].copy_from_slice(&part[..k]);
                     n += k;
@@ -720,7 +819,9 @@ mod tests {
                 }
             };
             let mut out = vec![Root::default(); kept];
-            stamper.finish(&cands[..kept], &mut scratch, &mut out).unwrap();
+            stamper
+                .finish(&cands[..kept], &mut scratch, &mut out)
+                .unwrap();
             assert_eq!(out, reference, "{chunks} chunks");
         }
     }
@@ -730,15 +831,26 @@ mod tests {
         let m = graded_plane(20, 1.0);
         let mesh = m.mesh();
         // left half black, right half white
-        let values: Vec<f32> = m.p.iter().map(|p| if p[0] < 0.5 { 0.0 } else { 1.0 }).collect();
+        let values: Vec<f32> =
+            m.p.iter()
+                .map(|p| if p[0] < 0.5 { 0.0 } else { 1.0 })
+                .collect();
         let mut p = params(4000);
         p.density = ScalarMap::PerVertex(Strided::from_slice(&values));
         let (roots, _) = run(mesh, &p);
-        assert!(roots.iter().all(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.44));
+        assert!(roots
+            .iter()
+            .all(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.44));
         p.bald_below = 0.0;
         let (roots, _) = run(mesh, &p);
-        let left = roots.iter().filter(|r| mesh.point(r.face as usize, r.u, r.v).x < 0.45).count();
-        let right = roots.iter().filter(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.55).count();
+        let left = roots
+            .iter()
+            .filter(|r| mesh.point(r.face as usize, r.u, r.v).x < 0.45)
+            .count();
+        let right = roots
+            .iter()
+            .filter(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.55)
+            .count();
         // black = half size: a quarter of the density
         let ratio = left as f32 / right as f32;
         assert!((ratio - 0.25).abs() < 0.05, "left/right = {ratio}");
@@ -750,16 +862,25 @@ mod tests {
         let mut bad = m.p.clone();
         bad[3][1] = f32::NAN;
         let mesh = Mesh::new(Strided::from_slice(&bad), Strided::from_slice(&m.t));
-        assert!(matches!(required_bytes(&mesh, &params(100)), Err(Error::NonFinite { .. })));
+        assert!(matches!(
+            required_bytes(&mesh, &params(100)),
+            Err(Error::NonFinite { .. })
+        ));
         let mesh = m.mesh();
         let mut buf = vec![0u8; 100];
         let mut out = vec![Root::default(); 10];
         let mut arena = Arena::new(&mut buf);
         let err = stamp(mesh, &params(100), &mut arena, &mut out).unwrap_err();
-        assert!(matches!(err, Error::CapacityExceeded { available: 100, .. }));
+        assert!(matches!(
+            err,
+            Error::CapacityExceeded { available: 100, .. }
+        ));
         assert!(out.iter().all(|r| *r == Root::default()));
         let mut p = params(100);
         p.black_scale = 0.0;
-        assert!(matches!(required_bytes(&mesh, &p), Err(Error::InvalidArgument(_))));
+        assert!(matches!(
+            required_bytes(&mesh, &p),
+            Err(Error::InvalidArgument(_))
+        ));
     }
 }

@@ -19,7 +19,12 @@ pub struct Strided<'a, T> {
 
 impl<'a, T: Pod> Strided<'a, T> {
     /// Validates that `count` elements at `stride` fit in `bytes`.
-    pub fn new(bytes: &'a [u8], stride: usize, count: usize, what: &'static str) -> Result<Self, Error> {
+    pub fn new(
+        bytes: &'a [u8],
+        stride: usize,
+        count: usize,
+        what: &'static str,
+    ) -> Result<Self, Error> {
         let bad = Error::BadStride { what };
         if count > 0 {
             if stride < size_of::<T>() {
@@ -100,8 +105,13 @@ mod tests {
         assert!(Strided::<[f32; 3]>::new(bytes, 16, 3, "p").is_err());
         assert!(Strided::<[f32; 3]>::new(bytes, 8, 2, "p").is_err());
         assert!(Strided::<[f32; 3]>::new(&bytes[1..], 16, 2, "p").is_ok());
-        assert_eq!(Strided::<[f32; 3]>::new(&bytes[1..], 16, 2, "p").unwrap().get(0)[2], f32::from_bits(
-            u32::from_le_bytes([bytes[9], bytes[10], bytes[11], bytes[12]])
-        ));
+        assert_eq!(
+            Strided::<[f32; 3]>::new(&bytes[1..], 16, 2, "p")
+                .unwrap()
+                .get(0)[2],
+            f32::from_bits(u32::from_le_bytes([
+                bytes[9], bytes[10], bytes[11], bytes[12]
+            ]))
+        );
     }
 }

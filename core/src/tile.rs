@@ -81,7 +81,10 @@ impl<'a> Tile<'a> {
     pub fn cell(&self, x: usize, y: usize) -> impl Iterator<Item = ([f32; 2], u8)> + '_ {
         let c = y * TILE_SIDE + x;
         let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-        self.points[s..e].iter().copied().zip(self.levels[s..e].iter().copied())
+        self.points[s..e]
+            .iter()
+            .copied()
+            .zip(self.levels[s..e].iter().copied())
     }
 
     /// All points with their LOD levels.
@@ -112,7 +115,7 @@ fn torus_dist2(a: [f32; 2], b: [f32; 2]) -> f32 {
 #[inline]
 fn wrap_coord(x: f32) -> f32 {
     let w = x - SIDE * libm::floorf(x / SIDE);
-    if w >= SIDE || w < 0.0 {
+    if !(0.0..SIDE).contains(&w) {
         0.0
     } else {
         w
@@ -185,7 +188,9 @@ fn fits(p: [f32; 2], points: &[[f32; 2]], grid: &[u32], h: f32) -> bool {
 
 /// Counting sort of the points into unit cells (stable, so deterministic).
 fn bucket(src: &[[f32; 2]], dst: &mut [[f32; 2]], cell_start: &mut [u32]) {
-    let cell = |p: [f32; 2]| (p[1] as usize).min(TILE_SIDE - 1) * TILE_SIDE + (p[0] as usize).min(TILE_SIDE - 1);
+    let cell = |p: [f32; 2]| {
+        (p[1] as usize).min(TILE_SIDE - 1) * TILE_SIDE + (p[0] as usize).min(TILE_SIDE - 1)
+    };
     cell_start.fill(0);
     for &p in src {
         cell_start[cell(p) + 1] += 1;
@@ -206,25 +211,22 @@ fn bucket(src: &[[f32; 2]], dst: &mut [[f32; 2]], cell_start: &mut [u32]) {
 /// Poisson set with half the density of the next.
 fn assign_levels(points: &[[f32; 2]], levels: &mut [u8]) {
     let finest = (LOD_LEVELS - 1) as u8;
-    levels.fill(u8::MAX);
+    levels.fill(finest);
+    let mut chosen = [[0.0f32; 2]; MAX_POINTS];
+    let mut n_chosen = 0;
     for k in 0..finest {
         let r = libm::powf(2.0, 0.5 * (finest - k) as f32);
         let r2 = r * r;
-        for i in 0..points.len() {
-            if levels[i] != u8::MAX {
+        for (i, &p) in points.iter().enumerate() {
+            if levels[i] != finest {
                 continue;
             }
-            let clear = points
-                .iter()
-                .zip(levels.iter())
-                .all(|(&q, &l)| l > k || torus_dist2(points[i], q) >= r2);
-            if clear {
+            if chosen[..n_chosen].iter().all(|&q| torus_dist2(p, q) >= r2) {
                 levels[i] = k;
+                chosen[n_chosen] = p;
+                n_chosen += 1;
             }
         }
-    }
-    for l in levels.iter_mut().filter(|l| **l == u8::MAX) {
-        *l = finest;
     }
 }
 
@@ -246,7 +248,11 @@ mod tests {
     fn tile_is_a_periodic_poisson_set_with_nested_levels() {
         with_tile(|tile| {
             let all: Vec<([f32; 2], u8)> = tile.points().collect();
-            assert!(tile.density() > 0.55 && tile.density() < 0.8, "{}", tile.density());
+            assert!(
+                tile.density() > 0.55 && tile.density() < 0.8,
+                "{}",
+                tile.density()
+            );
             for (i, &(a, la)) in all.iter().enumerate() {
                 for &(b, lb) in &all[i + 1..] {
                     let d2 = torus_dist2(a, b);
@@ -256,7 +262,10 @@ mod tests {
                     assert!(d2 >= r * r * 0.999, "level {k} spacing violated");
                 }
             }
-            let finest = all.iter().filter(|p| p.1 as usize == LOD_LEVELS - 1).count();
+            let finest = all
+                .iter()
+                .filter(|p| p.1 as usize == LOD_LEVELS - 1)
+                .count();
             let share = finest as f32 / all.len() as f32;
             assert!(share > 0.3 && share < 0.7, "finest level holds {share}");
         });

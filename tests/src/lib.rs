@@ -1,1 +1,4 @@
+//! Test assets and helpers shared by pelage's end-to-end tests and benchmarks.
+
 pub mod creature;
+pub mod measure;

@@ -1,0 +1,85 @@
+//! Stamping benchmark: 10K, 100K and 1M roots on the ~65K-triangle creature,
+//! next to uniform random area-weighted sampling measured in the same run.
+//!
+//! Spacing quality is the minimum and mean nearest-neighbour distance divided
+//! by r_hex = sqrt(2A / (sqrt(3) N)), the spacing of a perfect hexagonal
+//! lattice with the same count (1.0 is the unreachable ideal).
+
+use pelage_core::stamp::StampParams;
+use pelage_tests::creature::default_creature;
+use pelage_tests::measure::{mesh_view, r_hex, root_points, spacing, stamp_vec, uniform_roots};
+use std::time::Instant;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let creature = default_creature();
+    let mesh = mesh_view(&creature);
+    let area = mesh.validate().unwrap().area;
+    println!(
+        "creature: {} triangles, area {:.3}",
+        mesh.triangle_count(),
+        area
+    );
+    println!(
+        "{:>9} | {:>10} {:>11} {:>8} {:>6} {:>9} {:>9} | {:>10} {:>9} {:>9} | {:>6}",
+        "target",
+        "stamp ms",
+        "roots/s",
+        "count",
+        "passes",
+        "min/rhex",
+        "mean/rhex",
+        "uniform ms",
+        "min/rhex",
+        "mean/rhex",
+        "speed"
+    );
+    for target in [10_000u32, 100_000, 1_000_000] {
+        let params = StampParams {
+            target_count: target,
+            seed: 1,
+            ..StampParams::default()
+        };
+        let runs = if target >= 1_000_000 { 7 } else { 11 };
+        let mut times = vec![];
+        let mut result = None;
+        for _ in 0..runs {
+            let t = Instant::now();
+            let r = stamp_vec(mesh, &params);
+            times.push(t.elapsed().as_secs_f64());
+            result = Some(r);
+        }
+        let (roots, report) = result.unwrap();
+        let t_stamp = median(times);
+        let mut times = vec![];
+        let mut uniform = vec![];
+        for _ in 0..runs {
+            let t = Instant::now();
+            uniform = uniform_roots(&mesh, roots.len(), 1);
+            times.push(t.elapsed().as_secs_f64());
+        }
+        let t_uniform = median(times);
+        let rh = r_hex(area, roots.len());
+        let s = spacing(&root_points(&mesh, &roots), 4.0 * rh);
+        let u = spacing(&root_points(&mesh, &uniform), 4.0 * rh);
+        println!(
+            "{:>9} | {:>10.2} {:>11.3e} {:>+7.2}% {:>6} {:>9.3} {:>9.3} | {:>10.2} {:>9.3} {:>9.3} | {:>5.1}x",
+            target,
+            t_stamp * 1e3,
+            roots.len() as f64 / t_stamp,
+            100.0 * (roots.len() as f64 - target as f64) / target as f64,
+            report.passes,
+            s.min / rh,
+            s.mean / rh,
+            t_uniform * 1e3,
+            u.min / rh,
+            u.mean / rh,
+            t_stamp / t_uniform,
+        );
+    }
+    println!("speed = stamp time / uniform random time (same count, same run)");
+}

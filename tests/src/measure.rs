@@ -1,0 +1,122 @@
+//! Shared helpers for the end-to-end tests and benchmarks: running the core
+//! with `Vec`-backed memory, a uniform random baseline, and spacing statistics.
+
+use crate::creature::CreatureMesh;
+use glam::Vec3;
+use pelage_core::grid::HashGrid;
+use pelage_core::rng::{self, Purpose};
+use pelage_core::stamp::{self, StampParams, StampReport};
+use pelage_core::{Arena, Mesh, Root, Strided};
+
+/// Borrows a creature mesh as a core mesh (with UVs and normals).
+pub fn mesh_view(m: &CreatureMesh) -> Mesh<'_> {
+    let mut mesh = Mesh::new(
+        Strided::from_slice(&m.positions),
+        Strided::from_slice(&m.triangles),
+    );
+    mesh.uvs = Some(Strided::from_slice(&m.uvs));
+    mesh.normals = Some(Strided::from_slice(&m.normals));
+    mesh
+}
+
+/// Stamps with heap memory sized by the core's own queries.
+pub fn stamp_vec(mesh: Mesh, params: &StampParams) -> (Vec<Root>, StampReport) {
+    let mut arena = vec![0u8; stamp::required_bytes(&mesh, params).expect("valid input")];
+    let mut roots = vec![Root::default(); stamp::max_roots(&mesh, params).expect("valid input")];
+    let (n, report) =
+        stamp::stamp(mesh, params, &mut Arena::new(&mut arena), &mut roots).expect("stamp");
+    roots.truncate(n);
+    (roots, report)
+}
+
+/// `n` roots placed uniformly at random by area (the baseline stamping is
+/// compared against), skipping degenerate faces.
+pub fn uniform_roots(mesh: &Mesh, n: usize, seed: u64) -> Vec<Root> {
+    let faces = mesh.triangle_count();
+    let mut cdf = Vec::with_capacity(faces);
+    let mut total = 0.0f64;
+    for f in 0..faces {
+        if !mesh.is_degenerate(f) {
+            total += mesh.area(f) as f64;
+        }
+        cdf.push(total);
+    }
+    (0..n)
+        .map(|i| {
+            let h = |c| rng::hash(seed, i as u64, Purpose::Uniform, c);
+            let x = (h(0) >> 11) as f64 / (1u64 << 53) as f64 * total;
+            let face = cdf.partition_point(|&c| c <= x).min(faces - 1);
+            let (mut u, mut v) = (rng::to_unit(h(1)), rng::to_unit(h(2)));
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            Root {
+                face: face as u32,
+                u,
+                v,
+                id: i as u32,
+                rank: i as u32,
+            }
+        })
+        .collect()
+}
+
+/// Positions and face normals of roots.
+pub fn root_points(mesh: &Mesh, roots: &[Root]) -> Vec<(Vec3, Vec3)> {
+    roots
+        .iter()
+        .map(|r| {
+            (
+                mesh.point(r.face as usize, r.u, r.v),
+                mesh.face_normal(r.face as usize),
+            )
+        })
+        .collect()
+}
+
+/// Nearest-neighbour distance statistics, ignoring pairs on opposite sides
+/// of a thin part (opposed normals).
+#[derive(Clone, Copy, Debug)]
+pub struct Spacing {
+    /// Smallest nearest-neighbour distance.
+    pub min: f32,
+    /// Mean nearest-neighbour distance.
+    pub mean: f32,
+}
+
+/// Nearest-neighbour distances of `points`, searched within `max_dist`
+/// (a point with no neighbour that close counts as `max_dist`).
+pub fn spacing(points: &[(Vec3, Vec3)], max_dist: f32) -> Spacing {
+    let n = points.len();
+    let mut heads = vec![0u32; HashGrid::buckets_for(n)];
+    let mut next = vec![0u32; n];
+    let cell = max_dist / 2.0;
+    let mut grid = HashGrid::new(&mut heads, &mut next, cell);
+    for (i, p) in points.iter().enumerate() {
+        grid.insert(i as u32, p.0);
+    }
+    let (mut min, mut sum) = (f32::INFINITY, 0.0f64);
+    for (i, p) in points.iter().enumerate() {
+        let mut best = max_dist * max_dist;
+        grid.any_near(p.0, 2, |j| {
+            let q = &points[j as usize];
+            if j as usize != i && p.1.dot(q.1) > 0.0 {
+                best = best.min(p.0.distance_squared(q.0));
+            }
+            false
+        });
+        let d = best.sqrt();
+        min = min.min(d);
+        sum += d as f64;
+    }
+    Spacing {
+        min,
+        mean: (sum / n.max(1) as f64) as f32,
+    }
+}
+
+/// The spacing of `n` points on a perfect hexagonal lattice over `area`:
+/// sqrt(2A / (sqrt(3) N)).
+pub fn r_hex(area: f64, n: usize) -> f32 {
+    (2.0 * area / (3f64.sqrt() * n as f64)).sqrt() as f32
+}
