@@ -1,0 +1,46 @@
+# pelage: one command runs the demo, one runs every test (see README.md).
+# Both install the Debian packages they need when they are missing.
+
+BUILD ?= build
+JOBS ?= 2
+APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev valgrind binutils
+EMBEDDED_TARGET := thumbv7em-none-eabihf
+
+.PHONY: demo test deps rust-test rust-lint cmake-test header-check bench
+
+demo: deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BUILD) -j$(JOBS) --target demo
+	cd $(BUILD) && ./cpp_examples/demo
+
+test: deps rust-lint rust-test cmake-test header-check
+
+deps:
+	@missing=""; for p in $(APT_PACKAGES); do \
+	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
+	fi
+	@rustup target list --installed | grep -qx $(EMBEDDED_TARGET) || rustup target add $(EMBEDDED_TARGET)
+
+rust-lint:
+	cargo fmt --all -- --check
+	cargo clippy --locked --workspace --all-targets --release -- -D warnings
+	cargo check --locked -p pelage-core --target $(EMBEDDED_TARGET)
+
+rust-test:
+	cargo test --locked --workspace --release
+	cargo bench --locked --workspace --no-run
+
+cmake-test:
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BUILD) -j$(JOBS)
+	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)
+
+# The committed header must be exactly what the build generates.
+header-check:
+	git diff --exit-code -- include/pelage.h
+
+bench:
+	cargo bench --locked -p pelage-tests
