@@ -8,7 +8,8 @@ const EMPTY: u32 = u32::MAX;
 /// threaded through a `next` array (one slot per point).
 ///
 /// Collisions between cells only add candidates, never lose them, so a query
-/// visits every point inserted into the cells it asks for.
+/// visits every point inserted into the cells it asks for, and may visit a
+/// point more than once when two of those cells share a bucket.
 pub struct HashGrid<'a> {
     heads: &'a mut [u32],
     next: &'a mut [u32],

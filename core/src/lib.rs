@@ -10,14 +10,21 @@
 #![deny(missing_docs)]
 
 pub mod arena;
+pub mod bind;
 pub mod error;
+pub mod expand;
+pub mod frame;
 pub mod grid;
+pub mod groom;
+pub mod guides;
 pub mod map;
 pub mod mesh;
 pub mod rng;
 pub mod root;
 pub mod stamp;
 pub mod strided;
+#[cfg(test)]
+mod testmesh;
 pub mod tile;
 
 pub use arena::{Arena, ArenaLayout};

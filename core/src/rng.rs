@@ -17,6 +17,10 @@ pub enum Purpose {
     LodOrder = 5,
     /// Uniform random sampling (the baseline stamping is compared against).
     Uniform = 6,
+    /// Number of neighbour guides of a strand.
+    NeighbourCount = 7,
+    /// Phase of a strand's kink.
+    KinkPhase = 8,
 }
 
 /// Mixes (seed, id, purpose, counter) into 64 well-distributed bits.

@@ -23,3 +23,25 @@ pub struct Root {
 }
 
 const _: () = assert!(core::mem::size_of::<Root>() == 20);
+
+/// Checks that every root is on an existing face with finite coordinates.
+pub fn check_roots(
+    mesh: &crate::Mesh,
+    roots: &[Root],
+    what: &'static str,
+) -> Result<(), crate::Error> {
+    for (i, r) in roots.iter().enumerate() {
+        if r.face as usize >= mesh.triangle_count() {
+            return Err(crate::Error::OutOfRange {
+                what,
+                index: i,
+                value: r.face as usize,
+                bound: mesh.triangle_count(),
+            });
+        }
+        if !(r.u.is_finite() && r.v.is_finite()) {
+            return Err(crate::Error::NonFinite { what, index: i });
+        }
+    }
+    Ok(())
+}

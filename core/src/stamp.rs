@@ -619,88 +619,8 @@ pub fn stamp(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testmesh::{graded_plane, sphere};
     use crate::Strided;
-
-    pub(crate) struct TestMesh {
-        pub p: Vec<[f32; 3]>,
-        pub t: Vec<[u32; 3]>,
-        pub uv: Vec<[f32; 2]>,
-    }
-
-    impl TestMesh {
-        pub fn mesh(&self) -> Mesh<'_> {
-            let mut m = Mesh::new(Strided::from_slice(&self.p), Strided::from_slice(&self.t));
-            m.uvs = Some(Strided::from_slice(&self.uv));
-            m
-        }
-    }
-
-    /// A grid over [0,1]^2 (z = 0) whose column and row widths grow
-    /// geometrically by `ratio` overall, so triangle areas vary by ratio^2.
-    pub(crate) fn graded_plane(n: usize, ratio: f32) -> TestMesh {
-        let g = libm::powf(ratio, 1.0 / (n as f32 - 1.0));
-        let mut xs = vec![0.0f32];
-        let mut w = 1.0f32;
-        for _ in 0..n {
-            let last = *xs.last().unwrap();
-            xs.push(last + w);
-            w *= g;
-        }
-        let total = *xs.last().unwrap();
-        let xs: Vec<f32> = xs.iter().map(|x| x / total).collect();
-        let mut p = vec![];
-        let mut uv = vec![];
-        for &y in &xs {
-            for &x in &xs {
-                p.push([x, y, 0.0]);
-                uv.push([x, y]);
-            }
-        }
-        let mut t = vec![];
-        let s = (n + 1) as u32;
-        for j in 0..n as u32 {
-            for i in 0..n as u32 {
-                let a = j * s + i;
-                t.push([a, a + 1, a + s + 1]);
-                t.push([a, a + s + 1, a + s]);
-            }
-        }
-        TestMesh { p, t, uv }
-    }
-
-    /// A UV sphere with single-vertex poles.
-    pub(crate) fn sphere(rows: usize, cols: usize) -> TestMesh {
-        let mut p = vec![[0.0, 1.0, 0.0]];
-        let mut uv = vec![[0.5, 0.0]];
-        for r in 1..rows {
-            let th = core::f32::consts::PI * r as f32 / rows as f32;
-            for c in 0..cols {
-                let ph = core::f32::consts::TAU * c as f32 / cols as f32;
-                p.push([
-                    libm::sinf(th) * libm::cosf(ph),
-                    libm::cosf(th),
-                    libm::sinf(th) * libm::sinf(ph),
-                ]);
-                uv.push([c as f32 / cols as f32, r as f32 / rows as f32]);
-            }
-        }
-        p.push([0.0, -1.0, 0.0]);
-        uv.push([0.5, 1.0]);
-        let last = (p.len() - 1) as u32;
-        let at = |r: usize, c: usize| (1 + (r - 1) * cols + c % cols) as u32;
-        let mut t = vec![];
-        for c in 0..cols {
-            t.push([0, at(1, c + 1), at(1, c)]);
-            t.push([last, at(rows - 1, c), at(rows - 1, c + 1)]);
-        }
-        for r in 1..rows - 1 {
-            for c in 0..cols {
-                t.push([at(r, c), at(r, c + 1), at(r + 1, c + 1)]);
-                t.push([at(r, c), at(r + 1, c + 1), at(r + 1, c)]);
-            }
-        }
-        TestMesh { p, t, uv }
-    }
 
     pub(crate) fn run(mesh: Mesh, params: &StampParams) -> (Vec<Root>, StampReport) {
         let mut buf = vec![0u8; required_bytes(&mesh, params).unwrap()];

@@ -1,0 +1,378 @@
+//! Binding render strands to guides (once per groom, at rest).
+//!
+//! For each strand: the guides whose roots are near the strand's root, that
+//! face the same way (the paper's reverse-normal exclusion), that share its
+//! parting region and that lie within a search radius scaled by the local
+//! guide spacing (so guides across a gap are not used). The paper's
+//! randomized neighbour count picks how many to keep; weights are inverse
+//! distance, faded so each goes continuously to zero as its guide leaves the
+//! set: `w_i = (d_next - d_i) / d_i`, with `d_next` the distance of the first
+//! guide not kept (or the search radius).
+
+use crate::arena::{Arena, ArenaLayout};
+use crate::grid::HashGrid;
+use crate::guides::Guides;
+use crate::rng::{self, Purpose};
+use crate::{Error, Mesh, Root, Strided};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Most guides a strand can use.
+pub const MAX_NEIGHBOURS: usize = 8;
+/// Marks a strand without eligible guides in [`StrandBinding::clump`].
+pub const NO_GUIDE: u32 = u32::MAX;
+/// Guides counted when measuring the local guide spacing.
+const SPACING_RANK: usize = 3;
+/// Local spacing never exceeds this multiple of the mean spacing (bounds the search).
+const MAX_SPACING_RATIO: f32 = 3.0;
+
+/// Binding parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct BindParams<'a> {
+    /// Fewest guides a strand uses (>= 1).
+    pub min_neighbours: u32,
+    /// Most guides a strand uses (<= [`MAX_NEIGHBOURS`]); equal to the
+    /// minimum to turn off the paper's per-strand randomization.
+    pub max_neighbours: u32,
+    /// Seed of the per-strand neighbour count.
+    pub seed: u64,
+    /// A guide is eligible only if its root normal dotted with the strand's
+    /// exceeds this (0 excludes guides facing away, as the paper does).
+    pub min_normal_dot: f32,
+    /// Search radius in units of the local guide spacing (distance from the
+    /// strand's nearest guide to that guide's third nearest guide).
+    pub search_factor: f32,
+    /// Optional parting region per mesh vertex; a strand only uses guides of
+    /// its region (the region of the root's nearest corner).
+    pub regions: Option<Strided<'a, u32>>,
+}
+
+impl Default for BindParams<'_> {
+    fn default() -> Self {
+        BindParams {
+            min_neighbours: 3,
+            max_neighbours: 6,
+            seed: 0,
+            min_normal_dot: 0.0,
+            search_factor: 2.5,
+            regions: None,
+        }
+    }
+}
+
+/// Which guides drive one strand, and how much.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct StrandBinding {
+    /// Guide indices; the first `count` are used.
+    pub guides: [u32; MAX_NEIGHBOURS],
+    /// Normalized weights matching `guides`.
+    pub weights: [f32; MAX_NEIGHBOURS],
+    /// Number of guides used; 0 for an orphan (no eligible guide).
+    pub count: u32,
+    /// Nearest eligible guide: the strand's clump centre ([`NO_GUIDE`] for orphans).
+    pub clump: u32,
+}
+
+/// What binding found.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BindReport {
+    /// Strands with no eligible guide. They expand as straight strands along
+    /// their normal, `mean_guide_length` long (see `ExpandParams::orphan_length`).
+    pub orphans: u32,
+    /// Mean rest length of the guides.
+    pub mean_guide_length: f32,
+    /// Mean guide spacing, sqrt(mesh area / guide count).
+    pub mean_spacing: f32,
+}
+
+/// Guide roots in a spatial grid, with their normals, regions and local spacing.
+pub struct GuideIndex<'a> {
+    position: &'a [[f32; 3]],
+    normal: &'a [[f32; 3]],
+    region: &'a [u32],
+    spacing: &'a [f32],
+    grid: HashGrid<'a>,
+    cell: f32,
+    report: BindReport,
+}
+
+fn check(params: &BindParams, mesh: &Mesh) -> Result<(), Error> {
+    if params.min_neighbours == 0 || params.max_neighbours as usize > MAX_NEIGHBOURS {
+        return Err(Error::InvalidArgument("neighbour counts must be in 1..=8"));
+    }
+    if params.min_neighbours > params.max_neighbours {
+        return Err(Error::InvalidArgument(
+            "min_neighbours exceeds max_neighbours",
+        ));
+    }
+    if !params.min_normal_dot.is_finite()
+        || !(params.search_factor > 0.0 && params.search_factor.is_finite())
+    {
+        return Err(Error::InvalidArgument(
+            "min_normal_dot must be finite and search_factor positive",
+        ));
+    }
+    if let Some(r) = params.regions {
+        if r.len() != mesh.positions.len() {
+            return Err(Error::InvalidArgument(
+                "region map size differs from vertex count",
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn region_of(mesh: &Mesh, regions: Option<Strided<u32>>, r: &Root) -> u32 {
+    let Some(map) = regions else { return 0 };
+    let tri = mesh.triangles.get(r.face as usize);
+    let w = [1.0 - r.u - r.v, r.u, r.v];
+    let corner = if w[0] >= w[1] && w[0] >= w[2] {
+        0
+    } else if w[1] >= w[2] {
+        1
+    } else {
+        2
+    };
+    map.get(tri[corner] as usize)
+}
+
+/// Up to N nearest (distance^2, guide) pairs, sorted.
+struct Nearest<const N: usize> {
+    items: [(f32, u32); N],
+    len: usize,
+}
+
+impl<const N: usize> Nearest<N> {
+    fn new() -> Self {
+        Nearest {
+            items: [(f32::INFINITY, 0); N],
+            len: 0,
+        }
+    }
+
+    /// Inserts keeping order; ties break on guide index so results never
+    /// depend on grid traversal order. The grid may report a guide twice
+    /// (two cells sharing a bucket); the second report is ignored.
+    fn push(&mut self, d2: f32, g: u32) {
+        if self.len == N && (d2, g) >= self.items[N - 1]
+            || self.items[..self.len].contains(&(d2, g))
+        {
+            return;
+        }
+        let mut i = self.len.min(N - 1);
+        while i > 0 && (d2, g) < self.items[i - 1] {
+            self.items[i] = self.items[i - 1];
+            i -= 1;
+        }
+        self.items[i] = (d2, g);
+        self.len = (self.len + 1).min(N);
+    }
+}
+
+impl<'a> GuideIndex<'a> {
+    /// Adds the arena bytes [`GuideIndex::new`] needs for `guides` guides.
+    pub fn layout(layout: &mut ArenaLayout, guides: usize) {
+        layout
+            .add::<[f32; 3]>(guides)
+            .add::<[f32; 3]>(guides)
+            .add::<u32>(guides)
+            .add::<f32>(guides)
+            .add::<u32>(HashGrid::buckets_for(guides))
+            .add::<u32>(guides);
+    }
+
+    /// Validates the rest mesh, rest guides and parameters and indexes the guides.
+    pub fn new(
+        mesh: &Mesh,
+        guides: &Guides,
+        params: &BindParams,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        check(params, mesh)?;
+        let area = mesh.validate()?.area;
+        guides.validate(mesh)?;
+        let n = guides.len();
+        let position = arena.alloc::<[f32; 3]>(n)?;
+        let normal = arena.alloc::<[f32; 3]>(n)?;
+        let region = arena.alloc::<u32>(n)?;
+        let spacing = arena.alloc::<f32>(n)?;
+        let heads = arena.alloc::<u32>(HashGrid::buckets_for(n))?;
+        let next = arena.alloc::<u32>(n)?;
+        let mean_spacing = libm::sqrt(area / n as f64) as f32;
+        let cell = params.search_factor * mean_spacing;
+        let mut grid = HashGrid::new(heads, next, cell);
+        let mut total_length = 0.0f64;
+        for (g, r) in guides.roots.iter().enumerate() {
+            let p = mesh.point(r.face as usize, r.u, r.v);
+            position[g] = p.into();
+            normal[g] = mesh.normal(r.face as usize, r.u, r.v).into();
+            region[g] = region_of(mesh, params.regions, r);
+            total_length += guides.length(g) as f64;
+            grid.insert(g as u32, p);
+        }
+        for g in 0..n {
+            let mut near = Nearest::<{ SPACING_RANK + 1 }>::new();
+            let (p, nrm) = (Vec3::from(position[g]), Vec3::from(normal[g]));
+            grid.any_near(p, 1, |o| {
+                if Vec3::from(normal[o as usize]).dot(nrm) > params.min_normal_dot
+                    && region[o as usize] == region[g]
+                {
+                    near.push(p.distance_squared(Vec3::from(position[o as usize])), o);
+                }
+                false
+            });
+            // items[0] is the guide itself
+            spacing[g] = if near.len > SPACING_RANK {
+                libm::sqrtf(near.items[SPACING_RANK].0).min(MAX_SPACING_RATIO * mean_spacing)
+            } else {
+                cell
+            };
+        }
+        Ok(GuideIndex {
+            position,
+            normal,
+            region,
+            spacing,
+            grid,
+            cell,
+            report: BindReport {
+                orphans: 0,
+                mean_guide_length: (total_length / n as f64) as f32,
+                mean_spacing,
+            },
+        })
+    }
+
+    /// Mean length and spacing of the guides (orphans are counted by `bind`).
+    pub fn report(&self) -> BindReport {
+        self.report
+    }
+
+    /// Binds `strands` into `out` (same length); returns the number of orphans.
+    /// Pure per strand: disjoint ranges can run on different threads.
+    pub fn bind(
+        &self,
+        mesh: &Mesh,
+        strands: &[Root],
+        params: &BindParams,
+        out: &mut [StrandBinding],
+    ) -> Result<u32, Error> {
+        check(params, mesh)?;
+        if out.len() < strands.len() {
+            return Err(Error::CapacityExceeded {
+                needed: strands.len(),
+                available: out.len(),
+            });
+        }
+        crate::root::check_roots(mesh, strands, "strand roots")?;
+        let mut orphans = 0;
+        for (r, b) in strands.iter().zip(out.iter_mut()) {
+            *b = self.bind_one(mesh, r, params);
+            orphans += (b.count == 0) as u32;
+        }
+        Ok(orphans)
+    }
+
+    fn bind_one(&self, mesh: &Mesh, r: &Root, params: &BindParams) -> StrandBinding {
+        let face = r.face as usize;
+        let p = mesh.point(face, r.u, r.v);
+        let n = mesh.normal(face, r.u, r.v);
+        let region = region_of(mesh, params.regions, r);
+        let gather = |reach: i32| {
+            let mut near = Nearest::<{ MAX_NEIGHBOURS + 1 }>::new();
+            self.grid.any_near(p, reach, |g| {
+                let gi = g as usize;
+                if self.region[gi] == region
+                    && Vec3::from(self.normal[gi]).dot(n) > params.min_normal_dot
+                {
+                    near.push(p.distance_squared(Vec3::from(self.position[gi])), g);
+                }
+                false
+            });
+            near
+        };
+        let mut near = gather(1);
+        let orphan = StrandBinding {
+            clump: crate::bind::NO_GUIDE,
+            ..StrandBinding::default()
+        };
+        if near.len == 0 {
+            return orphan;
+        }
+        let radius = params.search_factor * self.spacing[near.items[0].1 as usize];
+        let reach = libm::ceilf(radius / self.cell) as i32;
+        if reach > 1 {
+            near = gather(reach);
+        }
+        let within = near.items[..near.len]
+            .iter()
+            .take_while(|(d2, _)| *d2 < radius * radius)
+            .count();
+        if within == 0 {
+            return orphan;
+        }
+        let span = params.max_neighbours - params.min_neighbours + 1;
+        let k = params.min_neighbours
+            + (rng::hash(params.seed, r.id as u64, Purpose::NeighbourCount, 0) % span as u64)
+                as u32;
+        let k = (k as usize).min(within);
+        let d_next = if within > k {
+            libm::sqrtf(near.items[k].0)
+        } else {
+            radius
+        };
+        let floor = 1e-6 * self.report.mean_spacing;
+        let mut b = StrandBinding {
+            count: k as u32,
+            clump: near.items[0].1,
+            ..StrandBinding::default()
+        };
+        let mut sum = 0.0;
+        for i in 0..k {
+            let d = libm::sqrtf(near.items[i].0);
+            let w = (d_next - d).max(0.0) / d.max(floor);
+            b.guides[i] = near.items[i].1;
+            b.weights[i] = w;
+            sum += w;
+        }
+        if sum > 0.0 {
+            for w in &mut b.weights[..k] {
+                *w /= sum;
+            }
+        } else {
+            b.weights[0] = 1.0;
+        }
+        b
+    }
+}
+
+/// Arena bytes [`bind`] needs for `guides` guides.
+pub fn required_bytes(guides: usize) -> usize {
+    let mut layout = ArenaLayout::new();
+    GuideIndex::layout(&mut layout, guides);
+    layout.bytes()
+}
+
+/// Binds every strand (rest mesh, rest guides) into `out`.
+pub fn bind(
+    mesh: &Mesh,
+    guides: &Guides,
+    strands: &[Root],
+    params: &BindParams,
+    arena: &mut Arena,
+    out: &mut [StrandBinding],
+) -> Result<BindReport, Error> {
+    if out.len() < strands.len() {
+        return Err(Error::CapacityExceeded {
+            needed: strands.len(),
+            available: out.len(),
+        });
+    }
+    let index = GuideIndex::new(mesh, guides, params, arena)?;
+    let orphans = index.bind(mesh, strands, params, out)?;
+    Ok(BindReport {
+        orphans,
+        ..index.report()
+    })
+}

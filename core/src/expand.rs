@@ -1,0 +1,586 @@
+//! Expanding render strands from posed guides (every frame, any range).
+//!
+//! Guides are first expressed in their own root frames on the deformed mesh
+//! ([`PreparedGuides`], once per frame). A strand's points are the weighted
+//! average of its guides' local points, shaped by its groom values, and
+//! carried back to world space by the strand's own root frame (paper 2.2).
+
+use crate::arena::{Arena, ArenaLayout};
+use crate::bind::{StrandBinding, NO_GUIDE};
+use crate::frame::Frame;
+use crate::groom::StrandGroom;
+use crate::guides::Guides;
+use crate::{Error, Mesh, Root};
+use glam::Vec3;
+
+/// Most control points per strand.
+pub const MAX_STRAND_POINTS: usize = 64;
+
+/// How curve ends are written for a Catmull-Rom consumer.
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EndPoints {
+    /// The points as they are; a Catmull-Rom curve (Embree, RenderMan) spans
+    /// the second to the second-last point.
+    Raw = 0,
+    /// First and last points repeated ("pinned" in USD), so the curve runs
+    /// from the root to the tip.
+    Pinned = 1,
+}
+
+/// Expansion parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct ExpandParams {
+    /// Control points per strand before end handling (2..=64); guides are
+    /// resampled to it.
+    pub points_per_strand: usize,
+    /// End-point convention of the output.
+    pub end_points: EndPoints,
+    /// Length of orphan strands (no eligible guide), grown along the normal.
+    pub orphan_length: f32,
+}
+
+impl ExpandParams {
+    /// Control points written per strand.
+    pub fn output_points(&self) -> usize {
+        self.points_per_strand + 2 * (self.end_points == EndPoints::Pinned) as usize
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        if !(2..=MAX_STRAND_POINTS).contains(&self.points_per_strand) {
+            return Err(Error::InvalidArgument(
+                "points_per_strand must be in 2..=64",
+            ));
+        }
+        if !(self.orphan_length >= 0.0 && self.orphan_length.is_finite()) {
+            return Err(Error::InvalidArgument(
+                "orphan_length must be finite and >= 0",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Posed guides resampled to the strand point count, in their own root
+/// frames (local) and in world space, for one frame.
+pub struct PreparedGuides<'a> {
+    local: &'a [[f32; 3]],
+    world: &'a [[f32; 3]],
+    points: usize,
+    guides: usize,
+}
+
+impl<'a> PreparedGuides<'a> {
+    /// Adds the arena bytes [`PreparedGuides::new`] needs.
+    pub fn layout(layout: &mut ArenaLayout, guides: usize, points_per_strand: usize) {
+        let n = guides.saturating_mul(points_per_strand);
+        layout.add::<[f32; 3]>(n).add::<[f32; 3]>(n);
+    }
+
+    /// Validates the deformed mesh and posed guides and prepares them.
+    pub fn new(
+        mesh: &Mesh,
+        guides: &Guides,
+        points_per_strand: usize,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        if !(2..=MAX_STRAND_POINTS).contains(&points_per_strand) {
+            return Err(Error::InvalidArgument(
+                "points_per_strand must be in 2..=64",
+            ));
+        }
+        mesh.validate()?;
+        guides.validate(mesh)?;
+        let n = points_per_strand;
+        let local = arena.alloc::<[f32; 3]>(guides.len() * n)?;
+        let world = arena.alloc::<[f32; 3]>(guides.len() * n)?;
+        let step = 1.0 / (n - 1) as f32;
+        for (g, r) in guides.roots.iter().enumerate() {
+            let frame = Frame::at(mesh, r.face as usize, r.u, r.v);
+            let (_, count) = guides.span(g);
+            for j in 0..n {
+                let p = if count == n {
+                    guides.point(g, j)
+                } else {
+                    guides.sample(g, j as f32 * step)
+                };
+                local[g * n + j] = frame.to_local(p).into();
+                world[g * n + j] = p.into();
+            }
+        }
+        Ok(PreparedGuides {
+            local,
+            world,
+            points: n,
+            guides: guides.len(),
+        })
+    }
+
+    /// Number of guides.
+    pub fn len(&self) -> usize {
+        self.guides
+    }
+
+    /// True when there is no guide.
+    pub fn is_empty(&self) -> bool {
+        self.guides == 0
+    }
+
+    /// Points per guide.
+    pub fn points(&self) -> usize {
+        self.points
+    }
+}
+
+/// Writes the curves of `strands` into `out`: `output_points()` float4
+/// (x, y, z, radius) per strand, `stride` bytes apart, strand after strand.
+/// `bindings` and `grooms` match `strands` index for index.
+///
+/// Every strand is a pure function of its inputs, so any split of a strand
+/// list into ranges gives the same bits. Nothing is written on error.
+#[allow(clippy::too_many_arguments)]
+pub fn expand(
+    mesh: &Mesh,
+    strands: &[Root],
+    bindings: &[StrandBinding],
+    grooms: &[StrandGroom],
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+    stride: usize,
+) -> Result<(), Error> {
+    params.check()?;
+    if params.points_per_strand != guides.points {
+        return Err(Error::InvalidArgument(
+            "guides were prepared for another point count",
+        ));
+    }
+    if bindings.len() < strands.len() || grooms.len() < strands.len() {
+        return Err(Error::InvalidArgument(
+            "bindings and grooms must cover every strand",
+        ));
+    }
+    if stride < 16 {
+        return Err(Error::BadStride {
+            what: "curve points",
+        });
+    }
+    let per = params.output_points();
+    let total = strands.len() * per;
+    if total > 0 && out.len() < (total - 1) * stride + 16 {
+        return Err(Error::CapacityExceeded {
+            needed: (total - 1) * stride + 16,
+            available: out.len(),
+        });
+    }
+    crate::root::check_roots(mesh, strands, "strand roots")?;
+    for (i, b) in bindings[..strands.len()].iter().enumerate() {
+        let bad = b.count as usize > crate::bind::MAX_NEIGHBOURS
+            || b.guides[..(b.count as usize).min(crate::bind::MAX_NEIGHBOURS)]
+                .iter()
+                .any(|&g| g as usize >= guides.guides)
+            || (b.clump != NO_GUIDE && b.clump as usize >= guides.guides);
+        if bad {
+            return Err(Error::OutOfRange {
+                what: "bindings",
+                index: i,
+                value: b.clump as usize,
+                bound: guides.guides,
+            });
+        }
+    }
+    for (s, root) in strands.iter().enumerate() {
+        let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS];
+        strand(
+            mesh,
+            root,
+            &bindings[s],
+            &grooms[s],
+            guides,
+            params,
+            &mut pts,
+        );
+        let n = params.points_per_strand;
+        let base = s * per * stride;
+        let mut write = |slot: usize, p: &[f32; 4]| {
+            let at = base + slot * stride;
+            out[at..at + 16].copy_from_slice(bytemuck::bytes_of(p));
+        };
+        let shift = (params.end_points == EndPoints::Pinned) as usize;
+        if shift == 1 {
+            write(0, &pts[0]);
+            write(n + 1, &pts[n - 1]);
+        }
+        for (j, p) in pts[..n].iter().enumerate() {
+            write(j + shift, p);
+        }
+    }
+    Ok(())
+}
+
+fn strand(
+    mesh: &Mesh,
+    root: &Root,
+    bind: &StrandBinding,
+    groom: &StrandGroom,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [[f32; 4]; MAX_STRAND_POINTS],
+) {
+    let n = params.points_per_strand;
+    let frame = Frame::at(mesh, root.face as usize, root.u, root.v);
+    let step = 1.0 / (n - 1) as f32;
+    let mut acc = [Vec3::ZERO; MAX_STRAND_POINTS];
+    if bind.count == 0 {
+        for (j, a) in acc[..n].iter_mut().enumerate() {
+            *a = Vec3::new(0.0, 0.0, params.orphan_length * j as f32 * step);
+        }
+    } else {
+        for k in 0..bind.count as usize {
+            let w = bind.weights[k];
+            let base = bind.guides[k] as usize * n;
+            for (a, l) in acc[..n].iter_mut().zip(&guides.local[base..base + n]) {
+                *a += Vec3::from(*l) * w;
+            }
+        }
+    }
+    let length = acc[n - 1].length() * groom.length;
+    let kink = groom.kink_amplitude * length;
+    let (sin_step, cos_step) = libm::sincosf(core::f32::consts::TAU * groom.kink_frequency * step);
+    let (mut sin, mut cos) = libm::sincosf(groom.kink_phase);
+    let clump = if bind.clump == NO_GUIDE {
+        0.0
+    } else {
+        groom.clump
+    };
+    let clump_base = bind.clump as usize * n;
+    for j in 0..n {
+        let t = j as f32 * step;
+        let mut l = acc[j] * groom.length;
+        l.x += groom.bend * length * t * t;
+        let mut p = frame.to_world(l);
+        if clump != 0.0 {
+            p += (Vec3::from(guides.world[clump_base + j]) - p) * (clump * t);
+        }
+        if kink != 0.0 {
+            p += (frame.t * sin + frame.b * cos) * (kink * t);
+            (sin, cos) = (
+                sin * cos_step + cos * sin_step,
+                cos * cos_step - sin * sin_step,
+            );
+        }
+        let r = groom.root_radius + (groom.tip_radius - groom.root_radius) * t;
+        out[j] = [p.x, p.y, p.z, r];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bind::{bind, BindParams};
+    use crate::groom::GroomMaps;
+    use crate::guides::CvLayout;
+    use crate::testmesh::{graded_plane, roots, straight_guides, TestMesh};
+    use crate::Strided;
+    use proptest::prelude::*;
+
+    const CVS: usize = 8;
+
+    struct Scene {
+        m: TestMesh,
+        guide_roots: Vec<Root>,
+        guide_points: Vec<[f32; 3]>,
+        strands: Vec<Root>,
+    }
+
+    impl Scene {
+        fn plane(guides: u32, strands: u32) -> Scene {
+            let m = graded_plane(16, 1.0);
+            let guide_roots = roots(m.mesh(), guides, 5);
+            let guide_points = straight_guides(&m.mesh(), &guide_roots, CVS, 0.1);
+            let strands = roots(m.mesh(), strands, 9);
+            Scene {
+                m,
+                guide_roots,
+                guide_points,
+                strands,
+            }
+        }
+
+        fn guides(&self) -> Guides<'_> {
+            Guides {
+                roots: &self.guide_roots,
+                points: Strided::from_slice(&self.guide_points),
+                layout: CvLayout::Fixed(CVS),
+            }
+        }
+
+        fn bind(&self, params: &BindParams) -> Vec<StrandBinding> {
+            let mut buf = vec![0u8; crate::bind::required_bytes(self.guide_roots.len())];
+            let mut out = vec![StrandBinding::default(); self.strands.len()];
+            bind(
+                &self.m.mesh(),
+                &self.guides(),
+                &self.strands,
+                params,
+                &mut Arena::new(&mut buf),
+                &mut out,
+            )
+            .unwrap();
+            out
+        }
+
+        fn expand(
+            &self,
+            bindings: &[StrandBinding],
+            grooms: &[StrandGroom],
+            params: &ExpandParams,
+            chunks: usize,
+        ) -> Vec<[f32; 4]> {
+            let mesh = self.m.mesh();
+            let mut layout = ArenaLayout::new();
+            PreparedGuides::layout(
+                &mut layout,
+                self.guide_roots.len(),
+                params.points_per_strand,
+            );
+            let mut buf = vec![0u8; layout.bytes()];
+            let mut arena = Arena::new(&mut buf);
+            let prepared =
+                PreparedGuides::new(&mesh, &self.guides(), params.points_per_strand, &mut arena)
+                    .unwrap();
+            let per = params.output_points();
+            let n = self.strands.len();
+            let mut out = vec![[0.0f32; 4]; n * per];
+            for c in 0..chunks {
+                let r = c * n / chunks..(c + 1) * n / chunks;
+                let bytes: &mut [u8] =
+                    bytemuck::cast_slice_mut(&mut out[r.start * per..r.end * per]);
+                expand(
+                    &mesh,
+                    &self.strands[r.clone()],
+                    &bindings[r.clone()],
+                    &grooms[r.clone()],
+                    &prepared,
+                    params,
+                    bytes,
+                    16,
+                )
+                .unwrap();
+            }
+            out
+        }
+    }
+
+    fn plain_grooms(n: usize) -> Vec<StrandGroom> {
+        vec![
+            StrandGroom {
+                length: 1.0,
+                root_radius: 0.001,
+                tip_radius: 0.0005,
+                ..StrandGroom::default()
+            };
+            n
+        ]
+    }
+
+    fn raw(n: usize) -> ExpandParams {
+        ExpandParams {
+            points_per_strand: n,
+            end_points: EndPoints::Raw,
+            orphan_length: 0.1,
+        }
+    }
+
+    #[test]
+    fn identical_bits_for_any_chunking() {
+        let s = Scene::plane(200, 3000);
+        let b = s.bind(&BindParams::default());
+        let mut grooms = plain_grooms(s.strands.len());
+        let maps = GroomMaps {
+            kink_amplitude: crate::ScalarMap::Constant(0.1),
+            clump: crate::ScalarMap::Constant(0.5),
+            bend: crate::ScalarMap::Constant(0.2),
+            ..GroomMaps::default()
+        };
+        maps.evaluate(&s.m.mesh(), &s.strands, 3, &mut grooms)
+            .unwrap();
+        let one = s.expand(&b, &grooms, &raw(CVS), 1);
+        for chunks in [2, 7] {
+            let other = s.expand(&b, &grooms, &raw(CVS), chunks);
+            assert!(bytemuck::cast_slice::<_, u8>(&one) == bytemuck::cast_slice::<_, u8>(&other));
+        }
+        assert!(one
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite()) && p[3] >= 0.0));
+    }
+
+    #[test]
+    fn roots_sit_on_the_surface_and_pinned_ends_repeat() {
+        let s = Scene::plane(150, 500);
+        let b = s.bind(&BindParams::default());
+        let params = ExpandParams {
+            end_points: EndPoints::Pinned,
+            ..raw(CVS)
+        };
+        let out = s.expand(&b, &plain_grooms(s.strands.len()), &params, 1);
+        let per = params.output_points();
+        for (i, r) in s.strands.iter().enumerate() {
+            let root = s.m.mesh().point(r.face as usize, r.u, r.v);
+            let c = &out[i * per..(i + 1) * per];
+            assert!(Vec3::new(c[1][0], c[1][1], c[1][2]).distance(root) < 1e-5);
+            assert_eq!(c[0], c[1]);
+            assert_eq!(c[per - 1], c[per - 2]);
+            assert!(c[per - 1][2] > 0.0, "tip above the plane");
+        }
+    }
+
+    /// Roots along the segment y = 0.37 + 0.1 x, x in [0.1, 0.9], on the plane.
+    fn path(mesh: &Mesh, steps: u32) -> Vec<Root> {
+        (0..steps)
+            .map(|i| {
+                let x = 0.1 + 0.8 * i as f32 / steps as f32;
+                let p = Vec3::new(x, 0.37 + 0.1 * x, 0.0);
+                let bary = |f: usize| {
+                    let [a, b, c] = mesh.corners(f);
+                    let (e1, e2, d) = (b - a, c - a, p - a);
+                    let det = e1.x * e2.y - e1.y * e2.x;
+                    (
+                        (d.x * e2.y - d.y * e2.x) / det,
+                        (e1.x * d.y - e1.y * d.x) / det,
+                    )
+                };
+                let face = (0..mesh.triangle_count())
+                    .find(|&f| {
+                        let (u, v) = bary(f);
+                        u >= -1e-6 && v >= -1e-6 && u + v <= 1.0 + 1e-6
+                    })
+                    .unwrap();
+                let (u, v) = bary(face);
+                Root {
+                    face: face as u32,
+                    u,
+                    v,
+                    id: i,
+                    rank: i,
+                }
+            })
+            .collect()
+    }
+
+    /// Largest change of root-relative shape between consecutive path roots.
+    fn largest_step_change(s: &Scene, steps: u32) -> f32 {
+        let strands = path(&s.m.mesh(), steps);
+        let scene = Scene {
+            m: TestMesh {
+                p: s.m.p.clone(),
+                t: s.m.t.clone(),
+                uv: s.m.uv.clone(),
+            },
+            guide_roots: s.guide_roots.clone(),
+            guide_points: s.guide_points.clone(),
+            strands,
+        };
+        let fixed = BindParams {
+            min_neighbours: 4,
+            max_neighbours: 4,
+            ..BindParams::default()
+        };
+        let b = scene.bind(&fixed);
+        let out = scene.expand(&b, &plain_grooms(steps as usize), &raw(CVS), 1);
+        let rel = |c: &[[f32; 4]], j: usize| {
+            Vec3::new(c[j][0] - c[0][0], c[j][1] - c[0][1], c[j][2] - c[0][2])
+        };
+        let mut worst = 0.0f32;
+        for i in 1..steps as usize {
+            let (p, q) = (&out[(i - 1) * CVS..i * CVS], &out[i * CVS..(i + 1) * CVS]);
+            for j in 0..CVS {
+                worst = worst.max(rel(p, j).distance(rel(q, j)));
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn shapes_change_continuously_along_a_path() {
+        // Continuous weights: refining the path 8x shrinks the largest
+        // change between neighbours about 8x. A hard k cutoff would leave a
+        // jump of the same size at every resolution.
+        let s = Scene::plane(120, 10);
+        let coarse = largest_step_change(&s, 1000);
+        let fine = largest_step_change(&s, 8000);
+        assert!(
+            fine < 0.3 * coarse,
+            "largest change {coarse} at 1000 steps, {fine} at 8000 steps"
+        );
+        // and the change is bounded by a constant times the step (0.8 / steps)
+        assert!(fine < 20.0 * 0.8 / 8000.0, "change {fine} per step");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        #[test]
+        fn strand_stays_in_its_guides_envelope(seed in 0u64..1000, kmin in 1u32..5, extra in 0u32..4) {
+            let s = Scene::plane(80, 300);
+            let params = BindParams { min_neighbours: kmin, max_neighbours: kmin + extra, seed, ..BindParams::default() };
+            let b = s.bind(&params);
+            let out = s.expand(&b, &plain_grooms(s.strands.len()), &raw(CVS), 1);
+            let mesh = s.m.mesh();
+            let mut layout = ArenaLayout::new();
+            PreparedGuides::layout(&mut layout, s.guide_roots.len(), CVS);
+            let mut buf = vec![0u8; layout.bytes()];
+            let prepared = PreparedGuides::new(&mesh, &s.guides(), CVS, &mut Arena::new(&mut buf)).unwrap();
+            for (i, r) in s.strands.iter().enumerate() {
+                let frame = Frame::at(&mesh, r.face as usize, r.u, r.v);
+                for j in 0..CVS {
+                    let p = out[i * CVS + j];
+                    let local = frame.to_local(Vec3::new(p[0], p[1], p[2]));
+                    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                    for k in 0..b[i].count as usize {
+                        let l = Vec3::from(prepared.local[b[i].guides[k] as usize * CVS + j]);
+                        lo = lo.min(l);
+                        hi = hi.max(l);
+                    }
+                    prop_assert!(local.cmpge(lo - 1e-5).all() && local.cmple(hi + 1e-5).all(),
+                        "strand {} point {}: {:?} outside {:?}..{:?}", i, j, local, lo, hi);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn variable_cv_counts_resample() {
+        let s = Scene::plane(60, 200);
+        let b = s.bind(&BindParams::default());
+        // the same guides stored with offsets give the same curves
+        let offsets: Vec<u32> = (0..=s.guide_roots.len() as u32)
+            .map(|g| g * CVS as u32)
+            .collect();
+        let mesh = s.m.mesh();
+        let guides = Guides {
+            roots: &s.guide_roots,
+            points: Strided::from_slice(&s.guide_points),
+            layout: CvLayout::Offsets(&offsets),
+        };
+        let mut buf = vec![0u8; 1 << 20];
+        let prepared = PreparedGuides::new(&mesh, &guides, 15, &mut Arena::new(&mut buf)).unwrap();
+        let mut out = vec![[0.0f32; 4]; s.strands.len() * 15];
+        expand(
+            &mesh,
+            &s.strands,
+            &b,
+            &plain_grooms(s.strands.len()),
+            &prepared,
+            &raw(15),
+            bytemuck::cast_slice_mut(&mut out),
+            16,
+        )
+        .unwrap();
+        let straight = s.expand(&b, &plain_grooms(s.strands.len()), &raw(CVS), 1);
+        for i in 0..s.strands.len() {
+            let tip_a = out[i * 15 + 14];
+            let tip_b = straight[i * CVS + CVS - 1];
+            assert!((0..3).all(|c| (tip_a[c] - tip_b[c]).abs() < 1e-5));
+        }
+    }
+}
