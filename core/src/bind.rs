@@ -376,3 +376,113 @@ pub fn bind(
         ..index.report()
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guides::CvLayout;
+    use crate::testmesh::{graded_plane, roots, straight_guides, TestMesh};
+
+    /// Two parallel squares 0.01 apart facing away from each other: the two
+    /// sides of an ear.
+    fn slab() -> TestMesh {
+        let top = graded_plane(10, 1.0);
+        let mut p = top.p.clone();
+        let n = p.len() as u32;
+        p.extend(top.p.iter().map(|q| [q[0], q[1], -0.01]));
+        let mut t = top.t.clone();
+        t.extend(top.t.iter().map(|f| [f[0] + n, f[2] + n, f[1] + n]));
+        let mut uv = top.uv.clone();
+        uv.extend(top.uv.iter());
+        TestMesh { p, t, uv }
+    }
+
+    fn run(m: &TestMesh, g: &[Root], pts: &[[f32; 3]], strands: &[Root], params: &BindParams) -> Result<(Vec<StrandBinding>, BindReport), Error> {
+        let guides = Guides {
+            roots: g,
+            points: Strided::from_slice(pts),
+            layout: CvLayout::Fixed(4),
+        };
+        let mut buf = vec![0u8; required_bytes(g.len())];
+        let mut out = vec![StrandBinding::default(); strands.len()];
+        let report = bind(&m.mesh(), &guides, strands, params, &mut Arena::new(&mut buf), &mut out)?;
+        Ok((out, report))
+    }
+
+    #[test]
+    fn never_takes_a_guide_from_the_other_side_of_a_thin_part() {
+        let m = slab();
+        let mesh = m.mesh();
+        let g = roots(mesh, 300, 1);
+        let pts = straight_guides(&mesh, &g, 4, 0.05);
+        let strands = roots(mesh, 5000, 2);
+        let (b, report) = run(&m, &g, &pts, &strands, &BindParams::default()).unwrap();
+        assert_eq!(report.orphans, 0);
+        let top = |f: u32| (f as usize) < mesh.triangle_count() / 2;
+        for (s, bind) in strands.iter().zip(&b) {
+            assert!(bind.count > 0);
+            for &gi in &bind.guides[..bind.count as usize] {
+                assert_eq!(top(s.face), top(g[gi as usize].face), "strand crossed the slab");
+            }
+            let w: f32 = bind.weights[..bind.count as usize].iter().sum();
+            assert!((w - 1.0).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn partings_and_orphans() {
+        let m = graded_plane(12, 1.0);
+        let mesh = m.mesh();
+        // region 1 on the right half, 0 on the left; guides only on the left
+        let regions: Vec<u32> = m.p.iter().map(|p| (p[0] > 0.5) as u32).collect();
+        let all = roots(mesh, 400, 1);
+        let g: Vec<Root> = all.into_iter().filter(|r| mesh.point(r.face as usize, r.u, r.v).x < 0.4).collect();
+        let pts = straight_guides(&mesh, &g, 4, 0.05);
+        let strands = roots(mesh, 3000, 2);
+        let params = BindParams {
+            regions: Some(Strided::from_slice(&regions)),
+            ..BindParams::default()
+        };
+        let (b, report) = run(&m, &g, &pts, &strands, &params).unwrap();
+        let right = strands.iter().filter(|r| region_of(&mesh, params.regions, r) == 1).count();
+        // every right-side strand is an orphan (checked below), and a few
+        // left-side ones near the border are beyond the search radius
+        assert!(report.orphans as usize >= right);
+        for (s, bind) in strands.iter().zip(&b) {
+            if region_of(&mesh, params.regions, s) == 1 {
+                assert_eq!((bind.count, bind.clump), (0, NO_GUIDE));
+            }
+        }
+        // without partings, the distance bound still keeps far strands orphaned
+        let (_, report) = run(&m, &g, &pts, &strands, &BindParams::default()).unwrap();
+        assert!(report.orphans > 0 && (report.orphans as usize) < right);
+    }
+
+    #[test]
+    fn bad_input_is_reported() {
+        let m = graded_plane(4, 1.0);
+        let mesh = m.mesh();
+        let g = roots(mesh, 20, 1);
+        let pts = straight_guides(&mesh, &g, 4, 0.05);
+        let s = roots(mesh, 50, 2);
+        let ok = BindParams::default();
+        assert!(matches!(run(&m, &[], &[], &s, &ok), Err(Error::InvalidArgument(_))));
+        let mut nan = pts.clone();
+        nan[5][0] = f32::NAN;
+        assert!(matches!(run(&m, &g, &nan, &s, &ok), Err(Error::NonFinite { index: 5, .. })));
+        let mut flat = pts.clone();
+        let first = flat[4];
+        flat[4..8].fill(first);
+        assert!(matches!(run(&m, &g, &flat, &s, &ok), Err(Error::InvalidArgument(_))));
+        let mut far = g.clone();
+        far[3].face = 10_000;
+        assert!(matches!(run(&m, &far, &pts, &s, &ok), Err(Error::OutOfRange { index: 3, .. })));
+        let k0 = BindParams { min_neighbours: 0, ..ok };
+        assert!(matches!(run(&m, &g, &pts, &s, &k0), Err(Error::InvalidArgument(_))));
+        let swapped = BindParams { min_neighbours: 5, max_neighbours: 3, ..ok };
+        assert!(matches!(run(&m, &g, &pts, &s, &swapped), Err(Error::InvalidArgument(_))));
+        let mut bad_strand = s.clone();
+        bad_strand[0].face = u32::MAX;
+        assert!(matches!(run(&m, &g, &pts, &bad_strand, &ok), Err(Error::OutOfRange { .. })));
+    }
+}
