@@ -25,6 +25,9 @@
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
 
+// Most guides a strand can use.
+#define PELAGE_MAX_NEIGHBOURS (uint32_t)MAX_NEIGHBOURS
+
 // Result of every pelage call. Values are stable: a retired code is never reused.
 typedef enum PelageStatus {
   // Success; outputs were written.
@@ -51,6 +54,16 @@ typedef enum PelageStatus {
   PELAGE_STATUS_PANIC = 10,
 } PelageStatus;
 
+// End-point convention of the output curves.
+typedef enum PelageEndPoints {
+  // Points as computed: a Catmull-Rom consumer (Embree, RenderMan) draws
+  // from the second to the second-last point.
+  PELAGE_END_POINTS_RAW = 0,
+  // First and last points repeated ("pinned" in USD): the curve runs from
+  // root to tip. Adds 2 points per curve.
+  PELAGE_END_POINTS_PINNED = 1,
+} PelageEndPoints;
+
 // How a [`PelageMap`] stores its values.
 typedef enum PelageMapKind {
   // `constant` everywhere; `data` is ignored.
@@ -63,6 +76,26 @@ typedef enum PelageMapKind {
   // One float per mesh vertex, `stride` bytes apart, interpolated over triangles.
   PELAGE_MAP_KIND_PER_VERTEX = 3,
 } PelageMapKind;
+
+// Binding parameters; start from pelage_bind_params_defaults().
+typedef struct PelageBindParams {
+  // Fewest guides per strand (>= 1).
+  uint32_t min_neighbours;
+  // Most guides per strand (<= PELAGE_MAX_NEIGHBOURS); equal to the minimum
+  // turns off the per-strand randomization.
+  uint32_t max_neighbours;
+  // Seed of the per-strand neighbour count.
+  uint64_t seed;
+  // Guides whose root normal dotted with the strand's is not above this are
+  // excluded (0: exclude guides facing away).
+  float min_normal_dot;
+  // Search radius in units of the local guide spacing.
+  float search_factor;
+  // Optional uint32 parting region per mesh vertex, or NULL.
+  const uint32_t *regions;
+  // Bytes between region values (>= 4).
+  size_t region_stride;
+} PelageBindParams;
 
 // A triangle mesh in host memory, borrowed for one call (like an Embree
 // shared buffer: pointer, byte stride, count).
@@ -110,6 +143,86 @@ typedef struct PelageRoot {
   uint32_t rank;
 } PelageRoot;
 
+// Guide curves in host memory (rest or posed), borrowed for one call.
+//
+// Guide g is rooted at `roots[g]` (face, u, v; id and rank unused). Its
+// control points are float3 `point_stride` bytes apart: with `offsets` NULL
+// every guide has `points_per_guide` points (the fast path); otherwise guide g
+// owns points offsets[g] .. offsets[g + 1] (guide_count + 1 entries).
+// `point_count` is the total number of points.
+typedef struct PelageGuidesDesc {
+  // Guide roots, `guide_count` entries.
+  const struct PelageRoot *roots;
+  // Number of guides.
+  size_t guide_count;
+  // float3 control points of all guides.
+  const void *points;
+  // Bytes between consecutive points (>= 12; 16 reads float4 buffers).
+  size_t point_stride;
+  // Total number of points.
+  size_t point_count;
+  // Points per guide when `offsets` is NULL.
+  uint32_t points_per_guide;
+  // Optional per-guide offsets (guide_count + 1 entries), or NULL.
+  const uint32_t *offsets;
+} PelageGuidesDesc;
+
+// Guides and weights of one strand (the flat, Pod binding record; store it
+// with the roots as the groom's "root file").
+typedef struct PelageStrandBinding {
+  // Guide indices; the first `count` are used.
+  uint32_t guides[8];
+  // Normalized weights.
+  float weights[8];
+  // Guides used; 0 for an orphan (no eligible guide).
+  uint32_t count;
+  // Clump centre guide (nearest eligible), or 0xFFFFFFFF for orphans.
+  uint32_t clump;
+} PelageStrandBinding;
+
+// What binding found.
+typedef struct PelageBindInfo {
+  // Strands with no eligible guide (grown straight along the normal).
+  uint32_t orphans;
+  // Mean rest guide length (a good PelageExpandParams.orphan_length).
+  float mean_guide_length;
+  // Mean guide spacing, sqrt(area / guides).
+  float mean_spacing;
+} PelageBindInfo;
+
+// Expansion parameters; start from pelage_expand_params_defaults().
+typedef struct PelageExpandParams {
+  // Control points per strand before end handling (2..64); guides are resampled.
+  uint32_t points_per_strand;
+  // End-point convention.
+  enum PelageEndPoints end_points;
+  // Length of orphan strands (use PelageBindInfo.mean_guide_length).
+  float orphan_length;
+  // Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
+  // calling thread only. The output is bitwise identical for any value.
+  uint32_t thread_count;
+} PelageExpandParams;
+
+// Groom values of one strand.
+typedef struct PelageStrandGroom {
+  // Length multiplier.
+  float length;
+  // Radius at the root.
+  float root_radius;
+  // Radius at the tip.
+  float tip_radius;
+  // Bend.
+  float bend;
+  // Kink amplitude.
+  float kink_amplitude;
+  // Kink frequency.
+  float kink_frequency;
+  // Kink phase (radians).
+  float kink_phase;
+  // Clump pull.
+  float clump;
+} PelageStrandGroom;
+
 // A scalar value over the mesh surface: a constant, a texture, or per-vertex values.
 typedef struct PelageMap {
   // Storage kind.
@@ -125,6 +238,26 @@ typedef struct PelageMap {
   // Bytes per texture row, or between per-vertex values.
   size_t stride;
 } PelageMap;
+
+// Groom maps sampled at each strand root; start from pelage_groom_maps_defaults().
+typedef struct PelageGroomMaps {
+  // Length multiplier (default 1).
+  struct PelageMap length;
+  // Width (diameter) at the root in world units (default 0.002).
+  struct PelageMap root_width;
+  // Width at the tip (default 0.0005).
+  struct PelageMap tip_width;
+  // Curl toward the root tangent, tip offset as a fraction of length (default 0).
+  struct PelageMap bend;
+  // Kink amplitude as a fraction of length (default 0).
+  struct PelageMap kink_amplitude;
+  // Kink waves along the strand (default 3).
+  struct PelageMap kink_frequency;
+  // Pull of the tip toward the clump centre guide, 0..1 (default 0).
+  struct PelageMap clump;
+  // Seed of the per-strand kink phase.
+  uint64_t seed;
+} PelageGroomMaps;
 
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
@@ -175,6 +308,70 @@ const char *pelage_status_string(int32_t status);
 //
 // Thread safety: per-thread; may be called from any thread.
 const char *pelage_last_error(void);
+
+// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0,
+// search_factor 2.5, no regions.
+//
+// Thread safety: may be called from any thread at any time.
+struct PelageBindParams pelage_bind_params_defaults(void);
+
+// Arena bytes pelage_bind needs for `guide_count` guides.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_bind_query(size_t guide_count, size_t *arena_bytes);
+
+// Binds `strand_count` strands to guides on the rest pose (rest mesh, rest
+// guides): neighbour guides by root distance, excluding guides facing away,
+// of another parting region, or beyond the search radius; a randomized count
+// per strand; inverse-distance weights that fade to zero as a guide leaves
+// the set. Writes `strand_count` records to `bindings` and, optionally,
+// `info`. Nothing is written on failure.
+//
+// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, void *arena, size_t arena_bytes, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);
+
+// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread.
+//
+// Thread safety: may be called from any thread at any time.
+struct PelageExpandParams pelage_expand_params_defaults(void);
+
+// Sizes an expansion: arena bytes for `guide_count` guides and the control
+// points written per curve (points_per_strand, + 2 when pinned).
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_expand_query(size_t guide_count, const struct PelageExpandParams *params, size_t *arena_bytes, size_t *points_per_curve);
+
+// Expands `strand_count` render curves for one frame from posed guides on
+// the deformed mesh. `strands`, `bindings` and `grooms` are parallel arrays
+// (pass pointers offset by `first` to expand a range). Writes
+// points_per_curve float4 (x, y, z, radius) per strand into `points`,
+// `point_stride` bytes apart (16 = Embree's RTC_FORMAT_FLOAT4 layout),
+// capacity `point_capacity` points; optionally the point count of each curve
+// (`curve_counts`) and each strand's id (`curve_ids`), NULL to skip.
+// Work is split over `params->thread_count` threads; the bits do not depend
+// on it. Everything is validated before anything is written.
+//
+// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+enum PelageStatus pelage_expand(const struct PelageMeshDesc *mesh, const struct PelageGuidesDesc *guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, const struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, void *points, size_t point_stride, size_t point_capacity, uint32_t *curve_counts, uint32_t *curve_ids);
+
+// Writes Embree's index buffer for `curve_count` curves of
+// `points_per_curve` points stored back to back: one uint32 per Catmull-Rom
+// segment, the index of its first control point (points_per_curve - 3
+// segments per curve). `capacity` is in entries.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_curves_segment_indices(size_t curve_count, size_t points_per_curve, uint32_t *indices, size_t capacity);
+
+// Default groom maps (constants; see the field docs), seed 0.
+//
+// Thread safety: may be called from any thread at any time.
+struct PelageGroomMaps pelage_groom_maps_defaults(void);
+
+// Samples the groom maps at `root_count` strand roots (once per groom) into
+// `grooms` (capacity `grooms_capacity`). Nothing is written on failure.
+//
+// Thread safety: reentrant; concurrent calls need distinct outputs.
+enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const struct PelageGroomMaps *maps, const struct PelageRoot *roots, size_t root_count, struct PelageStrandGroom *grooms, size_t grooms_capacity);
 
 // Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 // positions into `positions` (float3, `position_stride` bytes apart) and, if

@@ -7,12 +7,28 @@
 
 #[macro_use]
 mod status;
+mod bind;
 mod buffers;
+mod expand;
+mod groom;
+mod guides;
 mod map;
 mod mesh;
 mod roots;
 mod stamp;
 
+pub use bind::{
+    pelage_bind, pelage_bind_params_defaults, pelage_bind_query, PelageBindInfo, PelageBindParams,
+    PelageStrandBinding, PELAGE_MAX_NEIGHBOURS,
+};
+pub use expand::{
+    pelage_curves_segment_indices, pelage_expand, pelage_expand_params_defaults,
+    pelage_expand_query, PelageEndPoints, PelageExpandParams,
+};
+pub use groom::{
+    pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,
+};
+pub use guides::PelageGuidesDesc;
 pub use map::{PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
 pub use roots::{pelage_roots_evaluate, PelageRoot};

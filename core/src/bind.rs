@@ -106,8 +106,9 @@ fn check(params: &BindParams, mesh: &Mesh) -> Result<(), Error> {
             "min_neighbours exceeds max_neighbours",
         ));
     }
-    if !params.min_normal_dot.is_finite()
-        || !(params.search_factor > 0.0 && params.search_factor.is_finite())
+    if !(params.min_normal_dot.is_finite()
+        && params.search_factor > 0.0
+        && params.search_factor.is_finite())
     {
         return Err(Error::InvalidArgument(
             "min_normal_dot must be finite and search_factor positive",
@@ -397,7 +398,13 @@ mod tests {
         TestMesh { p, t, uv }
     }
 
-    fn run(m: &TestMesh, g: &[Root], pts: &[[f32; 3]], strands: &[Root], params: &BindParams) -> Result<(Vec<StrandBinding>, BindReport), Error> {
+    fn run(
+        m: &TestMesh,
+        g: &[Root],
+        pts: &[[f32; 3]],
+        strands: &[Root],
+        params: &BindParams,
+    ) -> Result<(Vec<StrandBinding>, BindReport), Error> {
         let guides = Guides {
             roots: g,
             points: Strided::from_slice(pts),
@@ -405,7 +412,14 @@ mod tests {
         };
         let mut buf = vec![0u8; required_bytes(g.len())];
         let mut out = vec![StrandBinding::default(); strands.len()];
-        let report = bind(&m.mesh(), &guides, strands, params, &mut Arena::new(&mut buf), &mut out)?;
+        let report = bind(
+            &m.mesh(),
+            &guides,
+            strands,
+            params,
+            &mut Arena::new(&mut buf),
+            &mut out,
+        )?;
         Ok((out, report))
     }
 
@@ -422,7 +436,11 @@ mod tests {
         for (s, bind) in strands.iter().zip(&b) {
             assert!(bind.count > 0);
             for &gi in &bind.guides[..bind.count as usize] {
-                assert_eq!(top(s.face), top(g[gi as usize].face), "strand crossed the slab");
+                assert_eq!(
+                    top(s.face),
+                    top(g[gi as usize].face),
+                    "strand crossed the slab"
+                );
             }
             let w: f32 = bind.weights[..bind.count as usize].iter().sum();
             assert!((w - 1.0).abs() < 1e-5);
@@ -436,7 +454,10 @@ mod tests {
         // region 1 on the right half, 0 on the left; guides only on the left
         let regions: Vec<u32> = m.p.iter().map(|p| (p[0] > 0.5) as u32).collect();
         let all = roots(mesh, 400, 1);
-        let g: Vec<Root> = all.into_iter().filter(|r| mesh.point(r.face as usize, r.u, r.v).x < 0.4).collect();
+        let g: Vec<Root> = all
+            .into_iter()
+            .filter(|r| mesh.point(r.face as usize, r.u, r.v).x < 0.4)
+            .collect();
         let pts = straight_guides(&mesh, &g, 4, 0.05);
         let strands = roots(mesh, 3000, 2);
         let params = BindParams {
@@ -444,7 +465,10 @@ mod tests {
             ..BindParams::default()
         };
         let (b, report) = run(&m, &g, &pts, &strands, &params).unwrap();
-        let right = strands.iter().filter(|r| region_of(&mesh, params.regions, r) == 1).count();
+        let right = strands
+            .iter()
+            .filter(|r| region_of(&mesh, params.regions, r) == 1)
+            .count();
         // every right-side strand is an orphan (checked below), and a few
         // left-side ones near the border are beyond the search radius
         assert!(report.orphans as usize >= right);
@@ -466,23 +490,51 @@ mod tests {
         let pts = straight_guides(&mesh, &g, 4, 0.05);
         let s = roots(mesh, 50, 2);
         let ok = BindParams::default();
-        assert!(matches!(run(&m, &[], &[], &s, &ok), Err(Error::InvalidArgument(_))));
+        assert!(matches!(
+            run(&m, &[], &[], &s, &ok),
+            Err(Error::InvalidArgument(_))
+        ));
         let mut nan = pts.clone();
         nan[5][0] = f32::NAN;
-        assert!(matches!(run(&m, &g, &nan, &s, &ok), Err(Error::NonFinite { index: 5, .. })));
+        assert!(matches!(
+            run(&m, &g, &nan, &s, &ok),
+            Err(Error::NonFinite { index: 5, .. })
+        ));
         let mut flat = pts.clone();
         let first = flat[4];
         flat[4..8].fill(first);
-        assert!(matches!(run(&m, &g, &flat, &s, &ok), Err(Error::InvalidArgument(_))));
+        assert!(matches!(
+            run(&m, &g, &flat, &s, &ok),
+            Err(Error::InvalidArgument(_))
+        ));
         let mut far = g.clone();
         far[3].face = 10_000;
-        assert!(matches!(run(&m, &far, &pts, &s, &ok), Err(Error::OutOfRange { index: 3, .. })));
-        let k0 = BindParams { min_neighbours: 0, ..ok };
-        assert!(matches!(run(&m, &g, &pts, &s, &k0), Err(Error::InvalidArgument(_))));
-        let swapped = BindParams { min_neighbours: 5, max_neighbours: 3, ..ok };
-        assert!(matches!(run(&m, &g, &pts, &s, &swapped), Err(Error::InvalidArgument(_))));
+        assert!(matches!(
+            run(&m, &far, &pts, &s, &ok),
+            Err(Error::OutOfRange { index: 3, .. })
+        ));
+        let k0 = BindParams {
+            min_neighbours: 0,
+            ..ok
+        };
+        assert!(matches!(
+            run(&m, &g, &pts, &s, &k0),
+            Err(Error::InvalidArgument(_))
+        ));
+        let swapped = BindParams {
+            min_neighbours: 5,
+            max_neighbours: 3,
+            ..ok
+        };
+        assert!(matches!(
+            run(&m, &g, &pts, &s, &swapped),
+            Err(Error::InvalidArgument(_))
+        ));
         let mut bad_strand = s.clone();
         bad_strand[0].face = u32::MAX;
-        assert!(matches!(run(&m, &g, &pts, &bad_strand, &ok), Err(Error::OutOfRange { .. })));
+        assert!(matches!(
+            run(&m, &g, &pts, &bad_strand, &ok),
+            Err(Error::OutOfRange { .. })
+        ));
     }
 }

@@ -132,21 +132,18 @@ impl<'a> PreparedGuides<'a> {
     }
 }
 
-/// Writes the curves of `strands` into `out`: `output_points()` float4
-/// (x, y, z, radius) per strand, `stride` bytes apart, strand after strand.
-/// `bindings` and `grooms` match `strands` index for index.
-///
-/// Every strand is a pure function of its inputs, so any split of a strand
-/// list into ranges gives the same bits. Nothing is written on error.
+/// Validates everything [`expand`] reads, for an output of `out_len` bytes;
+/// a threaded host calls it once before splitting, so that no chunk writes
+/// when another would fail.
 #[allow(clippy::too_many_arguments)]
-pub fn expand(
+pub fn check_inputs(
     mesh: &Mesh,
     strands: &[Root],
     bindings: &[StrandBinding],
     grooms: &[StrandGroom],
     guides: &PreparedGuides,
     params: &ExpandParams,
-    out: &mut [u8],
+    out_len: usize,
     stride: usize,
 ) -> Result<(), Error> {
     params.check()?;
@@ -165,12 +162,11 @@ pub fn expand(
             what: "curve points",
         });
     }
-    let per = params.output_points();
-    let total = strands.len() * per;
-    if total > 0 && out.len() < (total - 1) * stride + 16 {
+    let total = strands.len() * params.output_points();
+    if total > 0 && out_len < (total - 1) * stride + 16 {
         return Err(Error::CapacityExceeded {
             needed: (total - 1) * stride + 16,
-            available: out.len(),
+            available: out_len,
         });
     }
     crate::root::check_roots(mesh, strands, "strand roots")?;
@@ -189,6 +185,37 @@ pub fn expand(
             });
         }
     }
+    Ok(())
+}
+
+/// Writes the curves of `strands` into `out`: `output_points()` float4
+/// (x, y, z, radius) per strand, `stride` bytes apart, strand after strand.
+/// `bindings` and `grooms` match `strands` index for index.
+///
+/// Every strand is a pure function of its inputs, so any split of a strand
+/// list into ranges gives the same bits. Nothing is written on error.
+#[allow(clippy::too_many_arguments)]
+pub fn expand(
+    mesh: &Mesh,
+    strands: &[Root],
+    bindings: &[StrandBinding],
+    grooms: &[StrandGroom],
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+    stride: usize,
+) -> Result<(), Error> {
+    check_inputs(
+        mesh,
+        strands,
+        bindings,
+        grooms,
+        guides,
+        params,
+        out.len(),
+        stride,
+    )?;
+    let per = params.output_points();
     for (s, root) in strands.iter().enumerate() {
         let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS];
         strand(

@@ -1,0 +1,153 @@
+//! Binding strands to guides.
+
+use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut, strided};
+use crate::status::Failure;
+use crate::{PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus};
+use bytemuck::{Pod, Zeroable};
+use pelage_core::bind::{self, BindParams, StrandBinding, MAX_NEIGHBOURS};
+use pelage_core::{Arena, Root};
+
+/// Most guides a strand can use.
+pub const PELAGE_MAX_NEIGHBOURS: u32 = MAX_NEIGHBOURS as u32;
+
+/// Binding parameters; start from pelage_bind_params_defaults().
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageBindParams {
+    /// Fewest guides per strand (>= 1).
+    pub min_neighbours: u32,
+    /// Most guides per strand (<= PELAGE_MAX_NEIGHBOURS); equal to the minimum
+    /// turns off the per-strand randomization.
+    pub max_neighbours: u32,
+    /// Seed of the per-strand neighbour count.
+    pub seed: u64,
+    /// Guides whose root normal dotted with the strand's is not above this are
+    /// excluded (0: exclude guides facing away).
+    pub min_normal_dot: f32,
+    /// Search radius in units of the local guide spacing.
+    pub search_factor: f32,
+    /// Optional uint32 parting region per mesh vertex, or NULL.
+    pub regions: *const u32,
+    /// Bytes between region values (>= 4).
+    pub region_stride: usize,
+}
+
+/// Guides and weights of one strand (the flat, Pod binding record; store it
+/// with the roots as the groom's "root file").
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PelageStrandBinding {
+    /// Guide indices; the first `count` are used.
+    pub guides: [u32; 8],
+    /// Normalized weights.
+    pub weights: [f32; 8],
+    /// Guides used; 0 for an orphan (no eligible guide).
+    pub count: u32,
+    /// Clump centre guide (nearest eligible), or 0xFFFFFFFF for orphans.
+    pub clump: u32,
+}
+
+const _: () =
+    assert!(std::mem::size_of::<PelageStrandBinding>() == std::mem::size_of::<StrandBinding>());
+const _: () = assert!(MAX_NEIGHBOURS == 8);
+
+/// What binding found.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PelageBindInfo {
+    /// Strands with no eligible guide (grown straight along the normal).
+    pub orphans: u32,
+    /// Mean rest guide length (a good PelageExpandParams.orphan_length).
+    pub mean_guide_length: f32,
+    /// Mean guide spacing, sqrt(area / guides).
+    pub mean_spacing: f32,
+}
+
+/// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0,
+/// search_factor 2.5, no regions.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
+    let d = BindParams::default();
+    PelageBindParams {
+        min_neighbours: d.min_neighbours,
+        max_neighbours: d.max_neighbours,
+        seed: d.seed,
+        min_normal_dot: d.min_normal_dot,
+        search_factor: d.search_factor,
+        regions: std::ptr::null(),
+        region_stride: 4,
+    }
+}
+
+/// Arena bytes pelage_bind needs for `guide_count` guides.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_bind_query(guide_count: usize, arena_bytes: *mut usize) -> PelageStatus {
+    ffi_boundary! {
+        let out = req_mut(arena_bytes, "arena_bytes")?;
+        *out = bind::required_bytes(guide_count);
+        Ok(())
+    }
+}
+
+/// Binds `strand_count` strands to guides on the rest pose (rest mesh, rest
+/// guides): neighbour guides by root distance, excluding guides facing away,
+/// of another parting region, or beyond the search radius; a randomized count
+/// per strand; inverse-distance weights that fade to zero as a guide leaves
+/// the set. Writes `strand_count` records to `bindings` and, optionally,
+/// `info`. Nothing is written on failure.
+///
+/// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+#[no_mangle]
+pub extern "C" fn pelage_bind(
+    rest_mesh: *const PelageMeshDesc,
+    rest_guides: *const PelageGuidesDesc,
+    strands: *const PelageRoot,
+    strand_count: usize,
+    params: *const PelageBindParams,
+    arena: *mut std::ffi::c_void,
+    arena_bytes: usize,
+    bindings: *mut PelageStrandBinding,
+    bindings_capacity: usize,
+    info: *mut PelageBindInfo,
+) -> PelageStatus {
+    ffi_boundary! {
+        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
+        let guides = req(rest_guides, "rest_guides")?.view()?;
+        let strands: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
+        let p = req(params, "params")?;
+        let regions = if p.regions.is_null() {
+            None
+        } else {
+            Some(strided(p.regions.cast(), p.region_stride, mesh.positions.len(), "regions")?)
+        };
+        let core = BindParams {
+            min_neighbours: p.min_neighbours,
+            max_neighbours: p.max_neighbours,
+            seed: p.seed,
+            min_normal_dot: p.min_normal_dot,
+            search_factor: p.search_factor,
+            regions,
+        };
+        if bindings_capacity < strand_count {
+            return Err(Failure::new(
+                PelageStatus::CapacityExceeded,
+                format!("bindings: {strand_count} needed, {bindings_capacity} available"),
+            ));
+        }
+        let out = slice_mut(bindings, strand_count, "bindings")?;
+        let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        let report = bind::bind(&mesh, &guides, strands, &core, &mut Arena::new(arena), bytemuck::cast_slice_mut(out))?;
+        if let Some(info) = opt_mut(info) {
+            *info = PelageBindInfo {
+                orphans: report.orphans,
+                mean_guide_length: report.mean_guide_length,
+                mean_spacing: report.mean_spacing,
+            };
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,230 @@
+//! Expanding render curves from posed guides.
+
+use crate::buffers::{bytes_mut, req, req_mut, slice, slice_mut};
+use crate::status::Failure;
+use crate::{
+    PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus, PelageStrandBinding,
+    PelageStrandGroom,
+};
+use pelage_core::arena::ArenaLayout;
+use pelage_core::bind::StrandBinding;
+use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides};
+use pelage_core::groom::StrandGroom;
+use pelage_core::{Arena, Root};
+
+/// End-point convention of the output curves.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PelageEndPoints {
+    /// Points as computed: a Catmull-Rom consumer (Embree, RenderMan) draws
+    /// from the second to the second-last point.
+    Raw = 0,
+    /// First and last points repeated ("pinned" in USD): the curve runs from
+    /// root to tip. Adds 2 points per curve.
+    Pinned = 1,
+}
+
+/// Expansion parameters; start from pelage_expand_params_defaults().
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageExpandParams {
+    /// Control points per strand before end handling (2..64); guides are resampled.
+    pub points_per_strand: u32,
+    /// End-point convention.
+    pub end_points: PelageEndPoints,
+    /// Length of orphan strands (use PelageBindInfo.mean_guide_length).
+    pub orphan_length: f32,
+    /// Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
+    /// calling thread only. The output is bitwise identical for any value.
+    pub thread_count: u32,
+}
+
+/// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_expand_params_defaults() -> PelageExpandParams {
+    PelageExpandParams {
+        points_per_strand: 16,
+        end_points: PelageEndPoints::Pinned,
+        orphan_length: 0.1,
+        thread_count: 1,
+    }
+}
+
+fn core_params(p: &PelageExpandParams) -> ExpandParams {
+    ExpandParams {
+        points_per_strand: p.points_per_strand as usize,
+        end_points: match p.end_points {
+            PelageEndPoints::Raw => EndPoints::Raw,
+            PelageEndPoints::Pinned => EndPoints::Pinned,
+        },
+        orphan_length: p.orphan_length,
+    }
+}
+
+/// Sizes an expansion: arena bytes for `guide_count` guides and the control
+/// points written per curve (points_per_strand, + 2 when pinned).
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_expand_query(
+    guide_count: usize,
+    params: *const PelageExpandParams,
+    arena_bytes: *mut usize,
+    points_per_curve: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let p = req(params, "params")?;
+        let bytes = req_mut(arena_bytes, "arena_bytes")?;
+        let per = req_mut(points_per_curve, "points_per_curve")?;
+        let mut layout = ArenaLayout::new();
+        PreparedGuides::layout(&mut layout, guide_count, p.points_per_strand as usize);
+        *bytes = layout.bytes();
+        *per = core_params(p).output_points();
+        Ok(())
+    }
+}
+
+/// Expands `strand_count` render curves for one frame from posed guides on
+/// the deformed mesh. `strands`, `bindings` and `grooms` are parallel arrays
+/// (pass pointers offset by `first` to expand a range). Writes
+/// points_per_curve float4 (x, y, z, radius) per strand into `points`,
+/// `point_stride` bytes apart (16 = Embree's RTC_FORMAT_FLOAT4 layout),
+/// capacity `point_capacity` points; optionally the point count of each curve
+/// (`curve_counts`) and each strand's id (`curve_ids`), NULL to skip.
+/// Work is split over `params->thread_count` threads; the bits do not depend
+/// on it. Everything is validated before anything is written.
+///
+/// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+#[no_mangle]
+pub extern "C" fn pelage_expand(
+    mesh: *const PelageMeshDesc,
+    guides: *const PelageGuidesDesc,
+    strands: *const PelageRoot,
+    bindings: *const PelageStrandBinding,
+    grooms: *const PelageStrandGroom,
+    strand_count: usize,
+    params: *const PelageExpandParams,
+    arena: *mut std::ffi::c_void,
+    arena_bytes: usize,
+    points: *mut std::ffi::c_void,
+    point_stride: usize,
+    point_capacity: usize,
+    curve_counts: *mut u32,
+    curve_ids: *mut u32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let mesh = req(mesh, "mesh")?.view()?;
+        let guides = req(guides, "guides")?.view()?;
+        let p = req(params, "params")?;
+        let core = core_params(p);
+        let strands: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
+        let bindings: &[StrandBinding] = bytemuck::cast_slice(slice(bindings, strand_count, "bindings")?);
+        let grooms: &[StrandGroom] = bytemuck::cast_slice(slice(grooms, strand_count, "grooms")?);
+        let per = core.output_points();
+        let needed = strand_count.checked_mul(per).ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "strand_count overflows"))?;
+        if point_capacity < needed {
+            return Err(Failure::new(
+                PelageStatus::CapacityExceeded,
+                format!("points: {needed} needed, {point_capacity} available"),
+            ));
+        }
+        if point_stride < 16 {
+            return Err(Failure::new(PelageStatus::InvalidArgument, format!("point_stride {point_stride} is below 16")));
+        }
+        let out = float4_out(points, point_stride, needed)?;
+        let counts = slice_mut(curve_counts, if curve_counts.is_null() { 0 } else { strand_count }, "curve_counts")?;
+        let ids = slice_mut(curve_ids, if curve_ids.is_null() { 0 } else { strand_count }, "curve_ids")?;
+        let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        let mut arena = Arena::new(arena);
+        let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
+        expand::check_inputs(&mesh, strands, bindings, grooms, &prepared, &core, out.len(), point_stride)?;
+        let threads = match p.thread_count {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n as usize,
+        }
+        .clamp(1, strand_count.max(1));
+        let chunk_bytes = |a: usize, b: usize| (b - a) * per * point_stride;
+        std::thread::scope(|scope| -> Result<(), Failure> {
+            let mut rest = out;
+            let mut handles = vec![];
+            for t in 0..threads {
+                let (a, b) = (t * strand_count / threads, (t + 1) * strand_count / threads);
+                let take = if t + 1 == threads { rest.len() } else { chunk_bytes(a, b) };
+                let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
+                rest = tail;
+                let (mesh, prepared, core) = (&mesh, &prepared, &core);
+                let mut work = move || expand::expand(mesh, &strands[a..b], &bindings[a..b], &grooms[a..b], prepared, core, mine, point_stride);
+                if t + 1 == threads {
+                    work()?;
+                } else {
+                    handles.push(scope.spawn(work));
+                }
+            }
+            for h in handles {
+                h.join().map_err(|_| Failure::new(PelageStatus::Panic, "an expansion thread panicked"))??;
+            }
+            Ok(())
+        })?;
+        counts.fill(per as u32);
+        for (id, s) in ids.iter_mut().zip(strands) {
+            *id = s.id;
+        }
+        Ok(())
+    }
+}
+
+fn float4_out<'a>(
+    ptr: *mut std::ffi::c_void,
+    stride: usize,
+    count: usize,
+) -> Result<&'a mut [u8], Failure> {
+    if count == 0 {
+        return Ok(&mut []);
+    }
+    if ptr as usize % 4 != 0 || stride % 4 != 0 {
+        return Err(Failure::new(
+            PelageStatus::Misaligned,
+            "points: pointer and stride must be multiples of 4",
+        ));
+    }
+    let len = stride
+        .checked_mul(count - 1)
+        .and_then(|b| b.checked_add(16))
+        .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "points: size overflows"))?;
+    bytes_mut(ptr, len, "points")
+}
+
+/// Writes Embree's index buffer for `curve_count` curves of
+/// `points_per_curve` points stored back to back: one uint32 per Catmull-Rom
+/// segment, the index of its first control point (points_per_curve - 3
+/// segments per curve). `capacity` is in entries.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_curves_segment_indices(
+    curve_count: usize,
+    points_per_curve: usize,
+    indices: *mut u32,
+    capacity: usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        if points_per_curve < 4 {
+            return Err(Failure::new(PelageStatus::InvalidArgument, "a Catmull-Rom curve needs at least 4 points"));
+        }
+        let segments = points_per_curve - 3;
+        let needed = curve_count.checked_mul(segments).filter(|_| curve_count.saturating_mul(points_per_curve) <= u32::MAX as usize)
+            .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "more points than a uint32 index can address"))?;
+        if capacity < needed {
+            return Err(Failure::new(PelageStatus::CapacityExceeded, format!("indices: {needed} needed, {capacity} available")));
+        }
+        let out = slice_mut(indices, needed, "indices")?;
+        for (c, seg) in out.chunks_exact_mut(segments).enumerate() {
+            for (i, s) in seg.iter_mut().enumerate() {
+                *s = (c * points_per_curve + i) as u32;
+            }
+        }
+        Ok(())
+    }
+}
