@@ -87,10 +87,13 @@ typedef struct PelageBindParams {
   // Seed of the per-strand neighbour count.
   uint64_t seed;
   // Guides whose root normal dotted with the strand's is not above this are
-  // excluded (0: exclude guides facing away).
+  // excluded (0: the paper's rule, exclude guides facing away; default 0.25).
   float min_normal_dot;
   // Search radius in units of the local guide spacing.
   float search_factor;
+  // Excludes guides around a rim: either root below the other's tangent
+  // plane by more than this times their distance.
+  float max_wrap_slope;
   // Optional uint32 parting region per mesh vertex, or NULL.
   const uint32_t *regions;
   // Bytes between region values (>= 4).
@@ -309,8 +312,8 @@ const char *pelage_status_string(int32_t status);
 // Thread safety: per-thread; may be called from any thread.
 const char *pelage_last_error(void);
 
-// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0,
-// search_factor 2.5, no regions.
+// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0.25,
+// search_factor 2.5, max_wrap_slope 0.3, no regions.
 //
 // Thread safety: may be called from any thread at any time.
 struct PelageBindParams pelage_bind_params_defaults(void);

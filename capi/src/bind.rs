@@ -22,10 +22,13 @@ pub struct PelageBindParams {
     /// Seed of the per-strand neighbour count.
     pub seed: u64,
     /// Guides whose root normal dotted with the strand's is not above this are
-    /// excluded (0: exclude guides facing away).
+    /// excluded (0: the paper's rule, exclude guides facing away; default 0.25).
     pub min_normal_dot: f32,
     /// Search radius in units of the local guide spacing.
     pub search_factor: f32,
+    /// Excludes guides around a rim: either root below the other's tangent
+    /// plane by more than this times their distance.
+    pub max_wrap_slope: f32,
     /// Optional uint32 parting region per mesh vertex, or NULL.
     pub regions: *const u32,
     /// Bytes between region values (>= 4).
@@ -63,8 +66,8 @@ pub struct PelageBindInfo {
     pub mean_spacing: f32,
 }
 
-/// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0,
-/// search_factor 2.5, no regions.
+/// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0.25,
+/// search_factor 2.5, max_wrap_slope 0.3, no regions.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -76,6 +79,7 @@ pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
         seed: d.seed,
         min_normal_dot: d.min_normal_dot,
         search_factor: d.search_factor,
+        max_wrap_slope: d.max_wrap_slope,
         regions: std::ptr::null(),
         region_stride: 4,
     }
@@ -130,6 +134,7 @@ pub extern "C" fn pelage_bind(
             seed: p.seed,
             min_normal_dot: p.min_normal_dot,
             search_factor: p.search_factor,
+            max_wrap_slope: p.max_wrap_slope,
             regions,
         };
         if bindings_capacity < strand_count {

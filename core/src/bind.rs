@@ -37,11 +37,18 @@ pub struct BindParams<'a> {
     /// Seed of the per-strand neighbour count.
     pub seed: u64,
     /// A guide is eligible only if its root normal dotted with the strand's
-    /// exceeds this (0 excludes guides facing away, as the paper does).
+    /// exceeds this. 0 is the paper's rule (exclude guides facing away); the
+    /// default 0.25 also keeps strands on the rim of a thin part from taking
+    /// guides that are nearly perpendicular, i.e. from the other face.
     pub min_normal_dot: f32,
     /// Search radius in units of the local guide spacing (distance from the
     /// strand's nearest guide to that guide's third nearest guide).
     pub search_factor: f32,
+    /// A guide is also excluded when either root lies below the other's
+    /// tangent plane by more than this times their distance: the surface
+    /// between them wraps around a rim (an ear's edge, a fingertip), so the
+    /// guide grows on the far side even though its normal is not reversed.
+    pub max_wrap_slope: f32,
     /// Optional parting region per mesh vertex; a strand only uses guides of
     /// its region (the region of the root's nearest corner).
     pub regions: Option<Strided<'a, u32>>,
@@ -53,8 +60,9 @@ impl Default for BindParams<'_> {
             min_neighbours: 3,
             max_neighbours: 6,
             seed: 0,
-            min_normal_dot: 0.0,
+            min_normal_dot: 0.25,
             search_factor: 2.5,
+            max_wrap_slope: 0.3,
             regions: None,
         }
     }
@@ -113,6 +121,9 @@ fn check(params: &BindParams, mesh: &Mesh) -> Result<(), Error> {
         return Err(Error::InvalidArgument(
             "min_normal_dot must be finite and search_factor positive",
         ));
+    }
+    if params.max_wrap_slope.is_nan() || params.max_wrap_slope <= 0.0 {
+        return Err(Error::InvalidArgument("max_wrap_slope must be positive"));
     }
     if let Some(r) = params.regions {
         if r.len() != mesh.positions.len() {
@@ -284,10 +295,13 @@ impl<'a> GuideIndex<'a> {
             let mut near = Nearest::<{ MAX_NEIGHBOURS + 1 }>::new();
             self.grid.any_near(p, reach, |g| {
                 let gi = g as usize;
-                if self.region[gi] == region
-                    && Vec3::from(self.normal[gi]).dot(n) > params.min_normal_dot
-                {
-                    near.push(p.distance_squared(Vec3::from(self.position[gi])), g);
+                let (gp, gn) = (Vec3::from(self.position[gi]), Vec3::from(self.normal[gi]));
+                if self.region[gi] == region && gn.dot(n) > params.min_normal_dot {
+                    let d = gp - p;
+                    let depth = params.max_wrap_slope * d.length();
+                    if d.dot(n) > -depth && d.dot(gn) < depth {
+                        near.push(d.length_squared(), g);
+                    }
                 }
                 false
             });

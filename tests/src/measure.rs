@@ -120,3 +120,26 @@ pub fn spacing(points: &[(Vec3, Vec3)], max_dist: f32) -> Spacing {
 pub fn r_hex(area: f64, n: usize) -> f32 {
     (2.0 * area / (3f64.sqrt() * n as f64)).sqrt() as f32
 }
+
+/// Guide curves of `cvs` points on `roots`: leaving along the normal and
+/// combed toward -y, bending gently, `length` long. Stored point after point.
+pub fn combed_guides(mesh: &Mesh, roots: &[Root], cvs: usize, length: f32) -> Vec<[f32; 3]> {
+    let mut pts = Vec::with_capacity(roots.len() * cvs);
+    for r in roots {
+        let (f, u, v) = (r.face as usize, r.u, r.v);
+        let p = mesh.point(f, u, v);
+        let n = mesh.normal(f, u, v);
+        let down = Vec3::NEG_Y - n * n.dot(Vec3::NEG_Y);
+        let comb = down.normalize_or_zero();
+        let seg = length / (cvs - 1) as f32;
+        let mut q = p;
+        pts.push(q.into());
+        for j in 1..cvs {
+            let t = j as f32 / (cvs - 1) as f32;
+            let dir = (n * (1.0 - 0.6 * t) + comb * (0.6 * t)).normalize();
+            q += dir * seg;
+            pts.push(q.into());
+        }
+    }
+    pts
+}

@@ -1,0 +1,510 @@
+//! End-to-end interpolation on the creature through the C API: thread
+//! independence, thin parts, the three-level hierarchy, bad input.
+
+use glam::Vec3;
+use pelage::*;
+use pelage_core::stamp::StampParams;
+use pelage_core::Root;
+use pelage_tests::creature::{default_creature, CreatureMesh};
+use pelage_tests::measure::{combed_guides, mesh_view, stamp_vec};
+use std::ptr::{null, null_mut};
+
+const CVS: usize = 12;
+
+fn desc(m: &CreatureMesh) -> PelageMeshDesc {
+    PelageMeshDesc {
+        positions: m.positions.as_ptr().cast(),
+        position_stride: 12,
+        vertex_count: m.positions.len(),
+        indices: m.triangles.as_ptr().cast(),
+        index_stride: 12,
+        triangle_count: m.triangles.len(),
+        uvs: m.uvs.as_ptr().cast(),
+        uv_stride: 8,
+        normals: m.normals.as_ptr().cast(),
+        normal_stride: 12,
+    }
+}
+
+fn as_c(roots: &[Root]) -> &[PelageRoot] {
+    bytemuck::cast_slice(roots)
+}
+
+struct Groom {
+    guide_roots: Vec<Root>,
+    guide_points: Vec<[f32; 3]>,
+    strands: Vec<Root>,
+    bindings: Vec<PelageStrandBinding>,
+    grooms: Vec<PelageStrandGroom>,
+    info: PelageBindInfo,
+}
+
+fn guides_desc(roots: &[Root], points: &[[f32; 3]]) -> PelageGuidesDesc {
+    PelageGuidesDesc {
+        roots: as_c(roots).as_ptr(),
+        guide_count: roots.len(),
+        points: points.as_ptr().cast(),
+        point_stride: 12,
+        point_count: points.len(),
+        points_per_guide: (points.len() / roots.len().max(1)) as u32,
+        offsets: null(),
+    }
+}
+
+fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) -> Groom {
+    let mesh = mesh_view(m);
+    let stamp = |n, seed| {
+        stamp_vec(
+            mesh,
+            &StampParams {
+                target_count: n,
+                seed,
+                ..StampParams::default()
+            },
+        )
+        .0
+    };
+    let guide_roots = stamp(guides, 1);
+    let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.08);
+    let strands = stamp(strands, 2);
+    let d = desc(m);
+    let g = guides_desc(&guide_roots, &guide_points);
+    let params = pelage_bind_params_defaults();
+    let mut bytes = 0usize;
+    assert_eq!(
+        pelage_bind_query(guide_roots.len(), &mut bytes),
+        PelageStatus::Ok
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut bindings = vec![PelageStrandBinding::default(); strands.len()];
+    let mut info = PelageBindInfo::default();
+    let s = pelage_bind(
+        &d,
+        &g,
+        as_c(&strands).as_ptr(),
+        strands.len(),
+        &params,
+        arena.as_mut_ptr().cast(),
+        bytes,
+        bindings.as_mut_ptr(),
+        bindings.len(),
+        &mut info,
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let mut grooms = vec![PelageStrandGroom::default(); strands.len()];
+    let s = pelage_groom_evaluate(
+        &d,
+        maps,
+        as_c(&strands).as_ptr(),
+        strands.len(),
+        grooms.as_mut_ptr(),
+        grooms.len(),
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    Groom {
+        guide_roots,
+        guide_points,
+        strands,
+        bindings,
+        grooms,
+        info,
+    }
+}
+
+fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32; 4]> {
+    let (mut bytes, mut per) = (0usize, 0usize);
+    assert_eq!(
+        pelage_expand_query(g.guide_roots.len(), params, &mut bytes, &mut per),
+        PelageStatus::Ok
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut out = vec![[0.0f32; 4]; g.strands.len() * per];
+    let mut counts = vec![0u32; g.strands.len()];
+    let s = pelage_expand(
+        &desc(m),
+        &guides_desc(&g.guide_roots, &g.guide_points),
+        as_c(&g.strands).as_ptr(),
+        g.bindings.as_ptr(),
+        g.grooms.as_ptr(),
+        g.strands.len(),
+        params,
+        arena.as_mut_ptr().cast(),
+        bytes,
+        out.as_mut_ptr().cast(),
+        16,
+        out.len(),
+        counts.as_mut_ptr(),
+        null_mut(),
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    assert!(counts.iter().all(|&c| c as usize == per));
+    out
+}
+
+fn styled() -> PelageGroomMaps {
+    let mut maps = pelage_groom_maps_defaults();
+    maps.kink_amplitude.constant = 0.05;
+    maps.clump.constant = 0.3;
+    maps.bend.constant = 0.1;
+    maps
+}
+
+#[test]
+fn identical_bits_for_1_2_and_7_threads_and_chunks() {
+    let m = default_creature();
+    let g = groom(&m, 2000, 30_000, &styled());
+    let mut params = pelage_expand_params_defaults();
+    params.thread_count = 1;
+    let one = expand(&m, &g, &params);
+    for threads in [2, 7] {
+        params.thread_count = threads;
+        assert!(expand(&m, &g, &params) == one, "{threads} threads");
+    }
+    assert!(one
+        .iter()
+        .all(|p| p.iter().all(|c| c.is_finite()) && p[3] >= 0.0));
+}
+
+/// Nearest intersection of the ray origin + t dir (t in 0..max_t) with the
+/// mesh: (t, face).
+fn first_hit(m: &CreatureMesh, origin: Vec3, dir: Vec3, max_t: f32) -> Option<(f32, usize)> {
+    let mut best: Option<(f32, usize)> = None;
+    for (f, tri) in m.triangles.iter().enumerate() {
+        let [p0, p1, p2] = tri.map(|i| Vec3::from(m.positions[i as usize]));
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let h = dir.cross(e2);
+        let det = e1.dot(h);
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let s = origin - p0;
+        let u = s.dot(h) / det;
+        let q = s.cross(e1);
+        let v = dir.dot(q) / det;
+        let t = e2.dot(q) / det;
+        if u >= 0.0
+            && v >= 0.0
+            && u + v <= 1.0
+            && t > 0.0
+            && t < max_t
+            && best.is_none_or(|b| t < b.0)
+        {
+            best = Some((t, f));
+        }
+    }
+    best
+}
+
+/// A strand root is on a face of a thin part when the ray into the body
+/// leaves it again within `thickness` through a face pointing the other way.
+fn on_thin_face(
+    m: &CreatureMesh,
+    mesh: &pelage_core::Mesh,
+    p: Vec3,
+    n: Vec3,
+    thickness: f32,
+) -> bool {
+    first_hit(m, p - n * 1e-4, -n, thickness)
+        .is_some_and(|(_, f)| mesh.face_normal(f).dot(n) < -0.8)
+}
+
+#[test]
+fn strands_never_use_guides_from_the_other_side_of_a_thin_part() {
+    let m = default_creature();
+    let g = groom(&m, 13_000, 200_000, &pelage_groom_maps_defaults());
+    let mesh = mesh_view(&m);
+    let (mut used, mut suspicious, mut thin) = (0, 0, 0);
+    for (s, b) in g.strands.iter().zip(&g.bindings) {
+        let n = mesh.normal(s.face as usize, s.u, s.v);
+        let p = mesh.point(s.face as usize, s.u, s.v);
+        for &gi in &b.guides[..b.count as usize] {
+            let r = &g.guide_roots[gi as usize];
+            let gn = mesh.normal(r.face as usize, r.u, r.v);
+            let gp = mesh.point(r.face as usize, r.u, r.v);
+            assert!(n.dot(gn) > 0.0, "strand {} uses a guide facing away", s.id);
+            used += 1;
+            // Where normals differ, a thin part may separate the roots: a
+            // strand on the face of an ear or finger (not its rim) must not
+            // reach a guide whose root is hidden behind that face, i.e. the
+            // segment between the roots lifted off the surface crosses it.
+            if n.dot(gn) < 0.8 {
+                suspicious += 1;
+                if !on_thin_face(&m, &mesh, p, n, 0.06) {
+                    continue;
+                }
+                thin += 1;
+                let lift = 0.25 * p.distance(gp);
+                let (a, c) = (p + n * lift, gp + gn * lift);
+                let crossing = first_hit(&m, a, c - a, 1.0).is_some();
+                assert!(!crossing, "strand {} reaches through a thin part to guide {gi}: p {p} n {n} gp {gp} gn {gn}", s.id);
+            }
+        }
+    }
+    println!("{used} strand-guide pairs, {suspicious} with normals over 37 degrees apart, {thin} of them from strands on a thin face; orphans {} of {}", g.info.orphans, g.strands.len());
+    assert!(used > 200_000 && thin > 0);
+    assert!((g.info.orphans as usize) < g.strands.len() / 1000);
+}
+
+#[test]
+fn three_level_hierarchy_groom_to_sim_to_render() {
+    let m = default_creature();
+    let d = desc(&m);
+    // level 1 -> 2: simulation guides are stamped sparser and expanded from groom guides
+    let sim = groom(&m, 1500, 6000, &pelage_groom_maps_defaults());
+    let mut params = pelage_expand_params_defaults();
+    params.end_points = PelageEndPoints::Raw;
+    params.points_per_strand = 10;
+    params.orphan_length = 0.06;
+    let sim_points = expand(&m, &sim, &params);
+    // level 2 -> 3: the float4 output is read in place as float3 guides (stride 16)
+    let sim_guides = PelageGuidesDesc {
+        roots: as_c(&sim.strands).as_ptr(),
+        guide_count: sim.strands.len(),
+        points: sim_points.as_ptr().cast(),
+        point_stride: 16,
+        point_count: sim_points.len(),
+        points_per_guide: 10,
+        offsets: null(),
+    };
+    let mesh = mesh_view(&m);
+    let render = stamp_vec(
+        mesh,
+        &StampParams {
+            target_count: 50_000,
+            seed: 3,
+            ..StampParams::default()
+        },
+    )
+    .0;
+    let mut bytes = 0;
+    assert_eq!(
+        pelage_bind_query(sim.strands.len(), &mut bytes),
+        PelageStatus::Ok
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut bindings = vec![PelageStrandBinding::default(); render.len()];
+    let bp = pelage_bind_params_defaults();
+    let s = pelage_bind(
+        &d,
+        &sim_guides,
+        as_c(&render).as_ptr(),
+        render.len(),
+        &bp,
+        arena.as_mut_ptr().cast(),
+        bytes,
+        bindings.as_mut_ptr(),
+        bindings.len(),
+        null_mut(),
+    );
+    assert_eq!(s, PelageStatus::Ok, "{:?}", unsafe {
+        std::ffi::CStr::from_ptr(pelage_last_error())
+    });
+    let grooms = vec![
+        PelageStrandGroom {
+            length: 1.0,
+            root_radius: 0.001,
+            tip_radius: 0.0002,
+            ..Default::default()
+        };
+        render.len()
+    ];
+    params.points_per_strand = 16;
+    params.end_points = PelageEndPoints::Pinned;
+    params.orphan_length = 0.05;
+    let (mut ebytes, mut per) = (0, 0);
+    assert_eq!(
+        pelage_expand_query(sim.strands.len(), &params, &mut ebytes, &mut per),
+        PelageStatus::Ok
+    );
+    let mut earena = vec![0u8; ebytes];
+    let mut out = vec![[0.0f32; 4]; render.len() * per];
+    let s = pelage_expand(
+        &d,
+        &sim_guides,
+        as_c(&render).as_ptr(),
+        bindings.as_ptr(),
+        grooms.as_ptr(),
+        render.len(),
+        &params,
+        earena.as_mut_ptr().cast(),
+        ebytes,
+        out.as_mut_ptr().cast(),
+        16,
+        out.len(),
+        null_mut(),
+        null_mut(),
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    // every render hair starts on the surface and ends outside, about a guide length away
+    for (i, r) in render.iter().enumerate() {
+        let root = mesh.point(r.face as usize, r.u, r.v);
+        let c = &out[i * per..(i + 1) * per];
+        assert!(Vec3::new(c[0][0], c[0][1], c[0][2]).distance(root) < 1e-4);
+        let tip = Vec3::new(c[per - 1][0], c[per - 1][1], c[per - 1][2]);
+        let len = tip.distance(root);
+        assert!(len > 0.03 && len < 0.1, "hair {i} chord {len}");
+    }
+}
+
+#[test]
+fn bad_input_gets_a_status_and_leaves_outputs_alone() {
+    let m = default_creature();
+    let g = groom(&m, 300, 1000, &pelage_groom_maps_defaults());
+    let d = desc(&m);
+    let params = pelage_bind_params_defaults();
+    let mut arena = vec![0u8; 1 << 20];
+    let canary = PelageStrandBinding {
+        count: 0xCDCD_CDCD,
+        ..Default::default()
+    };
+    let mut out = vec![canary; g.strands.len()];
+    let mut bind = |guides: &PelageGuidesDesc, p: &PelageBindParams, arena_len: usize| {
+        pelage_bind(
+            &d,
+            guides,
+            as_c(&g.strands).as_ptr(),
+            g.strands.len(),
+            p,
+            arena.as_mut_ptr().cast(),
+            arena_len,
+            out.as_mut_ptr(),
+            g.strands.len(),
+            null_mut(),
+        )
+    };
+    let good = guides_desc(&g.guide_roots, &g.guide_points);
+    let mut nan = g.guide_points.clone();
+    nan[7][2] = f32::NAN;
+    assert_eq!(
+        bind(&guides_desc(&g.guide_roots, &nan), &params, 1 << 20),
+        PelageStatus::NonFinite
+    );
+    let mut zero = g.guide_points.clone();
+    let first = zero[CVS];
+    zero[CVS..2 * CVS].fill(first);
+    assert_eq!(
+        bind(&guides_desc(&g.guide_roots, &zero), &params, 1 << 20),
+        PelageStatus::InvalidArgument
+    );
+    assert_eq!(
+        bind(&guides_desc(&[], &[]), &params, 1 << 20),
+        PelageStatus::InvalidArgument
+    );
+    let mut far = g.guide_roots.clone();
+    far[2].face = 1 << 30;
+    assert_eq!(
+        bind(&guides_desc(&far, &g.guide_points), &params, 1 << 20),
+        PelageStatus::OutOfRange
+    );
+    let k0 = PelageBindParams {
+        min_neighbours: 0,
+        ..params
+    };
+    assert_eq!(bind(&good, &k0, 1 << 20), PelageStatus::InvalidArgument);
+    let swapped = PelageBindParams {
+        min_neighbours: 6,
+        max_neighbours: 2,
+        ..params
+    };
+    assert_eq!(
+        bind(&good, &swapped, 1 << 20),
+        PelageStatus::InvalidArgument
+    );
+    assert_eq!(bind(&good, &params, 64), PelageStatus::CapacityExceeded);
+    let mut bad_stride = good;
+    bad_stride.point_stride = 8;
+    assert_eq!(
+        bind(&bad_stride, &params, 1 << 20),
+        PelageStatus::InvalidArgument
+    );
+    bad_stride.point_stride = 14;
+    assert_eq!(
+        bind(&bad_stride, &params, 1 << 20),
+        PelageStatus::Misaligned
+    );
+    let null_guides = PelageGuidesDesc {
+        points: null(),
+        ..good
+    };
+    assert_eq!(
+        bind(&null_guides, &params, 1 << 20),
+        PelageStatus::NullParameter
+    );
+    assert!(
+        out.iter().all(|b| *b == canary),
+        "a failed bind wrote output"
+    );
+
+    // zero-size groom map
+    let mut maps = pelage_groom_maps_defaults();
+    maps.length = PelageMap {
+        kind: PelageMapKind::TextureU8,
+        constant: 0.0,
+        data: [0u8; 4].as_ptr().cast(),
+        width: 0,
+        height: 2,
+        stride: 2,
+    };
+    let mut grooms = vec![
+        PelageStrandGroom {
+            length: 7.0,
+            ..Default::default()
+        };
+        g.strands.len()
+    ];
+    let s = pelage_groom_evaluate(
+        &d,
+        &maps,
+        as_c(&g.strands).as_ptr(),
+        g.strands.len(),
+        grooms.as_mut_ptr(),
+        grooms.len(),
+    );
+    assert_eq!(s, PelageStatus::InvalidArgument);
+    assert!(grooms.iter().all(|x| x.length == 7.0));
+
+    // a binding that points past the guides
+    let mut broken = g.bindings.clone();
+    broken[5].guides[0] = 1 << 20;
+    let params = pelage_expand_params_defaults();
+    let (mut bytes, mut per) = (0, 0);
+    pelage_expand_query(g.guide_roots.len(), &params, &mut bytes, &mut per);
+    let mut earena = vec![0u8; bytes];
+    let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
+    let s = pelage_expand(
+        &d,
+        &good,
+        as_c(&g.strands).as_ptr(),
+        broken.as_ptr(),
+        g.grooms.as_ptr(),
+        g.strands.len(),
+        &params,
+        earena.as_mut_ptr().cast(),
+        bytes,
+        pts.as_mut_ptr().cast(),
+        16,
+        pts.len(),
+        null_mut(),
+        null_mut(),
+    );
+    assert_eq!(s, PelageStatus::OutOfRange);
+    assert!(pts.iter().all(|p| *p == [-1.0; 4]));
+    let s = pelage_expand(
+        &d,
+        &good,
+        as_c(&g.strands).as_ptr(),
+        g.bindings.as_ptr(),
+        g.grooms.as_ptr(),
+        g.strands.len(),
+        &params,
+        earena.as_mut_ptr().cast(),
+        bytes,
+        pts.as_mut_ptr().cast(),
+        16,
+        pts.len() - 1,
+        null_mut(),
+        null_mut(),
+    );
+    assert_eq!(s, PelageStatus::CapacityExceeded);
+    assert!(pts.iter().all(|p| *p == [-1.0; 4]));
+}
