@@ -63,9 +63,13 @@ impl ExpandParams {
 
 /// Posed guides resampled to the strand point count, in their own root
 /// frames (local) and in world space, for one frame.
+///
+/// Each guide is stored as its n x, then n y, then n z coordinates, so the
+/// per-strand loops run over contiguous lanes and vectorize (element-wise
+/// only: the bits are the same as a scalar loop's on every target).
 pub struct PreparedGuides<'a> {
-    local: &'a [[f32; 3]],
-    world: &'a [[f32; 3]],
+    local: &'a [f32],
+    world: &'a [f32],
     points: usize,
     guides: usize,
 }
@@ -73,8 +77,8 @@ pub struct PreparedGuides<'a> {
 impl<'a> PreparedGuides<'a> {
     /// Adds the arena bytes [`PreparedGuides::new`] needs.
     pub fn layout(layout: &mut ArenaLayout, guides: usize, points_per_strand: usize) {
-        let n = guides.saturating_mul(points_per_strand);
-        layout.add::<[f32; 3]>(n).add::<[f32; 3]>(n);
+        let n = guides.saturating_mul(points_per_strand).saturating_mul(3);
+        layout.add::<f32>(n).add::<f32>(n);
     }
 
     /// Validates the deformed mesh and posed guides and prepares them.
@@ -92,8 +96,8 @@ impl<'a> PreparedGuides<'a> {
         mesh.validate()?;
         guides.validate(mesh)?;
         let n = points_per_strand;
-        let local = arena.alloc::<[f32; 3]>(guides.len() * n)?;
-        let world = arena.alloc::<[f32; 3]>(guides.len() * n)?;
+        let local = arena.alloc::<f32>(guides.len() * n * 3)?;
+        let world = arena.alloc::<f32>(guides.len() * n * 3)?;
         let step = 1.0 / (n - 1) as f32;
         for (g, r) in guides.roots.iter().enumerate() {
             let frame = Frame::at(mesh, r.face as usize, r.u, r.v);
@@ -104,8 +108,10 @@ impl<'a> PreparedGuides<'a> {
                 } else {
                     guides.sample(g, j as f32 * step)
                 };
-                local[g * n + j] = frame.to_local(p).into();
-                world[g * n + j] = p.into();
+                let l = frame.to_local(p);
+                let base = g * 3 * n + j;
+                (local[base], local[base + n], local[base + 2 * n]) = (l.x, l.y, l.z);
+                (world[base], world[base + n], world[base + 2 * n]) = (p.x, p.y, p.z);
             }
         }
         Ok(PreparedGuides {
@@ -129,6 +135,16 @@ impl<'a> PreparedGuides<'a> {
     /// Points per guide.
     pub fn points(&self) -> usize {
         self.points
+    }
+
+    /// Point `j` of guide `g` in the guide's root frame.
+    pub fn local_point(&self, g: usize, j: usize) -> Vec3 {
+        let base = g * 3 * self.points + j;
+        Vec3::new(
+            self.local[base],
+            self.local[base + self.points],
+            self.local[base + 2 * self.points],
+        )
     }
 }
 
@@ -216,8 +232,10 @@ pub fn expand(
         stride,
     )?;
     let per = params.output_points();
+    let n = params.points_per_strand;
+    let shift = (params.end_points == EndPoints::Pinned) as usize;
+    let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
     for (s, root) in strands.iter().enumerate() {
-        let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS];
         strand(
             mesh,
             root,
@@ -225,21 +243,23 @@ pub fn expand(
             &grooms[s],
             guides,
             params,
-            &mut pts,
+            &mut pts[shift..shift + n],
         );
-        let n = params.points_per_strand;
-        let base = s * per * stride;
-        let mut write = |slot: usize, p: &[f32; 4]| {
-            let at = base + slot * stride;
-            out[at..at + 16].copy_from_slice(bytemuck::bytes_of(p));
-        };
-        let shift = (params.end_points == EndPoints::Pinned) as usize;
         if shift == 1 {
-            write(0, &pts[0]);
-            write(n + 1, &pts[n - 1]);
+            pts[0] = pts[1];
+            pts[n + 1] = pts[n];
         }
-        for (j, p) in pts[..n].iter().enumerate() {
-            write(j + shift, p);
+        let curve = &pts[..per];
+        let region = &mut out[s * per * stride..];
+        if stride == 16 {
+            if let Ok(typed) = bytemuck::try_cast_slice_mut::<u8, [f32; 4]>(&mut region[..per * 16])
+            {
+                typed.copy_from_slice(curve);
+                continue;
+            }
+        }
+        for (j, p) in curve.iter().enumerate() {
+            region[j * stride..j * stride + 16].copy_from_slice(bytemuck::bytes_of(p));
         }
     }
     Ok(())
@@ -252,52 +272,81 @@ fn strand(
     groom: &StrandGroom,
     guides: &PreparedGuides,
     params: &ExpandParams,
-    out: &mut [[f32; 4]; MAX_STRAND_POINTS],
+    out: &mut [[f32; 4]],
 ) {
-    let n = params.points_per_strand;
+    const M: usize = MAX_STRAND_POINTS;
+    // checked by ExpandParams::check; the min lets the compiler drop bounds checks
+    let n = params.points_per_strand.min(M);
     let frame = Frame::at(mesh, root.face as usize, root.u, root.v);
     let step = 1.0 / (n - 1) as f32;
-    let mut acc = [Vec3::ZERO; MAX_STRAND_POINTS];
+    let (mut ax, mut ay, mut az) = ([0.0f32; M], [0.0f32; M], [0.0f32; M]);
     if bind.count == 0 {
-        for (j, a) in acc[..n].iter_mut().enumerate() {
-            *a = Vec3::new(0.0, 0.0, params.orphan_length * j as f32 * step);
+        for (j, z) in az[..n].iter_mut().enumerate() {
+            *z = params.orphan_length * j as f32 * step;
         }
     } else {
         for k in 0..bind.count as usize {
             let w = bind.weights[k];
-            let base = bind.guides[k] as usize * n;
-            for (a, l) in acc[..n].iter_mut().zip(&guides.local[base..base + n]) {
-                *a += Vec3::from(*l) * w;
+            let base = bind.guides[k] as usize * 3 * n;
+            let g = &guides.local[base..base + 3 * n];
+            for (a, l) in ax[..n].iter_mut().zip(&g[..n]) {
+                *a += *l * w;
+            }
+            for (a, l) in ay[..n].iter_mut().zip(&g[n..2 * n]) {
+                *a += *l * w;
+            }
+            for (a, l) in az[..n].iter_mut().zip(&g[2 * n..]) {
+                *a += *l * w;
             }
         }
     }
-    let length = acc[n - 1].length() * groom.length;
-    let kink = groom.kink_amplitude * length;
-    let (sin_step, cos_step) = libm::sincosf(core::f32::consts::TAU * groom.kink_frequency * step);
-    let (mut sin, mut cos) = libm::sincosf(groom.kink_phase);
+    let scale = groom.length;
+    let length = Vec3::new(ax[n - 1], ay[n - 1], az[n - 1]).length() * scale;
+    let bend = groom.bend * length;
+    let (o, t, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
+    let (mut px, mut py, mut pz) = ([0.0f32; M], [0.0f32; M], [0.0f32; M]);
+    for j in 0..n {
+        let tj = j as f32 * step;
+        let lx = ax[j] * scale + bend * tj * tj;
+        let (ly, lz) = (ay[j] * scale, az[j] * scale);
+        px[j] = o.x + t.x * lx + b.x * ly + nn.x * lz;
+        py[j] = o.y + t.y * lx + b.y * ly + nn.y * lz;
+        pz[j] = o.z + t.z * lx + b.z * ly + nn.z * lz;
+    }
     let clump = if bind.clump == NO_GUIDE {
         0.0
     } else {
         groom.clump
     };
-    let clump_base = bind.clump as usize * n;
-    for j in 0..n {
-        let t = j as f32 * step;
-        let mut l = acc[j] * groom.length;
-        l.x += groom.bend * length * t * t;
-        let mut p = frame.to_world(l);
-        if clump != 0.0 {
-            p += (Vec3::from(guides.world[clump_base + j]) - p) * (clump * t);
+    if clump != 0.0 {
+        let base = bind.clump as usize * 3 * n;
+        let c = &guides.world[base..base + 3 * n];
+        for j in 0..n {
+            let pull = clump * (j as f32 * step);
+            px[j] += (c[j] - px[j]) * pull;
+            py[j] += (c[n + j] - py[j]) * pull;
+            pz[j] += (c[2 * n + j] - pz[j]) * pull;
         }
-        if kink != 0.0 {
-            p += (frame.t * sin + frame.b * cos) * (kink * t);
+    }
+    let kink = groom.kink_amplitude * length;
+    if kink != 0.0 {
+        let (sin_step, cos_step) =
+            libm::sincosf(core::f32::consts::TAU * groom.kink_frequency * step);
+        let (mut sin, mut cos) = libm::sincosf(groom.kink_phase);
+        for j in 0..n {
+            let k = kink * (j as f32 * step);
+            px[j] += (t.x * sin + b.x * cos) * k;
+            py[j] += (t.y * sin + b.y * cos) * k;
+            pz[j] += (t.z * sin + b.z * cos) * k;
             (sin, cos) = (
                 sin * cos_step + cos * sin_step,
                 cos * cos_step - sin * sin_step,
             );
         }
-        let r = groom.root_radius + (groom.tip_radius - groom.root_radius) * t;
-        out[j] = [p.x, p.y, p.z, r];
+    }
+    let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
+    for (j, p) in out[..n].iter_mut().enumerate() {
+        *p = [px[j], py[j], pz[j], r0 + dr * (j as f32 * step)];
     }
 }
 
@@ -564,7 +613,7 @@ mod tests {
                     let local = frame.to_local(Vec3::new(p[0], p[1], p[2]));
                     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
                     for k in 0..b[i].count as usize {
-                        let l = Vec3::from(prepared.local[b[i].guides[k] as usize * CVS + j]);
+                        let l = prepared.local_point(b[i].guides[k] as usize, j);
                         lo = lo.min(l);
                         hi = hi.max(l);
                     }

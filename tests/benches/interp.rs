@@ -1,0 +1,186 @@
+//! Interpolation benchmark at the paper's gorilla scale (Figure 1): the
+//! ~65K-triangle creature, 13,030 guides x 16 points, 979,526 render hairs x
+//! 16 points (18 with pinned ends). Reports bind time, and expand time per
+//! frame at 1 and 2 threads through the C API, next to the time to simply
+//! write the same number of output bytes with the same threads (the
+//! memory-bandwidth floor), measured in the same run.
+
+use pelage::*;
+use pelage_core::bind::{self, BindParams, StrandBinding};
+use pelage_core::groom::{GroomMaps, StrandGroom};
+use pelage_core::guides::{CvLayout, Guides};
+use pelage_core::stamp::StampParams;
+use pelage_core::{Arena, Root, ScalarMap, Strided};
+use pelage_tests::creature::default_creature;
+use pelage_tests::measure::{combed_guides, mesh_view, stamp_vec};
+use std::hint::black_box;
+use std::ptr::null_mut;
+use std::time::Instant;
+
+const GUIDES: u32 = 13_030;
+const HAIRS: u32 = 979_526;
+const CVS: usize = 16;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn time(runs: usize, mut f: impl FnMut()) -> f64 {
+    median(
+        (0..runs)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    )
+}
+
+/// Writes `out` with a cheap per-element pattern over `threads` threads.
+fn write_floor(out: &mut [[f32; 4]], threads: usize) {
+    let chunk = out.len().div_ceil(threads);
+    std::thread::scope(|s| {
+        for (t, part) in out.chunks_mut(chunk).enumerate() {
+            s.spawn(move || {
+                for (i, p) in part.iter_mut().enumerate() {
+                    let x = (t * chunk + i) as f32;
+                    *p = [x, x, x, 0.001];
+                }
+            });
+        }
+    });
+}
+
+fn main() {
+    let m = default_creature();
+    let mesh = mesh_view(&m);
+    let stamp = |n, seed| {
+        stamp_vec(
+            mesh,
+            &StampParams {
+                target_count: n,
+                seed,
+                ..StampParams::default()
+            },
+        )
+        .0
+    };
+    let guide_roots = stamp(GUIDES, 1);
+    let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.06);
+    let hairs: Vec<Root> = {
+        let mut h = stamp(HAIRS + HAIRS / 50, 2);
+        h.retain(|r| r.rank < HAIRS);
+        h
+    };
+    println!(
+        "creature: {} triangles; {} guides x {CVS} points; {} hairs",
+        m.triangles.len(),
+        guide_roots.len(),
+        hairs.len()
+    );
+
+    let guides = Guides {
+        roots: &guide_roots,
+        points: Strided::from_slice(&guide_points),
+        layout: CvLayout::Fixed(CVS),
+    };
+    let params = BindParams::default();
+    let mut arena = vec![0u8; bind::required_bytes(guide_roots.len())];
+    let mut bindings = vec![StrandBinding::default(); hairs.len()];
+    let t_bind = time(3, || {
+        bind::bind(
+            &mesh,
+            &guides,
+            &hairs,
+            &params,
+            &mut Arena::new(&mut arena),
+            &mut bindings,
+        )
+        .unwrap();
+    });
+    let mut grooms = vec![StrandGroom::default(); hairs.len()];
+    let maps = GroomMaps {
+        kink_amplitude: ScalarMap::Constant(0.03),
+        clump: ScalarMap::Constant(0.2),
+        ..GroomMaps::default()
+    };
+    let t_groom = time(3, || maps.evaluate(&mesh, &hairs, 0, &mut grooms).unwrap());
+
+    let desc = PelageMeshDesc {
+        positions: m.positions.as_ptr().cast(),
+        position_stride: 12,
+        vertex_count: m.positions.len(),
+        indices: m.triangles.as_ptr().cast(),
+        index_stride: 12,
+        triangle_count: m.triangles.len(),
+        uvs: m.uvs.as_ptr().cast(),
+        uv_stride: 8,
+        normals: m.normals.as_ptr().cast(),
+        normal_stride: 12,
+    };
+    let gdesc = PelageGuidesDesc {
+        roots: bytemuck::cast_slice::<Root, PelageRoot>(&guide_roots).as_ptr(),
+        guide_count: guide_roots.len(),
+        points: guide_points.as_ptr().cast(),
+        point_stride: 12,
+        point_count: guide_points.len(),
+        points_per_guide: CVS as u32,
+        offsets: std::ptr::null(),
+    };
+    let mut ep = pelage_expand_params_defaults();
+    ep.points_per_strand = CVS as u32;
+    let (mut bytes, mut per) = (0, 0);
+    assert_eq!(
+        pelage_expand_query(guide_roots.len(), &ep, &mut bytes, &mut per),
+        PelageStatus::Ok
+    );
+    let mut earena = vec![0u8; bytes];
+    let mut out = vec![[0.0f32; 4]; hairs.len() * per];
+    let mb = (out.len() * 16) as f64 / 1e6;
+    println!("bind: {:.1} ms ({:.2e} hairs/s); groom maps: {:.1} ms; output {mb:.0} MB per frame ({per} points per hair)", t_bind * 1e3, hairs.len() as f64 / t_bind, t_groom * 1e3);
+    println!(
+        "{:>7} | {:>10} {:>8} {:>11} | {:>13} {:>9} | {:>8}",
+        "threads", "expand ms", "frames/s", "hairs/s", "write-floor ms", "GB/s", "ratio"
+    );
+    for threads in [1u32, 2] {
+        ep.thread_count = threads;
+        let t_expand = time(7, || {
+            let s = pelage_expand(
+                &desc,
+                &gdesc,
+                bytemuck::cast_slice::<Root, PelageRoot>(&hairs).as_ptr(),
+                bytemuck::cast_slice::<StrandBinding, PelageStrandBinding>(&bindings).as_ptr(),
+                bytemuck::cast_slice::<StrandGroom, PelageStrandGroom>(&grooms).as_ptr(),
+                hairs.len(),
+                &ep,
+                earena.as_mut_ptr().cast(),
+                bytes,
+                out.as_mut_ptr().cast(),
+                16,
+                out.len(),
+                null_mut(),
+                null_mut(),
+            );
+            assert_eq!(s, PelageStatus::Ok);
+            black_box(&out);
+        });
+        let t_floor = time(7, || {
+            write_floor(&mut out, threads as usize);
+            black_box(&out);
+        });
+        println!(
+            "{:>7} | {:>10.1} {:>8.1} {:>11.3e} | {:>13.1} {:>9.2} | {:>7.2}x",
+            threads,
+            t_expand * 1e3,
+            1.0 / t_expand,
+            hairs.len() as f64 / t_expand,
+            t_floor * 1e3,
+            mb / 1e3 / t_floor,
+            t_expand / t_floor
+        );
+    }
+    println!("ratio = expand time / time to write the same bytes with the same threads (the bandwidth floor)");
+    println!("paper: 2 frames/s with full interpolation (979,526 hairs)");
+}
