@@ -6,14 +6,14 @@ JOBS ?= 2
 APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev valgrind binutils
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
-.PHONY: demo test deps rust-test rust-lint cmake-test header-check bench
+.PHONY: demo test deps rust-test rust-lint rust-miri cmake-test header-check bench
 
 demo: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
 	cmake --build $(BUILD) -j$(JOBS) --target demo
 	cd $(BUILD) && ./cpp_examples/demo
 
-test: deps rust-lint rust-test cmake-test header-check
+test: deps rust-lint rust-test rust-miri cmake-test header-check
 
 deps:
 	@missing=""; for p in $(APT_PACKAGES); do \
@@ -32,6 +32,11 @@ rust-lint:
 rust-test:
 	cargo test --locked --workspace --release
 	cargo bench --locked --workspace --no-run
+
+# Miri on the fast core tests (the arena, strided reads, maps, mesh, RNG).
+rust-miri:
+	@rustup +nightly component list --installed | grep -q '^miri' || rustup component add --toolchain nightly miri rust-src
+	cargo +nightly miri test --locked -p pelage-core --lib -- arena strided rng map:: mesh::
 
 cmake-test:
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
