@@ -1,0 +1,586 @@
+// embree_stamp: stamps ~100K roots on the creature through the C API and
+// checks them with Embree 3:
+//   (a) every root lies on the mesh surface (rays along the root normal),
+//   (b) no root lies in the bald regions of the density map,
+//   (c) straight strands grown from the roots are valid Embree round
+//       Catmull-Rom curves (error callback, rtcGetDeviceError, our own
+//       NaN/Inf/negative-radius check, and rays that find the curves),
+//   (d) skin coverage: stamped roots hide more skin than the same number of
+//       uniformly random roots; prints how many random roots match them.
+//
+//   embree_stamp <creature.obj> <creature_density.png> [--roots N] [--resolution R]
+//                [--length L] [--radius R] [--tilt DEGREES]   (strands; defaults 0.06, 0.0015, 60)
+#include "creature_io.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cstdarg>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace {
+
+int g_failures = 0;
+
+void expect(bool ok, const std::string& what) {
+  std::printf("  %s  %s\n", ok ? "PASS" : "FAIL", what.c_str());
+  if (!ok) ++g_failures;
+}
+
+std::string fmt(const char* f, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char* f, ...) {
+  char buf[512];
+  va_list args;
+  va_start(args, f);
+  std::vsnprintf(buf, sizeof buf, f, args);
+  va_end(args);
+  return buf;
+}
+
+struct V3 {
+  float x = 0, y = 0, z = 0;
+};
+V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3 operator*(float s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
+float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+float length(V3 a) { return std::sqrt(dot(a, a)); }
+V3 normalize(V3 a) { return (1.0f / length(a)) * a; }
+V3 at3(const std::vector<float>& v, size_t i) { return {v[3 * i], v[3 * i + 1], v[3 * i + 2]}; }
+
+// First hit of a ray, or geomID == RTC_INVALID_GEOMETRY_ID.
+RTCRayHit trace(RTCScene scene, V3 org, V3 dir, float tfar = 1e30f) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh{};
+  rh.ray.org_x = org.x, rh.ray.org_y = org.y, rh.ray.org_z = org.z;
+  rh.ray.dir_x = dir.x, rh.ray.dir_y = dir.y, rh.ray.dir_z = dir.z;
+  rh.ray.tnear = 0.0f, rh.ray.tfar = tfar, rh.ray.mask = ~0u;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene, &ctx, &rh);
+  return rh;
+}
+
+// splitmix64: a small deterministic generator for the random baseline.
+struct Rng {
+  uint64_t state;
+  uint64_t next() {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  float unit() { return float(next() >> 40) * (1.0f / 16777216.0f); }
+};
+
+// Per-triangle weights for random roots with the same expected density as
+// pelage's stamp: the density is sampled at the centroid, triangles below
+// bald_below get nothing, and a triangle scaled by s takes s^2 as many roots.
+std::vector<double> random_root_cdf(const creature::Mesh& mesh, const creature::GrayImage& density,
+                                    const PelageStampParams& params) {
+  std::vector<double> cdf(mesh.triangle_count());
+  double total = 0.0;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    float uv[2];
+    mesh.uv_at(t, 1.0f / 3.0f, 1.0f / 3.0f, uv);
+    const float d = density.bilinear(uv[0], uv[1]);
+    double w = 0.0;
+    if (d >= params.bald_below) {
+      const double s = params.black_scale + (1.0 - params.black_scale) * std::clamp(d, 0.0f, 1.0f);
+      w = mesh.area(t) * s * s;
+    }
+    total += w;
+    cdf[t] = total;
+  }
+  for (double& c : cdf) c /= total;
+  return cdf;
+}
+
+std::vector<PelageRoot> random_roots(const std::vector<double>& cdf, size_t count, uint64_t seed) {
+  Rng rng{seed};
+  std::vector<PelageRoot> roots(count);
+  for (size_t i = 0; i < count; ++i) {
+    const double x = double(rng.next() >> 11) * (1.0 / 9007199254740992.0);
+    const size_t face = size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin());
+    const float r = std::sqrt(rng.unit()), b = rng.unit();  // uniform on the triangle
+    roots[i] = PelageRoot{uint32_t(std::min(face, cdf.size() - 1)), r * (1.0f - b), r * b, uint32_t(i), uint32_t(i)};
+  }
+  return roots;
+}
+
+// Distance from each root to its nearest neighbour on the same side of the
+// surface (face normals not opposed, pelage's rule), searched up to `reach`
+// (roots with no neighbour that close report `reach`).
+std::vector<float> nearest_neighbours(const creature::Mesh& mesh, const std::vector<PelageRoot>& roots,
+                                      const std::vector<float>& positions, float reach) {
+  const size_t n = roots.size();
+  std::vector<V3> face_normal(n);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t* t = &mesh.indices[3 * size_t(roots[i].face)];
+    const V3 a = at3(mesh.positions, t[0]), b = at3(mesh.positions, t[1]), c = at3(mesh.positions, t[2]);
+    face_normal[i] = normalize(cross(b - a, c - a));
+  }
+  // A hash grid with cells of side `reach`.
+  auto cell = [&](V3 p, int d[3]) {
+    d[0] = int(std::floor(p.x / reach)), d[1] = int(std::floor(p.y / reach)), d[2] = int(std::floor(p.z / reach));
+  };
+  auto hash = [](int x, int y, int z, size_t buckets) {
+    return (uint64_t(uint32_t(x)) * 73856093u ^ uint64_t(uint32_t(y)) * 19349663u ^ uint64_t(uint32_t(z)) * 83492791u) %
+           buckets;
+  };
+  const size_t buckets = 2 * n + 1;
+  std::vector<uint32_t> start(buckets + 1, 0), items(n);
+  std::vector<size_t> bucket_of(n);
+  for (size_t i = 0; i < n; ++i) {
+    int d[3];
+    cell(at3(positions, i), d);
+    bucket_of[i] = size_t(hash(d[0], d[1], d[2], buckets));
+    ++start[bucket_of[i] + 1];
+  }
+  for (size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+  std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+  for (size_t i = 0; i < n; ++i) items[fill[bucket_of[i]]++] = uint32_t(i);
+  std::vector<float> nn(n, reach);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    const V3 p = at3(positions, i);
+    int d[3];
+    cell(p, d);
+    float best = reach;
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const size_t b = size_t(hash(d[0] + dx, d[1] + dy, d[2] + dz, buckets));
+          for (uint32_t k = start[b]; k < start[b + 1]; ++k) {
+            const uint32_t j = items[k];
+            if (j == i || dot(face_normal[i], face_normal[j]) <= 0.0f) continue;
+            best = std::min(best, length(at3(positions, j) - p));
+          }
+        }
+      }
+    }
+    nn[i] = best;
+  });
+  return nn;
+}
+
+// An orthographic view: `resolution`^2 parallel rays along `forward`.
+struct View {
+  const char* name;
+  V3 forward;
+};
+
+struct Coverage {
+  const creature::Mesh& mesh;
+  const creature::GrayImage& density;
+  std::vector<View> views;
+  int resolution;
+  V3 center{0.0f, 0.06f, 0.0f};
+  float half = 1.3f;  // half the side of the square each view covers
+  std::vector<uint8_t> furred;  // per ray: hits skin with density > 0 in the skin-only scene
+  size_t furred_rays = 0;
+
+  void ray(size_t view, int x, int y, V3& org, V3& dir) const {
+    const V3 f = views[view].forward;
+    const V3 right = normalize(cross(f, V3{0.0f, 1.0f, 0.0f}));
+    const V3 up = cross(right, f);
+    const float sx = ((float(x) + 0.5f) / float(resolution) * 2.0f - 1.0f) * half;
+    const float sy = (1.0f - (float(y) + 0.5f) / float(resolution) * 2.0f) * half;
+    org = center + sx * right + sy * up - 5.0f * f;
+    dir = f;
+  }
+
+  size_t rays_per_view() const { return size_t(resolution) * size_t(resolution); }
+
+  // Marks the rays that see furred skin when there is no fur.
+  void prepare(RTCScene skin_only) {
+    furred.assign(views.size() * rays_per_view(), 0);
+    for (size_t v = 0; v < views.size(); ++v) {
+      tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+          for (int x = 0; x < resolution; ++x) {
+            V3 org, dir;
+            ray(v, x, y, org, dir);
+            const RTCRayHit h = trace(skin_only, org, dir);
+            if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+            float uv[2];
+            mesh.uv_at(h.hit.primID, h.hit.u, h.hit.v, uv);
+            furred[v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x)] =
+                density.nearest(uv[0], uv[1]) > 0 ? 1 : 0;
+          }
+        }
+      });
+    }
+    furred_rays = size_t(std::count(furred.begin(), furred.end(), uint8_t(1)));
+  }
+
+  // What one set of strands leaves visible.
+  struct Seen {
+    double skin;     // fraction of the furred-skin rays whose first hit is the skin
+    double patches;  // fraction of tiles (tile x tile rays, all on furred skin) where >= 25 % of the rays see skin
+  };
+  static constexpr int tile = 8;
+
+  Seen skin_visible(RTCScene scene, unsigned skin_id) const {
+    std::vector<uint8_t> sees_skin(furred.size(), 0);
+    for (size_t v = 0; v < views.size(); ++v) {
+      tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+          for (int x = 0; x < resolution; ++x) {
+            const size_t i = v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x);
+            if (!furred[i]) continue;
+            V3 org, dir;
+            ray(v, x, y, org, dir);
+            sees_skin[i] = trace(scene, org, dir).hit.geomID == skin_id;
+          }
+        }
+      });
+    }
+    size_t visible = size_t(std::count(sees_skin.begin(), sees_skin.end(), uint8_t(1)));
+    size_t tiles = 0, patchy = 0;
+    for (size_t v = 0; v < views.size(); ++v) {
+      for (int ty = 0; ty + tile <= resolution; ty += tile) {
+        for (int tx = 0; tx + tile <= resolution; tx += tile) {
+          size_t on_fur = 0, skin = 0;
+          for (int y = ty; y < ty + tile; ++y) {
+            for (int x = tx; x < tx + tile; ++x) {
+              const size_t i = v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x);
+              on_fur += furred[i];
+              skin += sees_skin[i];
+            }
+          }
+          if (on_fur < size_t(tile * tile)) continue;
+          ++tiles;
+          patchy += 4 * skin >= on_fur;
+        }
+      }
+    }
+    return {double(visible) / double(furred_rays), double(patchy) / double(std::max<size_t>(tiles, 1))};
+  }
+};
+
+struct Options {
+  std::string obj, density;
+  uint32_t roots = 100000;
+  int resolution = 512;
+  creature::StrandParams strands;  // 0.06 long, radius 0.0015, 60 degrees toward world -y
+};
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  Options opt;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--roots") && i + 1 < argc) {
+      opt.roots = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+    } else if (!std::strcmp(argv[i], "--resolution") && i + 1 < argc) {
+      opt.resolution = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--length") && i + 1 < argc) {
+      opt.strands.length = std::strtof(argv[++i], nullptr);
+    } else if (!std::strcmp(argv[i], "--radius") && i + 1 < argc) {
+      opt.strands.root_radius = opt.strands.tip_radius = std::strtof(argv[++i], nullptr);
+    } else if (!std::strcmp(argv[i], "--tilt") && i + 1 < argc) {
+      opt.strands.tilt_root_deg = opt.strands.tilt_tip_deg = std::strtof(argv[++i], nullptr);
+    } else if (opt.obj.empty()) {
+      opt.obj = argv[i];
+    } else if (opt.density.empty()) {
+      opt.density = argv[i];
+    } else {
+      throw std::runtime_error(std::string("unexpected argument ") + argv[i]);
+    }
+  }
+  if (opt.density.empty()) {
+    throw std::runtime_error("usage: embree_stamp <creature.obj> <creature_density.png> [--roots N] [--resolution R] "
+                             "[--length L] [--radius R] [--tilt DEGREES]");
+  }
+  creature::Stopwatch total;
+  const creature::Mesh mesh = creature::load_obj(opt.obj);
+  const creature::GrayImage density = creature::load_png_gray(opt.density);
+  std::printf("creature: %zu vertices, %zu triangles; density %dx%d\n", mesh.vertex_count(), mesh.triangle_count(),
+              density.width, density.height);
+  if (mesh.uvs.empty() || mesh.normals.empty()) throw std::runtime_error("the creature needs vt and vn");
+
+  // --- Stamp --------------------------------------------------------------
+  PelageStampParams params = pelage_stamp_params_defaults();
+  params.target_count = opt.roots;
+  params.seed = 1;
+  params.density = density.map();
+  params.black_scale = 0.5f;
+  PelageStampInfo info{};
+  creature::Stopwatch clock;
+  const std::vector<PelageRoot> roots = creature::stamp(mesh, params, &info);
+  const double stamp_s = clock.seconds();
+  const size_t n = roots.size();
+  std::printf("\nstamp: %zu roots for a target of %u in %.3f s (query + allocation + stamp: %.2f M roots/s); "
+              "radius %.5f, %u passes, "
+              "%u candidates, %u pruned, %u degenerate triangles\n",
+              n, params.target_count, stamp_s, double(n) / stamp_s * 1e-6, info.radius, info.passes,
+              info.candidates, info.pruned, info.degenerate_triangles);
+  expect(std::fabs(double(n) - opt.roots) <= 0.03 * opt.roots, fmt("count %zu within 3%% of %u", n, opt.roots));
+
+  std::vector<float> positions, normals;
+  creature::evaluate(mesh, roots, positions, normals);
+
+  creature::Device device;
+
+  // --- (a) every root lies on the surface ----------------------------------
+  std::printf("\n(a) roots on the surface\n");
+  {
+    RTCScene skin = rtcNewScene(device.device);
+    creature::attach_mesh(device.device, skin, mesh);
+    rtcCommitScene(skin);
+    device.check("skin scene");
+    const float offset = 1e-3f, reach = 2e-3f;
+    std::vector<float> hit_t(n);
+    std::vector<uint8_t> same_face(n), ok(n);
+    double worst_eval = 0.0;
+    for (size_t i = 0; i < n; ++i) {  // pelage's evaluation against our own
+      const uint32_t* t = &mesh.indices[3 * size_t(roots[i].face)];
+      const float u = roots[i].u, v = roots[i].v;
+      const V3 ref = (1.0f - u - v) * at3(mesh.positions, t[0]) + u * at3(mesh.positions, t[1]) +
+                     v * at3(mesh.positions, t[2]);
+      worst_eval = std::max(worst_eval, double(length(at3(positions, i) - ref)));
+    }
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+      const V3 p = at3(positions, i), nrm = at3(normals, i);
+      RTCRayHit h = trace(skin, p + offset * nrm, -1.0f * nrm);  // from outside, inward
+      bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID && h.ray.tfar <= reach;
+      if (!hit) {  // from inside, outward (a normal that points the wrong way)
+        h = trace(skin, p - offset * nrm, nrm);
+        hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID && h.ray.tfar <= reach;
+      }
+      hit_t[i] = hit ? h.ray.tfar : -1.0f;
+      same_face[i] = hit && h.hit.primID == roots[i].face;
+      ok[i] = hit;
+    });
+    size_t failures = 0, same = 0;
+    double worst_dev = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      failures += !ok[i];
+      same += same_face[i];
+      if (ok[i]) worst_dev = std::max(worst_dev, std::fabs(double(hit_t[i]) - offset));
+    }
+    std::printf("  pelage_roots_evaluate vs. barycentric interpolation here: max difference %.2e\n", worst_eval);
+    std::printf("  rays from p + %.0e n along -n: %zu of %zu hit within %.0e; max |t - %.0e| = %.2e; "
+                "%.2f %% hit the root's own triangle\n",
+                double(offset), n - failures, n, double(reach), double(offset), worst_dev, 100.0 * same / double(n));
+    expect(worst_eval < 1e-5, "evaluated positions match (1 - u - v) p0 + u p1 + v p2");
+    expect(failures == 0, fmt("every root is on the surface (%zu off)", failures));
+    rtcReleaseScene(skin);
+  }
+
+  // --- (b) no roots in bald regions ---------------------------------------
+  std::printf("\n(b) bald regions (density 0: face and palms)\n");
+  {
+    // "Deep" bald texels: black, and every texel within +-20 columns and
+    // +-10 rows is black too (wider than any triangle near the bald discs).
+    const int rx = 20, ry = 10, w = density.width, h = density.height;
+    std::vector<uint8_t> rowmax(size_t(w) * size_t(h)), deep(size_t(w) * size_t(h));
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        uint8_t m = 0;
+        for (int k = std::max(0, x - rx); k <= std::min(w - 1, x + rx); ++k) m = std::max(m, density.at(k, y));
+        rowmax[size_t(y) * size_t(w) + size_t(x)] = m;
+      }
+    }
+    size_t deep_texels = 0;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        uint8_t m = 0;
+        for (int k = std::max(0, y - ry); k <= std::min(h - 1, y + ry); ++k) {
+          m = std::max(m, rowmax[size_t(k) * size_t(w) + size_t(x)]);
+        }
+        deep[size_t(y) * size_t(w) + size_t(x)] = m == 0;
+        deep_texels += m == 0;
+      }
+    }
+    size_t black_texels = size_t(std::count(density.texels.begin(), density.texels.end(), uint8_t(0)));
+    size_t on_black = 0, on_deep = 0, on_bald_triangle = 0;
+    for (size_t i = 0; i < n; ++i) {
+      float uv[2], c[2];
+      mesh.uv_at(roots[i].face, roots[i].u, roots[i].v, uv);
+      mesh.uv_at(roots[i].face, 1.0f / 3.0f, 1.0f / 3.0f, c);
+      const int x = std::clamp(int(uv[0] * float(w)), 0, w - 1), y = std::clamp(int(uv[1] * float(h)), 0, h - 1);
+      on_black += density.at(x, y) == 0;
+      on_deep += deep[size_t(y) * size_t(w) + size_t(x)];
+      on_bald_triangle += density.bilinear(c[0], c[1]) < params.bald_below;
+    }
+    std::printf("  texels: %zu black, %zu deep inside the black regions\n", black_texels, deep_texels);
+    std::printf("  roots whose triangle's centroid density is below bald_below (%.5f): %zu\n",
+                double(params.bald_below), on_bald_triangle);
+    std::printf("  roots on a black texel: %zu (%.3f %%); deep inside a bald region: %zu\n", on_black,
+                100.0 * on_black / double(n), on_deep);
+    expect(deep_texels > 0, "the density map has bald regions");
+    expect(on_bald_triangle == 0, "no roots on triangles whose centroid density is below bald_below");
+    expect(on_deep == 0, "no roots deep inside bald regions");
+    expect(on_black < 0.005 * double(n), "fewer than 0.5 % of the roots on black texels (region borders)");
+  }
+
+  // --- (c) strands as Embree curves ----------------------------------------
+  std::printf("\n(c) straight strands as RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE\n");
+  const creature::StrandParams sp = opt.strands;
+  const creature::Strands strands = creature::grow_strands(positions, normals, sp);
+  {
+    const size_t bad = creature::count_bad_control_points(strands);
+    bool indices_ok = true;
+    for (size_t i = 0; i < strands.count(); ++i) indices_ok &= strands.indices[i] + 3 < strands.control_points.size() / 4;
+    RTCScene scene = rtcNewScene(device.device);
+    creature::attach_mesh(device.device, scene, mesh);
+    creature::attach_strands(device.device, scene, strands);
+    rtcCommitScene(scene);
+    const RTCError err = rtcGetDeviceError(device.device);
+    RTCBounds b;
+    rtcGetSceneBounds(scene, &b);
+    std::printf("  %zu curves, %zu control points (float4, stride 16); scene bounds (%.3f %.3f %.3f) .. "
+                "(%.3f %.3f %.3f)\n",
+                strands.count(), strands.control_points.size() / 4, b.lower_x, b.lower_y, b.lower_z, b.upper_x,
+                b.upper_y, b.upper_z);
+    expect(bad == 0, fmt("control points finite with radius >= 0 (%zu bad)", bad));
+    expect(indices_ok, "every index points at the first of 4 control points in range");
+    expect(device.errors.empty(), fmt("no Embree error callback (%zu calls)", device.errors.size()));
+    for (const std::string& e : device.errors) std::printf("    Embree: %s\n", e.c_str());
+    expect(err == RTC_ERROR_NONE, "rtcGetDeviceError == RTC_ERROR_NONE after commit");
+
+    // Embree drops bad primitives silently: check that the curves are really
+    // there by shooting at the middle of every 50th strand from the side
+    // (curves only: near the thin ears the skin can be closer than 4 radii).
+    RTCScene fur = rtcNewScene(device.device);
+    const unsigned fur_id = creature::attach_strands(device.device, fur, strands);
+    rtcCommitScene(fur);
+    size_t probes = 0, found = 0, own = 0;
+    for (size_t i = 0; i < strands.count(); i += 50, ++probes) {
+      const float* c = &strands.control_points[16 * i];
+      const V3 root{c[4], c[5], c[6]}, tip{c[8], c[9], c[10]};
+      const V3 along = normalize(tip - root);
+      const V3 side = normalize(cross(along, std::fabs(along.x) < 0.9f ? V3{1, 0, 0} : V3{0, 1, 0}));
+      const V3 mid = 0.5f * (root + tip);
+      const RTCRayHit h = trace(fur, mid + 4.0f * sp.root_radius * side, -1.0f * side, 8.0f * sp.root_radius);
+      found += h.hit.geomID == fur_id;
+      own += h.hit.geomID == fur_id && h.hit.primID == i;
+    }
+    std::printf("  side rays at strand midpoints: %zu of %zu hit a curve, %zu the strand aimed at\n", found, probes,
+                own);
+    expect(found == probes, "every probed strand is in the BVH");
+    rtcReleaseScene(fur);
+    rtcReleaseScene(scene);
+    device.check("curves");
+  }
+
+  // --- (d) skin coverage: stamped vs. random roots -------------------------
+  std::printf("\n(d) skin coverage\n");
+  {
+    Coverage cov{mesh, density,
+                 {{"front", {0, 0, -1}}, {"right", {-1, 0, 0}}, {"back", {0, 0, 1}}, {"left", {1, 0, 0}}},
+                 opt.resolution, {0.0f, 0.06f, 0.0f}, 1.3f, {}, 0};
+    RTCScene skin = rtcNewScene(device.device);
+    creature::attach_mesh(device.device, skin, mesh);
+    rtcCommitScene(skin);
+    cov.prepare(skin);
+    rtcReleaseScene(skin);
+
+    auto measure = [&](const std::vector<PelageRoot>& rs) {
+      std::vector<float> p, nr;
+      creature::evaluate(mesh, rs, p, nr);
+      const creature::Strands s = creature::grow_strands(p, nr, sp);
+      RTCScene scene = rtcNewScene(device.device);
+      const unsigned id = creature::attach_mesh(device.device, scene, mesh);
+      creature::attach_strands(device.device, scene, s);
+      rtcCommitScene(scene);
+      device.check("coverage scene");
+      const Coverage::Seen seen = cov.skin_visible(scene, id);
+      rtcReleaseScene(scene);
+      return seen;
+    };
+
+    struct Row {
+      std::string name;
+      double multiple;
+      size_t count;
+      Coverage::Seen seen;
+    };
+    std::vector<Row> rows;
+    rows.push_back({"pelage stamp (Poisson)", 1.0, n, measure(roots)});
+    const std::vector<double> cdf = random_root_cdf(mesh, density, params);
+    for (double m : {1.0, 1.5, 2.0, 3.0, 4.0}) {
+      const size_t count = size_t(std::llround(m * double(n)));
+      rows.push_back({fmt("uniform random, %.1fx", m), m, count, measure(random_roots(cdf, count, 1000 + uint64_t(10 * m)))});
+    }
+    std::printf("  %zu orthographic views (", cov.views.size());
+    for (size_t v = 0; v < cov.views.size(); ++v) std::printf("%s%s", v ? ", " : "", cov.views[v].name);
+    std::printf(") of %dx%d rays (%.4f apart); %zu rays hit furred skin (density texel > 0) when there is no fur.\n",
+                cov.resolution, cov.resolution, double(2.0f * cov.half / float(cov.resolution)), cov.furred_rays);
+    std::printf("  Strands: straight, length %.3f, radius %.4f, %.0f degrees from the normal, combed toward -y.\n",
+                double(sp.length), double(sp.root_radius), double(sp.tilt_root_deg));
+    std::printf("  Random roots: area x density-scale^2 weighted, bald triangles excluded (pelage's rule).\n");
+    std::printf("  skin visible: share of those rays whose first hit is the skin, not a strand.\n");
+    std::printf("  bald patches: share of %dx%d-ray tiles on furred skin where >= 25 %% of the rays see skin.\n\n",
+                Coverage::tile, Coverage::tile);
+    std::printf("  %-26s %10s %14s %14s\n", "roots", "count", "skin visible", "bald patches");
+    for (const Row& r : rows) {
+      std::printf("  %-26s %10zu %12.2f %% %12.2f %%\n", r.name.c_str(), r.count, 100.0 * r.seen.skin,
+                  100.0 * r.seen.patches);
+    }
+
+    // Interpolate the multiple of random roots that matches the stamped roots.
+    auto match = [&](double Coverage::Seen::*metric) {
+      const double stamped = rows[0].seen.*metric;
+      if (stamped >= rows[1].seen.*metric) return std::string("<= 1x");
+      for (size_t k = 1; k + 1 < rows.size(); ++k) {
+        const double a = rows[k].seen.*metric, b = rows[k + 1].seen.*metric;
+        if (stamped <= a && stamped >= b) {
+          const double t = (a - stamped) / std::max(a - b, 1e-12);
+          return fmt("~%.1fx", rows[k].multiple + t * (rows[k + 1].multiple - rows[k].multiple));
+        }
+      }
+      return fmt("> %.0fx", rows.back().multiple);
+    };
+    std::printf("\n  random roots needed to match stamped: %s (skin visible), %s (bald patches)\n",
+                match(&Coverage::Seen::skin).c_str(), match(&Coverage::Seen::patches).c_str());
+    expect(rows[0].seen.skin < rows[1].seen.skin,
+           fmt("stamped roots show less skin than random roots at equal count (%.2f %% < %.2f %%)",
+               100.0 * rows[0].seen.skin, 100.0 * rows[1].seen.skin));
+  }
+
+  // --- (e) spacing ------------------------------------------------------------
+  std::printf("\n(e) spacing: nearest same-side neighbour of each root\n");
+  {
+    const float reach = 4.0f * info.radius;
+    const std::vector<double> cdf = random_root_cdf(mesh, density, params);
+    const std::vector<PelageRoot> random = random_roots(cdf, n, 1010);
+    std::vector<float> rp, rn;
+    creature::evaluate(mesh, random, rp, rn);
+    const std::vector<float> stamped_nn = nearest_neighbours(mesh, roots, positions, reach);
+    const std::vector<float> random_nn = nearest_neighbours(mesh, random, rp, reach);
+    auto stats = [&](const char* name, std::vector<float> d) {
+      std::sort(d.begin(), d.end());
+      double mean = 0.0;
+      for (float x : d) mean += x;
+      mean /= double(d.size());
+      const size_t below = size_t(std::lower_bound(d.begin(), d.end(), info.radius) - d.begin());
+      std::printf("  %-24s min %.5f (%.3f r)  median %.5f  mean %.5f  closer than r: %6.2f %%\n", name,
+                  double(d.front()), double(d.front() / info.radius), double(d[d.size() / 2]), mean,
+                  100.0 * double(below) / double(d.size()));
+      return std::make_pair(double(d.front()), mean);
+    };
+    std::printf("  disk radius r = %.5f; distances capped at 4 r\n", double(info.radius));
+    const auto st = stats("pelage stamp (Poisson)", stamped_nn);
+    const auto rd = stats("uniform random, 1.0x", random_nn);
+    std::printf("  mean nearest-neighbour distance, stamped / random: %.2f\n", st.second / rd.second);
+    expect(st.first >= 0.999 * double(info.radius), "no two same-side stamped roots closer than the disk radius");
+  }
+
+  device.check("end");
+  std::printf("\nembree_stamp: %s (%d failed checks) in %.1f s\n", g_failures ? "FAILED" : "passed", g_failures,
+              total.seconds());
+  return g_failures ? EXIT_FAILURE : EXIT_SUCCESS;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "embree_stamp: %s\n", e.what());
+  return EXIT_FAILURE;
+}
