@@ -54,16 +54,6 @@ typedef enum PelageStatus {
   PELAGE_STATUS_PANIC = 10,
 } PelageStatus;
 
-// End-point convention of the output curves.
-typedef enum PelageEndPoints {
-  // Points as computed: a Catmull-Rom consumer (Embree, RenderMan) draws
-  // from the second to the second-last point.
-  PELAGE_END_POINTS_RAW = 0,
-  // First and last points repeated ("pinned" in USD): the curve runs from
-  // root to tip. Adds 2 points per curve.
-  PELAGE_END_POINTS_PINNED = 1,
-} PelageEndPoints;
-
 // How a [`PelageMap`] stores its values.
 typedef enum PelageMapKind {
   // `constant` everywhere; `data` is ignored.
@@ -76,6 +66,16 @@ typedef enum PelageMapKind {
   // One float per mesh vertex, `stride` bytes apart, interpolated over triangles.
   PELAGE_MAP_KIND_PER_VERTEX = 3,
 } PelageMapKind;
+
+// End-point convention of the output curves.
+typedef enum PelageEndPoints {
+  // Points as computed: a Catmull-Rom consumer (Embree, RenderMan) draws
+  // from the second to the second-last point.
+  PELAGE_END_POINTS_RAW = 0,
+  // First and last points repeated ("pinned" in USD): the curve runs from
+  // root to tip. Adds 2 points per curve.
+  PELAGE_END_POINTS_PINNED = 1,
+} PelageEndPoints;
 
 // Binding parameters; start from pelage_bind_params_defaults().
 typedef struct PelageBindParams {
@@ -197,8 +197,8 @@ typedef struct PelageBindInfo {
 typedef struct PelageExpandParams {
   // Control points per strand before end handling (2..64); guides are resampled.
   uint32_t points_per_strand;
-  // End-point convention.
-  enum PelageEndPoints end_points;
+  // End-point convention: a PelageEndPoints value.
+  uint32_t end_points;
   // Length of orphan strands (use PelageBindInfo.mean_guide_length).
   float orphan_length;
   // Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
@@ -228,8 +228,9 @@ typedef struct PelageStrandGroom {
 
 // A scalar value over the mesh surface: a constant, a texture, or per-vertex values.
 typedef struct PelageMap {
-  // Storage kind.
-  enum PelageMapKind kind;
+  // Storage kind: a PelageMapKind value (a plain integer so that a bad
+  // value from the host is reported, not undefined behaviour).
+  uint32_t kind;
   // The value for PELAGE_MAP_KIND_CONSTANT.
   float constant;
   // Texels or per-vertex values; borrowed for the call.
@@ -264,7 +265,9 @@ typedef struct PelageGroomMaps {
 
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
-  // Number of roots wanted on the whole mesh (the result is within 1-3%).
+  // Number of roots wanted on the whole mesh (at most 2^28). The result is
+  // exactly this unless the mesh cannot hold that many at any spacing the
+  // correction reaches (then a little fewer).
   uint32_t target_count;
   // Seed of every random choice; same inputs and seed give the same bits.
   uint64_t seed;
@@ -284,6 +287,8 @@ typedef struct PelageStampInfo {
   uint32_t candidates;
   // Points removed by the edge pass in the final pass.
   uint32_t pruned;
+  // Surplus roots trimmed by LOD rank to land exactly on the target.
+  uint32_t trimmed;
   // Degenerate triangles skipped.
   uint32_t degenerate_triangles;
   // Stamping passes (radius corrections + 1).
@@ -307,7 +312,8 @@ uint32_t pelage_version(void);
 const char *pelage_status_string(int32_t status);
 
 // The detailed message of the last failed call on the calling thread ("" if
-// none). The pointer stays valid until the next pelage call on this thread.
+// none yet; successful calls leave it unchanged). The pointer stays valid
+// until the next failed pelage call on this thread.
 //
 // Thread safety: per-thread; may be called from any thread.
 const char *pelage_last_error(void);
@@ -403,7 +409,7 @@ enum PelageStatus pelage_stamp_query(const struct PelageMeshDesc *mesh, const st
 //
 // `arena`/`arena_bytes`: scratch memory of at least the size from
 // `pelage_stamp_query` (any alignment). `roots`: capacity `roots_capacity`;
-// the max_roots bound from the query always suffices. On success
+// the max_roots bound from the query (the target count) always suffices. On success
 // `*root_count` is the number written and `info` (optional, may be NULL) is
 // filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
 // of roots needed when the root buffer was the limit; nothing else is written.

@@ -30,8 +30,8 @@ pub enum PelageEndPoints {
 pub struct PelageExpandParams {
     /// Control points per strand before end handling (2..64); guides are resampled.
     pub points_per_strand: u32,
-    /// End-point convention.
-    pub end_points: PelageEndPoints,
+    /// End-point convention: a PelageEndPoints value.
+    pub end_points: u32,
     /// Length of orphan strands (use PelageBindInfo.mean_guide_length).
     pub orphan_length: f32,
     /// Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
@@ -46,21 +46,30 @@ pub struct PelageExpandParams {
 pub extern "C" fn pelage_expand_params_defaults() -> PelageExpandParams {
     PelageExpandParams {
         points_per_strand: 16,
-        end_points: PelageEndPoints::Pinned,
+        end_points: PelageEndPoints::Pinned as u32,
         orphan_length: 0.1,
         thread_count: 1,
     }
 }
 
-fn core_params(p: &PelageExpandParams) -> ExpandParams {
-    ExpandParams {
+fn core_params(p: &PelageExpandParams) -> Result<ExpandParams, Failure> {
+    const RAW: u32 = PelageEndPoints::Raw as u32;
+    const PINNED: u32 = PelageEndPoints::Pinned as u32;
+    let end_points = match p.end_points {
+        RAW => EndPoints::Raw,
+        PINNED => EndPoints::Pinned,
+        other => {
+            return Err(Failure::new(
+                PelageStatus::InvalidArgument,
+                format!("unknown end_points value {other}"),
+            ))
+        }
+    };
+    Ok(ExpandParams {
         points_per_strand: p.points_per_strand as usize,
-        end_points: match p.end_points {
-            PelageEndPoints::Raw => EndPoints::Raw,
-            PelageEndPoints::Pinned => EndPoints::Pinned,
-        },
+        end_points,
         orphan_length: p.orphan_length,
-    }
+    })
 }
 
 /// Sizes an expansion: arena bytes for `guide_count` guides and the control
@@ -81,7 +90,7 @@ pub extern "C" fn pelage_expand_query(
         let mut layout = ArenaLayout::new();
         PreparedGuides::layout(&mut layout, guide_count, p.points_per_strand as usize);
         *bytes = layout.bytes();
-        *per = core_params(p).output_points();
+        *per = core_params(p)?.output_points();
         Ok(())
     }
 }
@@ -118,7 +127,7 @@ pub extern "C" fn pelage_expand(
         let mesh = req(mesh, "mesh")?.view()?;
         let guides = req(guides, "guides")?.view()?;
         let p = req(params, "params")?;
-        let core = core_params(p);
+        let core = core_params(p)?;
         let strands: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
         let bindings: &[StrandBinding] = bytemuck::cast_slice(slice(bindings, strand_count, "bindings")?);
         let grooms: &[StrandGroom] = bytemuck::cast_slice(slice(grooms, strand_count, "grooms")?);

@@ -26,8 +26,9 @@ pub enum PelageMapKind {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct PelageMap {
-    /// Storage kind.
-    pub kind: PelageMapKind,
+    /// Storage kind: a PelageMapKind value (a plain integer so that a bad
+    /// value from the host is reported, not undefined behaviour).
+    pub kind: u32,
     /// The value for PELAGE_MAP_KIND_CONSTANT.
     pub constant: f32,
     /// Texels or per-vertex values; borrowed for the call.
@@ -44,7 +45,7 @@ impl PelageMap {
     /// A constant map.
     pub(crate) fn constant(value: f32) -> Self {
         PelageMap {
-            kind: PelageMapKind::Constant,
+            kind: PelageMapKind::Constant as u32,
             constant: value,
             data: std::ptr::null(),
             width: 0,
@@ -93,12 +94,22 @@ impl PelageMap {
             }
             bytes(self.data, len, name)
         };
+        const CONSTANT: u32 = PelageMapKind::Constant as u32;
+        const TEXTURE_U8: u32 = PelageMapKind::TextureU8 as u32;
+        const TEXTURE_F32: u32 = PelageMapKind::TextureF32 as u32;
+        const PER_VERTEX: u32 = PelageMapKind::PerVertex as u32;
         Ok(match self.kind {
-            PelageMapKind::Constant => ScalarMap::Constant(self.constant),
-            PelageMapKind::TextureU8 => ScalarMap::Texture(self.texture(Texels::U8(texels(1)?))),
-            PelageMapKind::TextureF32 => ScalarMap::Texture(self.texture(Texels::F32(texels(4)?))),
-            PelageMapKind::PerVertex => {
+            CONSTANT => ScalarMap::Constant(self.constant),
+            TEXTURE_U8 => ScalarMap::Texture(self.texture(Texels::U8(texels(1)?))),
+            TEXTURE_F32 => ScalarMap::Texture(self.texture(Texels::F32(texels(4)?))),
+            PER_VERTEX => {
                 ScalarMap::PerVertex(strided(self.data, self.stride, vertex_count, name)?)
+            }
+            other => {
+                return Err(Failure::new(
+                    PelageStatus::InvalidArgument,
+                    format!("{name}: unknown map kind {other}"),
+                ))
             }
         })
     }

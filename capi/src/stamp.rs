@@ -9,7 +9,9 @@ use pelage_core::{stamp, Arena, Root, StampParams};
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct PelageStampParams {
-    /// Number of roots wanted on the whole mesh (the result is within 1-3%).
+    /// Number of roots wanted on the whole mesh (at most 2^28). The result is
+    /// exactly this unless the mesh cannot hold that many at any spacing the
+    /// correction reaches (then a little fewer).
     pub target_count: u32,
     /// Seed of every random choice; same inputs and seed give the same bits.
     pub seed: u64,
@@ -31,6 +33,8 @@ pub struct PelageStampInfo {
     pub candidates: u32,
     /// Points removed by the edge pass in the final pass.
     pub pruned: u32,
+    /// Surplus roots trimmed by LOD rank to land exactly on the target.
+    pub trimmed: u32,
     /// Degenerate triangles skipped.
     pub degenerate_triangles: u32,
     /// Stamping passes (radius corrections + 1).
@@ -98,7 +102,7 @@ pub extern "C" fn pelage_stamp_query(
 ///
 /// `arena`/`arena_bytes`: scratch memory of at least the size from
 /// `pelage_stamp_query` (any alignment). `roots`: capacity `roots_capacity`;
-/// the max_roots bound from the query always suffices. On success
+/// the max_roots bound from the query (the target count) always suffices. On success
 /// `*root_count` is the number written and `info` (optional, may be NULL) is
 /// filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
 /// of roots needed when the root buffer was the limit; nothing else is written.
@@ -124,8 +128,16 @@ pub extern "C" fn pelage_stamp(
         let arena = bytes_mut(arena, arena_bytes, "arena")?;
         let out = slice_mut(roots, roots_capacity, "roots")?;
         let out: &mut [Root] = bytemuck::cast_slice_mut(out);
-        let mut arena = Arena::new(arena);
-        match stamp::stamp(mesh, &p, &mut arena, out) {
+        // the arena is checked here so that CAPACITY_EXCEEDED from the core
+        // can only mean the root buffer, whose needed size is reported
+        let need = stamp::required_bytes(&mesh, &p)?;
+        if arena.len() < need {
+            return Err(Failure::new(
+                PelageStatus::CapacityExceeded,
+                format!("arena too small: {need} bytes needed, {} available", arena.len()),
+            ));
+        }
+        match stamp::stamp(mesh, &p, &mut Arena::new(arena), out) {
             Ok((n, report)) => {
                 *root_count = n;
                 if let Some(info) = opt_mut(info) {
@@ -133,25 +145,18 @@ pub extern "C" fn pelage_stamp(
                         radius: report.radius,
                         candidates: report.candidates,
                         pruned: report.pruned,
+                        trimmed: report.trimmed,
                         degenerate_triangles: report.degenerate_triangles,
                         passes: report.passes,
                     };
                 }
                 Ok(())
             }
-            Err(e @ pelage_core::Error::CapacityExceeded { needed, available })
-                if available == roots_capacity && needed > roots_capacity =>
-            {
+            Err(e @ pelage_core::Error::CapacityExceeded { needed, .. }) => {
                 *root_count = needed;
                 Err(Failure::from(e))
             }
-            Err(e) => {
-                let mut f = Failure::from(e);
-                if f.status == PelageStatus::CapacityExceeded {
-                    f.message = format!("arena too small: {}", f.message);
-                }
-                Err(f)
-            }
+            Err(e) => Err(Failure::from(e)),
         }
     }
 }

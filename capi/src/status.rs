@@ -75,7 +75,8 @@ thread_local! {
 }
 
 /// The detailed message of the last failed call on the calling thread ("" if
-/// none). The pointer stays valid until the next pelage call on this thread.
+/// none yet; successful calls leave it unchanged). The pointer stays valid
+/// until the next failed pelage call on this thread.
 ///
 /// Thread safety: per-thread; may be called from any thread.
 #[no_mangle]
@@ -119,10 +120,7 @@ pub(crate) fn set_last_error(message: &str) {
 /// failure and returning its status.
 pub(crate) fn boundary(body: impl FnOnce() -> Result<(), Failure>) -> PelageStatus {
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(body)) {
-        Ok(Ok(())) => {
-            set_last_error("");
-            PelageStatus::Ok
-        }
+        Ok(Ok(())) => PelageStatus::Ok,
         Ok(Err(f)) => {
             set_last_error(&f.message);
             f.status

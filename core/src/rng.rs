@@ -59,13 +59,13 @@ mod tests {
     #[test]
     fn streams_are_independent_and_uniform() {
         let mut sum = 0.0f64;
-        let n = 100_000;
+        let n = if cfg!(miri) { 4_000 } else { 100_000 };
         for i in 0..n {
             let a = unit(7, i, Purpose::StampOffsetX, 0);
             assert!((0.0..1.0).contains(&a));
             sum += a as f64;
         }
-        assert!((sum / n as f64 - 0.5).abs() < 0.01);
+        assert!((sum / n as f64 - 0.5).abs() < 0.02);
         assert_ne!(
             hash(1, 2, Purpose::StampOffsetX, 0),
             hash(1, 2, Purpose::StampOffsetY, 0)

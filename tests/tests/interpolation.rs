@@ -252,7 +252,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     // level 1 -> 2: simulation guides are stamped sparser and expanded from groom guides
     let sim = groom(&m, 1500, 6000, &pelage_groom_maps_defaults());
     let mut params = pelage_expand_params_defaults();
-    params.end_points = PelageEndPoints::Raw;
+    params.end_points = PelageEndPoints::Raw as u32;
     params.points_per_strand = 10;
     params.orphan_length = 0.06;
     let sim_points = expand(&m, &sim, &params);
@@ -309,7 +309,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
         render.len()
     ];
     params.points_per_strand = 16;
-    params.end_points = PelageEndPoints::Pinned;
+    params.end_points = PelageEndPoints::Pinned as u32;
     params.orphan_length = 0.05;
     let (mut ebytes, mut per) = (0, 0);
     assert_eq!(
@@ -438,7 +438,7 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
     // zero-size groom map
     let mut maps = pelage_groom_maps_defaults();
     maps.length = PelageMap {
-        kind: PelageMapKind::TextureU8,
+        kind: PelageMapKind::TextureU8 as u32,
         constant: 0.0,
         data: [0u8; 4].as_ptr().cast(),
         width: 0,
