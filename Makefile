@@ -36,7 +36,7 @@ rust-test:
 # Miri on the fast core tests (the arena, strided reads, maps, mesh, RNG).
 rust-miri:
 	@rustup +nightly component list --installed | grep -q '^miri' || rustup component add --toolchain nightly miri rust-src
-	cargo +nightly miri test --locked -p pelage-core --lib -- arena strided rng map:: mesh::
+	cargo +nightly miri test --locked -p pelage-core --lib --no-default-features -- arena strided rng map:: mesh::
 
 cmake-test:
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release

@@ -7,7 +7,7 @@
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::bind::{StrandBinding, NO_GUIDE};
-use crate::frame::Frame;
+use crate::frame::{FaceBasis, Frame};
 use crate::groom::StrandGroom;
 use crate::guides::Guides;
 use crate::{Error, Mesh, Root};
@@ -235,10 +235,19 @@ pub fn expand(
     let n = params.points_per_strand;
     let shift = (params.end_points == EndPoints::Pinned) as usize;
     let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
+    let mut basis: Option<(u32, FaceBasis)> = None;
     for (s, root) in strands.iter().enumerate() {
+        let face = match basis {
+            Some((f, b)) if f == root.face => b,
+            _ => {
+                let b = FaceBasis::new(mesh, root.face as usize);
+                basis = Some((root.face, b));
+                b
+            }
+        };
+        let frame = face.frame(root.u, root.v);
         strand(
-            mesh,
-            root,
+            &frame,
             &bindings[s],
             &grooms[s],
             guides,
@@ -266,8 +275,7 @@ pub fn expand(
 }
 
 fn strand(
-    mesh: &Mesh,
-    root: &Root,
+    frame: &Frame,
     bind: &StrandBinding,
     groom: &StrandGroom,
     guides: &PreparedGuides,
@@ -277,7 +285,6 @@ fn strand(
     const M: usize = MAX_STRAND_POINTS;
     // checked by ExpandParams::check; the min lets the compiler drop bounds checks
     let n = params.points_per_strand.min(M);
-    let frame = Frame::at(mesh, root.face as usize, root.u, root.v);
     let step = 1.0 / (n - 1) as f32;
     let (mut ax, mut ay, mut az) = ([0.0f32; M], [0.0f32; M], [0.0f32; M]);
     if bind.count == 0 {
@@ -330,18 +337,23 @@ fn strand(
     }
     let kink = groom.kink_amplitude * length;
     if kink != 0.0 {
+        // the rotation recurrence is sequential; keep it out of the lane loop
         let (sin_step, cos_step) =
             libm::sincosf(core::f32::consts::TAU * groom.kink_frequency * step);
         let (mut sin, mut cos) = libm::sincosf(groom.kink_phase);
+        let (mut ks, mut kc) = ([0.0f32; M], [0.0f32; M]);
         for j in 0..n {
             let k = kink * (j as f32 * step);
-            px[j] += (t.x * sin + b.x * cos) * k;
-            py[j] += (t.y * sin + b.y * cos) * k;
-            pz[j] += (t.z * sin + b.z * cos) * k;
+            (ks[j], kc[j]) = (sin * k, cos * k);
             (sin, cos) = (
                 sin * cos_step + cos * sin_step,
                 cos * cos_step - sin * sin_step,
             );
+        }
+        for j in 0..n {
+            px[j] += t.x * ks[j] + b.x * kc[j];
+            py[j] += t.y * ks[j] + b.y * kc[j];
+            pz[j] += t.z * ks[j] + b.z * kc[j];
         }
     }
     let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
