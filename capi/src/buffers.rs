@@ -124,22 +124,24 @@ pub(crate) fn bytes_mut<'a>(
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), len) })
 }
 
-/// A contiguous input array of Pod `T`. `(NULL, 0)` is valid.
-pub(crate) fn slice<'a, T: bytemuck::Pod>(
-    ptr: *const T,
-    count: usize,
-    name: &str,
-) -> Result<&'a [T], Failure> {
-    if count == 0 {
-        return Ok(&[]);
-    }
+/// Checks a host array of `count` `T` (count > 0): not NULL, aligned for
+/// `T`, and addressable.
+fn check_array<T>(ptr: *const T, count: usize, name: &str) -> Result<(), Failure> {
     if ptr.is_null() {
         return Err(Failure::new(
             PelageStatus::NullParameter,
             format!("{name} is NULL"),
         ));
     }
-    check_align(ptr as usize, 0, name)?;
+    if !ptr.is_aligned() {
+        return Err(Failure::new(
+            PelageStatus::Misaligned,
+            format!(
+                "{name}: pointer not aligned to {} bytes",
+                std::mem::align_of::<T>()
+            ),
+        ));
+    }
     if count
         .checked_mul(size_of::<T>())
         .is_none_or(|b| b > isize::MAX as usize)
@@ -149,8 +151,21 @@ pub(crate) fn slice<'a, T: bytemuck::Pod>(
             format!("{name}: size overflows"),
         ));
     }
-    // SAFETY: non-NULL, aligned for T (4-byte Pod types), and the host promises
-    // `count` initialised elements for the duration of the call.
+    Ok(())
+}
+
+/// A contiguous input array of Pod `T`. `(NULL, 0)` is valid.
+pub(crate) fn slice<'a, T: bytemuck::Pod>(
+    ptr: *const T,
+    count: usize,
+    name: &str,
+) -> Result<&'a [T], Failure> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    check_array(ptr, count, name)?;
+    // SAFETY: non-NULL, aligned for T, and the host promises `count`
+    // initialised elements for the duration of the call.
     Ok(unsafe { std::slice::from_raw_parts(ptr, count) })
 }
 
@@ -163,24 +178,9 @@ pub(crate) fn slice_mut<'a, T: bytemuck::Pod>(
     if count == 0 {
         return Ok(&mut []);
     }
-    if ptr.is_null() {
-        return Err(Failure::new(
-            PelageStatus::NullParameter,
-            format!("{name} is NULL"),
-        ));
-    }
-    check_align(ptr as usize, 0, name)?;
-    if count
-        .checked_mul(size_of::<T>())
-        .is_none_or(|b| b > isize::MAX as usize)
-    {
-        return Err(Failure::new(
-            PelageStatus::InvalidArgument,
-            format!("{name}: size overflows"),
-        ));
-    }
-    // SAFETY: non-NULL, aligned, and the host grants exclusive access to `count`
-    // elements for the duration of the call.
+    check_array(ptr.cast_const(), count, name)?;
+    // SAFETY: non-NULL, aligned, and the host grants exclusive access to
+    // `count` elements for the duration of the call.
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr, count) })
 }
 

@@ -8,7 +8,7 @@ use crate::{
 };
 use pelage_core::arena::ArenaLayout;
 use pelage_core::bind::StrandBinding;
-use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides};
+use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
 use pelage_core::groom::StrandGroom;
 use pelage_core::{Arena, Root};
 
@@ -148,7 +148,8 @@ pub extern "C" fn pelage_expand(
         let arena = bytes_mut(arena, arena_bytes, "arena")?;
         let mut arena = Arena::new(arena);
         let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
-        expand::check_inputs(&mesh, strands, bindings, grooms, &prepared, &core, out.len(), point_stride)?;
+        let all = Strands { roots: strands, bindings, grooms };
+        expand::check_inputs(&mesh, &all, &prepared, &core, out.len(), point_stride)?;
         let threads = match p.thread_count {
             0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
             n => n as usize,
@@ -163,8 +164,8 @@ pub extern "C" fn pelage_expand(
                 let take = if t + 1 == threads { rest.len() } else { chunk_bytes(a, b) };
                 let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
                 rest = tail;
-                let (mesh, prepared, core) = (&mesh, &prepared, &core);
-                let mut work = move || expand::expand(mesh, &strands[a..b], &bindings[a..b], &grooms[a..b], prepared, core, mine, point_stride);
+                let (mesh, prepared, core, part) = (&mesh, &prepared, &core, all.range(a..b));
+                let mut work = move || expand::expand(mesh, &part, prepared, core, mine, point_stride);
                 if t + 1 == threads {
                     work()?;
                 } else {

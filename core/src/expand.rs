@@ -148,15 +148,45 @@ impl<'a> PreparedGuides<'a> {
     }
 }
 
+/// The per-strand inputs of expansion: parallel arrays, index for index.
+#[derive(Clone, Copy, Debug)]
+pub struct Strands<'a> {
+    /// Where each strand grows (its `id` seeds nothing here; grooms hold
+    /// the per-strand randomness).
+    pub roots: &'a [Root],
+    /// Guides and weights of each strand.
+    pub bindings: &'a [StrandBinding],
+    /// Groom values of each strand.
+    pub grooms: &'a [StrandGroom],
+}
+
+impl<'a> Strands<'a> {
+    /// Number of strands.
+    pub fn len(&self) -> usize {
+        self.roots.len()
+    }
+
+    /// True when there is no strand.
+    pub fn is_empty(&self) -> bool {
+        self.roots.is_empty()
+    }
+
+    /// The strands in `range` (of the roots; bindings and grooms are cut alike).
+    pub fn range(&self, range: core::ops::Range<usize>) -> Strands<'a> {
+        Strands {
+            roots: &self.roots[range.clone()],
+            bindings: &self.bindings[range.clone()],
+            grooms: &self.grooms[range],
+        }
+    }
+}
+
 /// Validates everything [`expand`] reads, for an output of `out_len` bytes;
 /// a threaded host calls it once before splitting, so that no chunk writes
 /// when another would fail.
-#[allow(clippy::too_many_arguments)]
 pub fn check_inputs(
     mesh: &Mesh,
-    strands: &[Root],
-    bindings: &[StrandBinding],
-    grooms: &[StrandGroom],
+    strands: &Strands,
     guides: &PreparedGuides,
     params: &ExpandParams,
     out_len: usize,
@@ -168,7 +198,12 @@ pub fn check_inputs(
             "guides were prepared for another point count",
         ));
     }
-    if bindings.len() < strands.len() || grooms.len() < strands.len() {
+    let Strands {
+        roots,
+        bindings,
+        grooms,
+    } = *strands;
+    if bindings.len() < roots.len() || grooms.len() < roots.len() {
         return Err(Error::InvalidArgument(
             "bindings and grooms must cover every strand",
         ));
@@ -178,15 +213,15 @@ pub fn check_inputs(
             what: "curve points",
         });
     }
-    let total = strands.len() * params.output_points();
+    let total = roots.len() * params.output_points();
     if total > 0 && out_len < (total - 1) * stride + 16 {
         return Err(Error::CapacityExceeded {
             needed: (total - 1) * stride + 16,
             available: out_len,
         });
     }
-    crate::root::check_roots(mesh, strands, "strand roots")?;
-    for (i, b) in bindings[..strands.len()].iter().enumerate() {
+    crate::root::check_roots(mesh, roots, "strand roots")?;
+    for (i, b) in bindings[..roots.len()].iter().enumerate() {
         let bad = b.count as usize > crate::bind::MAX_NEIGHBOURS
             || b.guides[..(b.count as usize).min(crate::bind::MAX_NEIGHBOURS)]
                 .iter()
@@ -206,37 +241,29 @@ pub fn check_inputs(
 
 /// Writes the curves of `strands` into `out`: `output_points()` float4
 /// (x, y, z, radius) per strand, `stride` bytes apart, strand after strand.
-/// `bindings` and `grooms` match `strands` index for index.
 ///
 /// Every strand is a pure function of its inputs, so any split of a strand
 /// list into ranges gives the same bits. Nothing is written on error.
-#[allow(clippy::too_many_arguments)]
 pub fn expand(
     mesh: &Mesh,
-    strands: &[Root],
-    bindings: &[StrandBinding],
-    grooms: &[StrandGroom],
+    strands: &Strands,
     guides: &PreparedGuides,
     params: &ExpandParams,
     out: &mut [u8],
     stride: usize,
 ) -> Result<(), Error> {
-    check_inputs(
-        mesh,
-        strands,
+    check_inputs(mesh, strands, guides, params, out.len(), stride)?;
+    let Strands {
+        roots,
         bindings,
         grooms,
-        guides,
-        params,
-        out.len(),
-        stride,
-    )?;
+    } = *strands;
     let per = params.output_points();
     let n = params.points_per_strand;
     let shift = (params.end_points == EndPoints::Pinned) as usize;
     let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
     let mut basis: Option<(u32, FaceBasis)> = None;
-    for (s, root) in strands.iter().enumerate() {
+    for (s, root) in roots.iter().enumerate() {
         let face = match basis {
             Some((f, b)) if f == root.face => b,
             _ => {
@@ -444,17 +471,12 @@ mod tests {
                 let r = c * n / chunks..(c + 1) * n / chunks;
                 let bytes: &mut [u8] =
                     bytemuck::cast_slice_mut(&mut out[r.start * per..r.end * per]);
-                expand(
-                    &mesh,
-                    &self.strands[r.clone()],
-                    &bindings[r.clone()],
-                    &grooms[r.clone()],
-                    &prepared,
-                    params,
-                    bytes,
-                    16,
-                )
-                .unwrap();
+                let all = Strands {
+                    roots: &self.strands,
+                    bindings,
+                    grooms,
+                };
+                expand(&mesh, &all.range(r), &prepared, params, bytes, 16).unwrap();
             }
             out
         }
@@ -653,11 +675,15 @@ mod tests {
         let mut buf = vec![0u8; 1 << 20];
         let prepared = PreparedGuides::new(&mesh, &guides, 15, &mut Arena::new(&mut buf)).unwrap();
         let mut out = vec![[0.0f32; 4]; s.strands.len() * 15];
+        let grooms = plain_grooms(s.strands.len());
+        let strands = Strands {
+            roots: &s.strands,
+            bindings: &b,
+            grooms: &grooms,
+        };
         expand(
             &mesh,
-            &s.strands,
-            &b,
-            &plain_grooms(s.strands.len()),
+            &strands,
             &prepared,
             &raw(15),
             bytemuck::cast_slice_mut(&mut out),

@@ -12,7 +12,7 @@ use pelage_core::guides::{CvLayout, Guides};
 use pelage_core::stamp::StampParams;
 use pelage_core::{Arena, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
-use pelage_tests::measure::{combed_guides, mesh_view, stamp_vec};
+use pelage_tests::measure::{combed_guides, guides_desc, mesh_desc, mesh_view, stamp_vec};
 use std::hint::black_box;
 use std::ptr::null_mut;
 use std::time::Instant;
@@ -108,27 +108,8 @@ fn main() {
     };
     let t_groom = time(3, || maps.evaluate(&mesh, &hairs, 0, &mut grooms).unwrap());
 
-    let desc = PelageMeshDesc {
-        positions: m.positions.as_ptr().cast(),
-        position_stride: 12,
-        vertex_count: m.positions.len(),
-        indices: m.triangles.as_ptr().cast(),
-        index_stride: 12,
-        triangle_count: m.triangles.len(),
-        uvs: m.uvs.as_ptr().cast(),
-        uv_stride: 8,
-        normals: m.normals.as_ptr().cast(),
-        normal_stride: 12,
-    };
-    let gdesc = PelageGuidesDesc {
-        roots: bytemuck::cast_slice::<Root, PelageRoot>(&guide_roots).as_ptr(),
-        guide_count: guide_roots.len(),
-        points: guide_points.as_ptr().cast(),
-        point_stride: 12,
-        point_count: guide_points.len(),
-        points_per_guide: CVS as u32,
-        offsets: std::ptr::null(),
-    };
+    let desc = mesh_desc(&m);
+    let gdesc = guides_desc(&guide_roots, &guide_points);
     let mut ep = pelage_expand_params_defaults();
     ep.points_per_strand = CVS as u32;
     let (mut bytes, mut per) = (0, 0);

@@ -143,3 +143,32 @@ pub fn combed_guides(mesh: &Mesh, roots: &[Root], cvs: usize, length: f32) -> Ve
     }
     pts
 }
+
+/// The creature as a C API mesh description (borrows `m`).
+pub fn mesh_desc(m: &CreatureMesh) -> pelage::PelageMeshDesc {
+    pelage::PelageMeshDesc {
+        positions: m.positions.as_ptr().cast(),
+        position_stride: 12,
+        vertex_count: m.positions.len(),
+        indices: m.triangles.as_ptr().cast(),
+        index_stride: 12,
+        triangle_count: m.triangles.len(),
+        uvs: m.uvs.as_ptr().cast(),
+        uv_stride: 8,
+        normals: m.normals.as_ptr().cast(),
+        normal_stride: 12,
+    }
+}
+
+/// Guides with a fixed point count as a C API description (borrows both slices).
+pub fn guides_desc(roots: &[Root], points: &[[f32; 3]]) -> pelage::PelageGuidesDesc {
+    pelage::PelageGuidesDesc {
+        roots: bytemuck::cast_slice::<Root, pelage::PelageRoot>(roots).as_ptr(),
+        guide_count: roots.len(),
+        points: points.as_ptr().cast(),
+        point_stride: 12,
+        point_count: points.len(),
+        points_per_guide: (points.len() / roots.len().max(1)) as u32,
+        offsets: std::ptr::null(),
+    }
+}

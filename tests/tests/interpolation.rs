@@ -6,25 +6,10 @@ use pelage::*;
 use pelage_core::stamp::StampParams;
 use pelage_core::Root;
 use pelage_tests::creature::{default_creature, CreatureMesh};
-use pelage_tests::measure::{combed_guides, mesh_view, stamp_vec};
+use pelage_tests::measure::{combed_guides, guides_desc, mesh_desc as desc, mesh_view, stamp_vec};
 use std::ptr::{null, null_mut};
 
 const CVS: usize = 12;
-
-fn desc(m: &CreatureMesh) -> PelageMeshDesc {
-    PelageMeshDesc {
-        positions: m.positions.as_ptr().cast(),
-        position_stride: 12,
-        vertex_count: m.positions.len(),
-        indices: m.triangles.as_ptr().cast(),
-        index_stride: 12,
-        triangle_count: m.triangles.len(),
-        uvs: m.uvs.as_ptr().cast(),
-        uv_stride: 8,
-        normals: m.normals.as_ptr().cast(),
-        normal_stride: 12,
-    }
-}
 
 fn as_c(roots: &[Root]) -> &[PelageRoot] {
     bytemuck::cast_slice(roots)
@@ -37,18 +22,6 @@ struct Groom {
     bindings: Vec<PelageStrandBinding>,
     grooms: Vec<PelageStrandGroom>,
     info: PelageBindInfo,
-}
-
-fn guides_desc(roots: &[Root], points: &[[f32; 3]]) -> PelageGuidesDesc {
-    PelageGuidesDesc {
-        roots: as_c(roots).as_ptr(),
-        guide_count: roots.len(),
-        points: points.as_ptr().cast(),
-        point_stride: 12,
-        point_count: points.len(),
-        points_per_guide: (points.len() / roots.len().max(1)) as u32,
-        offsets: null(),
-    }
 }
 
 fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) -> Groom {
