@@ -226,7 +226,7 @@ impl<'a> GuideIndex<'a> {
         for g in 0..n {
             let mut near = Nearest::<{ SPACING_RANK + 1 }>::new();
             let (p, nrm) = (Vec3::from(position[g]), Vec3::from(normal[g]));
-            grid.any_near(p, 1, |o| {
+            grid.any_within(p, cell, |o| {
                 if Vec3::from(normal[o as usize]).dot(nrm) > params.min_normal_dot
                     && region[o as usize] == region[g]
                 {
@@ -291,9 +291,9 @@ impl<'a> GuideIndex<'a> {
         let p = mesh.point(face, r.u, r.v);
         let n = mesh.normal(face, r.u, r.v);
         let region = region_of(mesh, params.regions, r);
-        let gather = |reach: i32| {
+        let gather = |radius: f32| {
             let mut near = Nearest::<{ MAX_NEIGHBOURS + 1 }>::new();
-            self.grid.any_near(p, reach, |g| {
+            self.grid.any_within(p, radius, |g| {
                 let gi = g as usize;
                 let (gp, gn) = (Vec3::from(self.position[gi]), Vec3::from(self.normal[gi]));
                 if self.region[gi] == region && gn.dot(n) > params.min_normal_dot {
@@ -307,7 +307,7 @@ impl<'a> GuideIndex<'a> {
             });
             near
         };
-        let mut near = gather(1);
+        let mut near = gather(self.cell);
         let orphan = StrandBinding {
             clump: crate::bind::NO_GUIDE,
             ..StrandBinding::default()
@@ -316,9 +316,8 @@ impl<'a> GuideIndex<'a> {
             return orphan;
         }
         let radius = params.search_factor * self.spacing[near.items[0].1 as usize];
-        let reach = libm::ceilf(radius / self.cell) as i32;
-        if reach > 1 {
-            near = gather(reach);
+        if radius > self.cell {
+            near = gather(radius);
         }
         let within = near.items[..near.len]
             .iter()

@@ -69,15 +69,17 @@ impl<'a> HashGrid<'a> {
         self.heads[b] = index;
     }
 
-    /// Calls `f` for every point inserted in the cells within `reach` cells of
-    /// the cell of `p`, stopping early when `f` returns true; returns whether it did.
+    /// Calls `f` for every point inserted in the cells that overlap the cube
+    /// of half-side `radius` around `p` (so every point within `radius`),
+    /// stopping early when `f` returns true; returns whether it did.
     #[inline]
-    pub fn any_near(&self, p: Vec3, reach: i32, mut f: impl FnMut(u32) -> bool) -> bool {
-        let c = self.cell_of(p);
-        for dz in -reach..=reach {
-            for dy in -reach..=reach {
-                for dx in -reach..=reach {
-                    let mut i = self.heads[self.bucket([c[0] + dx, c[1] + dy, c[2] + dz])];
+    pub fn any_within(&self, p: Vec3, radius: f32, mut f: impl FnMut(u32) -> bool) -> bool {
+        let lo = self.cell_of(p - Vec3::splat(radius));
+        let hi = self.cell_of(p + Vec3::splat(radius));
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let mut i = self.heads[self.bucket([x, y, z])];
                     while i != EMPTY {
                         if f(i) {
                             return true;

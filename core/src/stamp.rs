@@ -34,6 +34,9 @@ use glam::{Vec2, Vec3};
 /// Width of the band above the target where the radius correction stops;
 /// the surplus is trimmed by LOD rank.
 pub const COUNT_TOLERANCE: f32 = 0.02;
+/// Grid cells of the edge and LOD passes, in disk radii: at 2 a query ball
+/// overlaps about 3 cells instead of 27 at 1, with fewer points visited too.
+const GRID_CELL: f32 = 2.0;
 /// Passes that correct the radius from the measured count.
 const SECANT_PASSES: u32 = 5;
 /// Passes after which the stamp is accepted whatever its count.
@@ -172,6 +175,8 @@ pub struct Stamper<'m, 'a> {
     scaled_area: f64,
     first_radius: f32,
     radius: f32,
+    /// Radius and kept count of the previous pass, for the secant.
+    previous: Option<(f32, usize)>,
     passes: u32,
     degenerate: u32,
 }
@@ -365,6 +370,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             scaled_area: area,
             first_radius: radius,
             radius,
+            previous: None,
             passes: 0,
             degenerate,
         }))
@@ -474,11 +480,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
         ni.dot(nj) > 0.0 && Vec3::from(i.position).distance_squared(Vec3::from(j.position)) < r * r
     }
 
-    /// Reach in grid cells of side `cell` needed for candidate `c`'s local spacing.
+    /// Candidate `c`'s local disk radius (larger where the density is lower).
     #[inline]
-    fn reach(&self, c: &Candidate, cell: f32) -> i32 {
-        let local = self.radius / self.faces[c.face as usize].scale;
-        libm::ceilf(local / cell) as i32
+    fn local_radius(&self, c: &Candidate) -> f32 {
+        self.radius / self.faces[c.face as usize].scale
     }
 
     /// The edge pass: keeps, in order, every candidate that is not closer
@@ -491,7 +496,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// same-facing sheets are a radius apart.
     pub fn prune(&self, cands: &mut [Candidate], scratch: &mut Scratch) -> Result<usize, Error> {
         scratch.check(cands.len())?;
-        let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
+        let mut grid = HashGrid::new(scratch.heads, scratch.next, GRID_CELL * self.radius);
         let mut kept = 0usize;
         for j in 0..cands.len() {
             let c = cands[j];
@@ -501,7 +506,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 continue;
             }
             let p = Vec3::from(c.position);
-            let clash = grid.any_near(p, self.reach(&c, self.radius), |i| {
+            let clash = grid.any_within(p, self.local_radius(&c), |i| {
                 let o = &cands[i as usize];
                 self.conflict(o, &c, self.pair_radius(o, &c))
             });
@@ -516,18 +521,34 @@ impl<'m, 'a> Stamper<'m, 'a> {
 
     /// Feeds back the count of the last pass. Returns true when it is close
     /// enough to the target; otherwise adjusts the radius for another pass.
-    pub fn converged(&mut self, kept: usize) -> bool {
+    pub fn converged(&mut self, candidates: usize, kept: usize) -> bool {
         self.passes += 1;
         let target = self.target as f32;
         let excess = (kept as f32 - target) / target;
         if (0.0..=COUNT_TOLERANCE).contains(&excess) || kept == 0 || self.passes >= MAX_PASSES {
             return true;
         }
+        let aim = target as f64 * (1.0 + 0.5 * COUNT_TOLERANCE as f64);
+        let r1 = self.radius as f64;
         let corrected = if self.passes < SECANT_PASSES {
-            // aim inside the band [target, target * (1 + tolerance)]; the
-            // surplus is trimmed by LOD rank in `finish`
-            let aim = target * (1.0 + 0.5 * COUNT_TOLERANCE);
-            self.radius * libm::sqrtf(kept as f32 / aim)
+            match self.previous {
+                // a secant in log-log space through the last two passes
+                Some((r0, k0)) if r0 != self.radius && k0 != kept && k0 > 0 => {
+                    let slope = libm::log(kept as f64 / k0 as f64) / libm::log(r1 / r0 as f64);
+                    (r1 * libm::pow(aim / kept as f64, 1.0 / slope)) as f32
+                }
+                // Stamped points scale like 1/r^2 and the edge pass removes a
+                // share proportional to r (boundary length over area), so
+                // kept(r) = c / r^2 * (1 - f * r / r1) with c and f measured
+                // at the current radius r1. Aim inside the band [target,
+                // target * (1 + tolerance)]; `finish` trims the surplus.
+                _ => {
+                    let c = candidates as f64 * r1 * r1;
+                    let f = 1.0 - kept as f64 / candidates.max(1) as f64;
+                    let b = c * f / r1;
+                    ((-b + libm::sqrt(b * b + 4.0 * aim * c)) / (2.0 * aim)) as f32
+                }
+            }
         } else if excess > 0.0 {
             // small counts move in steps: accept any surplus, trim it
             return true;
@@ -536,6 +557,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         };
         let floor = self.first_radius * min_radius_factor(self.target, self.mesh.triangle_count());
         let clamped = corrected.max(floor);
+        self.previous = Some((self.radius, kept));
         if clamped == self.radius {
             return true;
         }
@@ -575,8 +597,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
         for k in 0..finest {
             let spacing = libm::powf(2.0, 0.5 * (finest - k) as f32);
-            let cell = self.radius * spacing;
-            grid.reset(cell);
+            grid.reset(GRID_CELL * self.radius * spacing);
             for (i, c) in cands.iter().enumerate() {
                 if level[i] < k && c.edge_distance < spacing {
                     grid.insert(i as u32, Vec3::from(c.position));
@@ -591,7 +612,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     continue;
                 }
                 let p = Vec3::from(c.position);
-                let clash = grid.any_near(p, self.reach(c, cell), |i| {
+                let clash = grid.any_within(p, self.local_radius(c) * spacing, |i| {
                     let o = &cands[i as usize];
                     self.conflict(o, c, self.pair_radius(o, c) * spacing)
                 });
@@ -670,7 +691,7 @@ pub fn stamp(
     loop {
         let n = stamper.stamp_faces(faces.clone(), cands)?;
         let kept = stamper.prune(&mut cands[..n], &mut scratch)?;
-        if stamper.converged(kept) {
+        if stamper.converged(n, kept) {
             let m = stamper.output_count(kept);
             if out.len() < m {
                 return Err(Error::CapacityExceeded {
@@ -800,7 +821,7 @@ mod tests {
                     n += k;
                 }
                 let kept = stamper.prune(&mut cands[..n], &mut scratch).unwrap();
-                if stamper.converged(kept) {
+                if stamper.converged(n, kept) {
                     break kept;
                 }
             };

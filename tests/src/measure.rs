@@ -98,7 +98,7 @@ pub fn spacing(points: &[(Vec3, Vec3)], max_dist: f32) -> Spacing {
     let (mut min, mut sum) = (f32::INFINITY, 0.0f64);
     for (i, p) in points.iter().enumerate() {
         let mut best = max_dist * max_dist;
-        grid.any_near(p.0, 2, |j| {
+        grid.any_within(p.0, max_dist, |j| {
             let q = &points[j as usize];
             if j as usize != i && p.1.dot(q.1) > 0.0 {
                 best = best.min(p.0.distance_squared(q.0));
