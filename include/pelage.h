@@ -269,6 +269,10 @@ typedef struct PelageStampParams {
   // exactly this unless the mesh cannot hold that many at any spacing the
   // correction reaches (then a little fewer).
   uint32_t target_count;
+  // Fixed disk radius (world units) instead of a count: 0 uses
+  // target_count; a positive value stamps at that spacing and keeps every
+  // root, so darker density maps give fewer roots (the paper's setting).
+  float radius;
   // Seed of every random choice; same inputs and seed give the same bits.
   uint64_t seed;
   // Grayscale density in [0, 1], sampled at each triangle's centroid.
@@ -392,7 +396,7 @@ enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const
 enum PelageStatus pelage_roots_evaluate(const struct PelageMeshDesc *mesh, const struct PelageRoot *roots, size_t root_count, void *positions, size_t position_stride, void *normals, size_t normal_stride);
 
 // Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
-// seed 0, target_count 0.
+// seed 0, target_count 0, radius 0 (derived from the count).
 //
 // Thread safety: may be called from any thread at any time.
 struct PelageStampParams pelage_stamp_params_defaults(void);

@@ -13,6 +13,10 @@ pub struct PelageStampParams {
     /// exactly this unless the mesh cannot hold that many at any spacing the
     /// correction reaches (then a little fewer).
     pub target_count: u32,
+    /// Fixed disk radius (world units) instead of a count: 0 uses
+    /// target_count; a positive value stamps at that spacing and keeps every
+    /// root, so darker density maps give fewer roots (the paper's setting).
+    pub radius: f32,
     /// Seed of every random choice; same inputs and seed give the same bits.
     pub seed: u64,
     /// Grayscale density in [0, 1], sampled at each triangle's centroid.
@@ -42,7 +46,7 @@ pub struct PelageStampInfo {
 }
 
 /// Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
-/// seed 0, target_count 0.
+/// seed 0, target_count 0, radius 0 (derived from the count).
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -50,6 +54,7 @@ pub extern "C" fn pelage_stamp_params_defaults() -> PelageStampParams {
     let d = StampParams::default();
     PelageStampParams {
         target_count: d.target_count,
+        radius: d.radius,
         seed: d.seed,
         density: PelageMap::constant(1.0),
         black_scale: d.black_scale,
@@ -63,6 +68,7 @@ fn core_params<'a>(
 ) -> Result<StampParams<'a>, Failure> {
     Ok(StampParams {
         target_count: p.target_count,
+        radius: p.radius,
         seed: p.seed,
         density: p.density.view(mesh.vertex_count, "density map")?,
         black_scale: p.black_scale,

@@ -59,8 +59,12 @@ fn min_radius_factor(target: u32, faces: usize) -> f32 {
 /// Stamping parameters.
 #[derive(Clone, Copy, Debug)]
 pub struct StampParams<'a> {
-    /// Number of roots wanted on the whole mesh.
+    /// Number of roots wanted on the whole mesh (ignored when `radius` is set).
     pub target_count: u32,
+    /// A fixed disk radius instead of a count: 0 derives the radius from
+    /// `target_count`; a positive value stamps at that spacing and keeps
+    /// every root (the paper's setting, where darker maps give fewer roots).
+    pub radius: f32,
     /// Seed of every random choice; same seed, same roots.
     pub seed: u64,
     /// Grayscale density in `[0, 1]`, sampled at each triangle's centroid.
@@ -77,6 +81,7 @@ impl Default for StampParams<'_> {
     fn default() -> Self {
         StampParams {
             target_count: 0,
+            radius: 0.0,
             seed: 0,
             density: ScalarMap::Constant(1.0),
             black_scale: 0.5,
@@ -175,6 +180,8 @@ pub struct Stamper<'m, 'a> {
     scaled_area: f64,
     first_radius: f32,
     radius: f32,
+    /// The radius was given: one pass, every root kept.
+    fixed: bool,
     /// Radius and kept count of the previous pass, for the secant.
     previous: Option<(f32, usize)>,
     passes: u32,
@@ -187,6 +194,17 @@ pub const MAX_TARGET: u32 = 1 << 28;
 fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
     if params.target_count > MAX_TARGET {
         return Err(Error::InvalidArgument("target_count exceeds 2^28"));
+    }
+    if !params.radius.is_finite() {
+        return Err(Error::NonFinite {
+            what: "radius",
+            index: 0,
+        });
+    }
+    if params.radius < 0.0 {
+        return Err(Error::InvalidArgument(
+            "radius must be 0 (use the count) or positive",
+        ));
     }
     if !params.black_scale.is_finite() {
         return Err(Error::NonFinite {
@@ -235,8 +253,12 @@ fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize {
 }
 
 /// Upper bound on the roots [`stamp`] writes: the target (surplus stamps
-/// are trimmed by LOD rank), or 0 when every face is bald or degenerate.
+/// are trimmed by LOD rank), or 0 when every face is bald or degenerate;
+/// with a fixed radius, a packing bound.
 pub fn max_roots(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
+    if params.radius > 0.0 {
+        return candidates_bound(mesh, params);
+    }
     validate(mesh, params)?;
     Ok(if scaled_area(mesh, params) > 0.0 {
         params.target_count as usize
@@ -250,10 +272,14 @@ pub fn max_roots(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
 fn candidates_bound(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
     validate(mesh, params)?;
     let area = scaled_area(mesh, params);
-    let Some(r) = first_radius(area, params.target_count, tile_density_lower_bound()) else {
-        return Ok(0);
+    let r_min = if params.radius > 0.0 {
+        params.radius
+    } else {
+        let Some(r) = first_radius(area, params.target_count, tile_density_lower_bound()) else {
+            return Ok(0);
+        };
+        r * min_radius_factor(params.target_count, mesh.triangle_count())
     };
-    let r_min = r * min_radius_factor(params.target_count, mesh.triangle_count());
     Ok((0..mesh.triangle_count())
         .map(|f| face_bound(mesh, f, face_scale(mesh, params, f), r_min))
         .sum())
@@ -358,8 +384,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
             *face = Face::new(&mesh, params.seed, f, scale);
             area += mesh.area(f) as f64 * (scale as f64) * (scale as f64);
         }
-        let Some(radius) = first_radius(area, params.target_count, tile.density()) else {
-            return Ok(None);
+        let fixed = params.radius > 0.0;
+        let radius = if fixed {
+            params.radius
+        } else {
+            match first_radius(area, params.target_count, tile.density()) {
+                Some(r) => r,
+                None => return Ok(None),
+            }
         };
         Ok(Some(Stamper {
             mesh,
@@ -369,6 +401,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             faces,
             scaled_area: area,
             first_radius: radius,
+            fixed,
             radius,
             previous: None,
             passes: 0,
@@ -389,7 +422,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// Upper bound on the candidates [`stamp_faces`](Self::stamp_faces) writes
     /// for `faces`, valid for every radius the correction can reach.
     pub fn candidate_bound(&self, faces: Range<usize>) -> usize {
-        let r_min = self.first_radius * min_radius_factor(self.target, self.mesh.triangle_count());
+        let r_min = if self.fixed {
+            self.radius
+        } else {
+            self.first_radius * min_radius_factor(self.target, self.mesh.triangle_count())
+        };
         faces
             .map(|f| face_bound(&self.mesh, f, self.faces[f].scale, r_min))
             .sum()
@@ -523,6 +560,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// enough to the target; otherwise adjusts the radius for another pass.
     pub fn converged(&mut self, candidates: usize, kept: usize) -> bool {
         self.passes += 1;
+        if self.fixed {
+            return true;
+        }
         let target = self.target as f32;
         let excess = (kept as f32 - target) / target;
         if (0.0..=COUNT_TOLERANCE).contains(&excess) || kept == 0 || self.passes >= MAX_PASSES {
@@ -568,6 +608,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// Roots [`finish`](Self::finish) writes for `kept` candidates: the
     /// target, or all of them when the stamp fell short.
     pub fn output_count(&self, kept: usize) -> usize {
+        if self.fixed {
+            return kept;
+        }
         kept.min(self.target as usize)
     }
 
@@ -868,6 +911,27 @@ mod tests {
         // black = half size: a quarter of the density
         let ratio = left as f32 / right as f32;
         assert!((ratio - 0.25).abs() < 0.05, "left/right = {ratio}");
+    }
+
+    #[test]
+    fn a_fixed_radius_keeps_every_root_and_its_spacing() {
+        let m = sphere(16, 32);
+        let mesh = m.mesh();
+        let (white, report) = run(mesh, &params(3000));
+        let fixed = |density: ScalarMap<'static>| StampParams {
+            radius: report.radius,
+            density,
+            bald_below: 0.0,
+            ..params(0)
+        };
+        let (same, r2) = run(mesh, &fixed(ScalarMap::Constant(1.0)));
+        assert_eq!((r2.trimmed, r2.passes), (0, 1));
+        assert!(min_spacing(&mesh, &same) >= report.radius * 0.999);
+        // uniform gray 0.5 with black = half size: scale 0.75, density 0.5625
+        let (gray, _) = run(mesh, &fixed(ScalarMap::Constant(0.5)));
+        let ratio = gray.len() as f32 / same.len() as f32;
+        assert!((ratio - 0.5625).abs() < 0.05, "gray/white = {ratio}");
+        assert!(white.len() == 3000 && (same.len() as f32 / 3000.0 - 1.0).abs() < 0.06);
     }
 
     #[test]
