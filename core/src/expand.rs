@@ -262,6 +262,7 @@ pub fn expand(
     let n = params.points_per_strand;
     let shift = (params.end_points == EndPoints::Pinned) as usize;
     let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
+    let mut lanes = Lanes::new(n);
     let mut basis: Option<(u32, FaceBasis)> = None;
     for (s, root) in roots.iter().enumerate() {
         let face = match basis {
@@ -279,6 +280,7 @@ pub fn expand(
             &grooms[s],
             guides,
             params,
+            &mut lanes,
             &mut pts[shift..shift + n],
         );
         if shift == 1 {
@@ -301,51 +303,81 @@ pub fn expand(
     Ok(())
 }
 
+/// Per-strand working lanes, reused across the strands of one call (zeroing
+/// fresh arrays per strand would cost more than the arithmetic).
+struct Lanes {
+    /// Parameter of each point along the strand, j / (n - 1).
+    t: [f32; MAX_STRAND_POINTS],
+    local: [[f32; MAX_STRAND_POINTS]; 3],
+    world: [[f32; MAX_STRAND_POINTS]; 3],
+    kink: [[f32; MAX_STRAND_POINTS]; 2],
+}
+
+impl Lanes {
+    fn new(n: usize) -> Self {
+        let mut t = [0.0f32; MAX_STRAND_POINTS];
+        let step = 1.0 / (n - 1) as f32;
+        for (j, tj) in t[..n].iter_mut().enumerate() {
+            *tj = j as f32 * step;
+        }
+        Lanes {
+            t,
+            local: [[0.0; MAX_STRAND_POINTS]; 3],
+            world: [[0.0; MAX_STRAND_POINTS]; 3],
+            kink: [[0.0; MAX_STRAND_POINTS]; 2],
+        }
+    }
+}
+
 fn strand(
     frame: &Frame,
     bind: &StrandBinding,
     groom: &StrandGroom,
     guides: &PreparedGuides,
     params: &ExpandParams,
+    lanes: &mut Lanes,
     out: &mut [[f32; 4]],
 ) {
-    const M: usize = MAX_STRAND_POINTS;
     // checked by ExpandParams::check; the min lets the compiler drop bounds checks
-    let n = params.points_per_strand.min(M);
-    let step = 1.0 / (n - 1) as f32;
-    let (mut ax, mut ay, mut az) = ([0.0f32; M], [0.0f32; M], [0.0f32; M]);
+    let n = params.points_per_strand.min(MAX_STRAND_POINTS);
+    let t = &lanes.t[..n];
+    let [ax, ay, az] = &mut lanes.local;
+    let (ax, ay, az) = (&mut ax[..n], &mut ay[..n], &mut az[..n]);
     if bind.count == 0 {
-        for (j, z) in az[..n].iter_mut().enumerate() {
-            *z = params.orphan_length * j as f32 * step;
+        ax.fill(0.0);
+        ay.fill(0.0);
+        for (z, tj) in az.iter_mut().zip(t) {
+            *z = params.orphan_length * tj;
         }
     } else {
-        for k in 0..bind.count as usize {
+        let first = bind.guides[0] as usize * 3 * n;
+        let (g, w) = (&guides.local[first..first + 3 * n], bind.weights[0]);
+        for j in 0..n {
+            (ax[j], ay[j], az[j]) = (g[j] * w, g[n + j] * w, g[2 * n + j] * w);
+        }
+        for k in 1..bind.count as usize {
             let w = bind.weights[k];
             let base = bind.guides[k] as usize * 3 * n;
             let g = &guides.local[base..base + 3 * n];
-            for (a, l) in ax[..n].iter_mut().zip(&g[..n]) {
-                *a += *l * w;
-            }
-            for (a, l) in ay[..n].iter_mut().zip(&g[n..2 * n]) {
-                *a += *l * w;
-            }
-            for (a, l) in az[..n].iter_mut().zip(&g[2 * n..]) {
-                *a += *l * w;
+            for j in 0..n {
+                ax[j] += g[j] * w;
+                ay[j] += g[n + j] * w;
+                az[j] += g[2 * n + j] * w;
             }
         }
     }
     let scale = groom.length;
     let length = Vec3::new(ax[n - 1], ay[n - 1], az[n - 1]).length() * scale;
     let bend = groom.bend * length;
-    let (o, t, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
-    let (mut px, mut py, mut pz) = ([0.0f32; M], [0.0f32; M], [0.0f32; M]);
+    let (o, tt, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
+    let [px, py, pz] = &mut lanes.world;
+    let (px, py, pz) = (&mut px[..n], &mut py[..n], &mut pz[..n]);
     for j in 0..n {
-        let tj = j as f32 * step;
-        let lx = ax[j] * scale + bend * tj * tj;
+        let lx = ax[j] * scale + bend * t[j] * t[j];
         let (ly, lz) = (ay[j] * scale, az[j] * scale);
-        px[j] = o.x + t.x * lx + b.x * ly + nn.x * lz;
-        py[j] = o.y + t.y * lx + b.y * ly + nn.y * lz;
-        pz[j] = o.z + t.z * lx + b.z * ly + nn.z * lz;
+        px[j] = o.x + tt.x * lx + b.x * ly + nn.x * lz;
+        py[j] = o.y + tt.y * lx + b.y * ly + nn.y * lz;
+        pz[j] = o.z + tt.z * lx + b.z * ly + nn.z * lz;
     }
     let clump = if bind.clump == NO_GUIDE {
         0.0
@@ -356,7 +388,7 @@ fn strand(
         let base = bind.clump as usize * 3 * n;
         let c = &guides.world[base..base + 3 * n];
         for j in 0..n {
-            let pull = clump * (j as f32 * step);
+            let pull = clump * t[j];
             px[j] += (c[j] - px[j]) * pull;
             py[j] += (c[n + j] - py[j]) * pull;
             pz[j] += (c[2 * n + j] - pz[j]) * pull;
@@ -364,28 +396,40 @@ fn strand(
     }
     let kink = groom.kink_amplitude * length;
     if kink != 0.0 {
-        // the rotation recurrence is sequential; keep it out of the lane loop
-        let (sin_step, cos_step) =
-            libm::sincosf(core::f32::consts::TAU * groom.kink_frequency * step);
-        let (mut sin, mut cos) = libm::sincosf(groom.kink_phase);
-        let (mut ks, mut kc) = ([0.0f32; M], [0.0f32; M]);
+        let [ks, kc] = &mut lanes.kink;
+        kink_wave(groom, n, &mut ks[..n], &mut kc[..n]);
         for j in 0..n {
-            let k = kink * (j as f32 * step);
-            (ks[j], kc[j]) = (sin * k, cos * k);
-            (sin, cos) = (
-                sin * cos_step + cos * sin_step,
-                cos * cos_step - sin * sin_step,
-            );
-        }
-        for j in 0..n {
-            px[j] += t.x * ks[j] + b.x * kc[j];
-            py[j] += t.y * ks[j] + b.y * kc[j];
-            pz[j] += t.z * ks[j] + b.z * kc[j];
+            let k = kink * t[j];
+            px[j] += (tt.x * ks[j] + b.x * kc[j]) * k;
+            py[j] += (tt.y * ks[j] + b.y * kc[j]) * k;
+            pz[j] += (tt.z * ks[j] + b.z * kc[j]) * k;
         }
     }
     let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
     for (j, p) in out[..n].iter_mut().enumerate() {
-        *p = [px[j], py[j], pz[j], r0 + dr * (j as f32 * step)];
+        *p = [px[j], py[j], pz[j], r0 + dr * t[j]];
+    }
+}
+
+/// sin and cos of the kink phase at each of `n` points, by rotation
+/// recurrences: four interleaved chains, so the serial dependency is a
+/// quarter as long as one chain's.
+fn kink_wave(groom: &StrandGroom, n: usize, sin: &mut [f32], cos: &mut [f32]) {
+    const CHAINS: usize = 4;
+    let delta = core::f32::consts::TAU * groom.kink_frequency / (n - 1) as f32;
+    let (s1, c1) = libm::sincosf(delta);
+    let (s4, c4) = libm::sincosf(delta * CHAINS as f32);
+    let (mut s, mut c) = ([0.0f32; CHAINS], [0.0f32; CHAINS]);
+    (s[0], c[0]) = libm::sincosf(groom.kink_phase);
+    for i in 1..CHAINS {
+        (s[i], c[i]) = (s[i - 1] * c1 + c[i - 1] * s1, c[i - 1] * c1 - s[i - 1] * s1);
+    }
+    for (sj, cj) in sin.chunks_mut(CHAINS).zip(cos.chunks_mut(CHAINS)) {
+        sj.copy_from_slice(&s[..sj.len()]);
+        cj.copy_from_slice(&c[..cj.len()]);
+        for i in 0..CHAINS {
+            (s[i], c[i]) = (s[i] * c4 + c[i] * s4, c[i] * c4 - s[i] * s4);
+        }
     }
 }
 
