@@ -295,12 +295,17 @@ impl<'a> GuideIndex<'a> {
             let mut near = Nearest::<{ MAX_NEIGHBOURS + 1 }>::new();
             self.grid.any_within(p, radius, |g| {
                 let gi = g as usize;
-                let (gp, gn) = (Vec3::from(self.position[gi]), Vec3::from(self.normal[gi]));
-                if self.region[gi] == region && gn.dot(n) > params.min_normal_dot {
-                    let d = gp - p;
-                    let depth = params.max_wrap_slope * d.length();
+                let d = Vec3::from(self.position[gi]) - p;
+                let d2 = d.length_squared();
+                // the grid visits a cube; the search is a ball
+                if d2 >= radius * radius || self.region[gi] != region {
+                    return false;
+                }
+                let gn = Vec3::from(self.normal[gi]);
+                if gn.dot(n) > params.min_normal_dot {
+                    let depth = params.max_wrap_slope * libm::sqrtf(d2);
                     if d.dot(n) > -depth && d.dot(gn) < depth {
-                        near.push(d.length_squared(), g);
+                        near.push(d2, g);
                     }
                 }
                 false
