@@ -4,6 +4,14 @@ use glam::Vec3;
 
 const EMPTY: u32 = u32::MAX;
 
+/// `floor(x)` as an integer for |x| < 2^31: a truncation and a fix-up, where
+/// libm's portable floor is a bit-twiddling routine several times slower.
+#[inline]
+pub fn floor_i32(x: f32) -> i32 {
+    let i = x as i32;
+    i - ((i as f32) > x) as i32
+}
+
 /// Buckets of point indices keyed by integer cell, as singly linked lists
 /// threaded through a `next` array (one slot per point).
 ///
@@ -44,11 +52,7 @@ impl<'a> HashGrid<'a> {
     #[inline]
     pub fn cell_of(&self, p: Vec3) -> [i32; 3] {
         let q = p * self.inv_cell;
-        [
-            libm::floorf(q.x) as i32,
-            libm::floorf(q.y) as i32,
-            libm::floorf(q.z) as i32,
-        ]
+        [floor_i32(q.x), floor_i32(q.y), floor_i32(q.z)]
     }
 
     #[inline]

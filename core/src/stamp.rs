@@ -23,7 +23,7 @@
 //! spread it over threads; the result is bitwise identical for any split.
 
 use crate::arena::{Arena, ArenaLayout};
-use crate::grid::HashGrid;
+use crate::grid::{floor_i32, HashGrid};
 use crate::rng::{self, Purpose};
 use crate::tile::{Tile, LOD_LEVELS, TILE_SIDE};
 use crate::{Error, Mesh, Root, ScalarMap};
@@ -238,6 +238,54 @@ fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
     params.black_scale + (1.0 - params.black_scale) * d.clamp(0.0, 1.0)
 }
 
+/// Stable LSD radix sort of `keys` by their upper 32 bits (11-bit digits),
+/// using `spare` (same length) as the second buffer.
+fn radix_sort_high32(keys: &mut [u64], spare: &mut [u64]) {
+    const BITS: u32 = 11;
+    let (mut src, mut dst) = (keys, spare);
+    let mut swapped = false;
+    for pass in 0..3 {
+        let shift = 32 + pass * BITS;
+        let digit = |k: u64| ((k >> shift) & ((1 << BITS) - 1)) as usize;
+        let mut count = [0usize; 1 << BITS];
+        for &k in src.iter() {
+            count[digit(k)] += 1;
+        }
+        let mut at = 0;
+        for c in count.iter_mut() {
+            (*c, at) = (at, at + *c);
+        }
+        for &k in src.iter() {
+            dst[count[digit(k)]] = k;
+            count[digit(k)] += 1;
+        }
+        core::mem::swap(&mut src, &mut dst);
+        swapped = !swapped;
+    }
+    if swapped {
+        // after an odd number of passes the sorted keys sit in `spare`
+        dst.copy_from_slice(src);
+    }
+}
+
+/// The x extent of triangle `t` within the strip y0 <= y <= y1, if any.
+fn row_span(t: &[Vec2; 3], y0: f32, y1: f32) -> Option<(f32, f32)> {
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for (i, a) in t.iter().enumerate() {
+        if (y0..=y1).contains(&a.y) {
+            (lo, hi) = (lo.min(a.x), hi.max(a.x));
+        }
+        let b = t[(i + 1) % 3];
+        for y in [y0, y1] {
+            if (a.y - y) * (b.y - y) < 0.0 {
+                let x = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
+                (lo, hi) = (lo.min(x), hi.max(x));
+            }
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
 /// Upper bound on the points a face can take at radius `r` (hexagonal
 /// packing of the face dilated by r/2).
 fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize {
@@ -326,6 +374,7 @@ fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
         .add::<u32>(HashGrid::buckets_for(candidates))
         .add::<u32>(candidates)
         .add::<u8>(candidates)
+        .add::<u64>(candidates)
         .add::<u64>(candidates);
 }
 
@@ -335,7 +384,10 @@ pub struct Scratch<'a> {
     heads: &'a mut [u32],
     next: &'a mut [u32],
     level: &'a mut [u8],
+    /// Sort keys; during the LOD levels, two u32 lists (by tile level, assigned).
     keys: &'a mut [u64],
+    /// Radix sort buffer; during the LOD levels, two u32 pending lists.
+    spare: &'a mut [u64],
 }
 
 impl<'a> Scratch<'a> {
@@ -346,6 +398,7 @@ impl<'a> Scratch<'a> {
             next: arena.alloc::<u32>(candidates)?,
             level: arena.alloc::<u8>(candidates)?,
             keys: arena.alloc::<u64>(candidates)?,
+            spare: arena.alloc::<u64>(candidates)?,
         })
     }
 
@@ -462,13 +515,18 @@ impl<'m, 'a> Stamper<'m, 'a> {
             det / ec.length(),
             det / eb.length(),
         ];
-        let lo = pa.min(pa + eb).min(pa + ec);
-        let hi = pa.max(pa + eb).max(pa + ec);
+        let corners = [pa, pa + eb, pa + ec];
+        let lo_y = corners[0].y.min(corners[1].y).min(corners[2].y);
+        let hi_y = corners[0].y.max(corners[1].y).max(corners[2].y);
         let side = TILE_SIDE as i32;
-        for cy in libm::floorf(lo.y) as i32..=libm::floorf(hi.y) as i32 {
+        for cy in floor_i32(lo_y)..=floor_i32(hi_y) {
             let wy = cy.rem_euclid(side);
             let shift_y = (cy - wy) as f32;
-            for cx in libm::floorf(lo.x) as i32..=libm::floorf(hi.x) as i32 {
+            // only the cells the triangle crosses in this row, not its bounding box
+            let Some((x0, x1)) = row_span(&corners, cy as f32, cy as f32 + 1.0) else {
+                continue;
+            };
+            for cx in floor_i32(x0)..=floor_i32(x1) {
                 let wx = cx.rem_euclid(side);
                 let shift = Vec2::new((cx - wx) as f32, shift_y);
                 for (p, level) in self.tile.cell(wx as usize, wy as usize) {
@@ -633,44 +691,15 @@ impl<'m, 'a> Stamper<'m, 'a> {
             });
         }
         scratch.check(n)?;
-        let level = &mut scratch.level[..n];
-        let keys = &mut scratch.keys[..n];
+        self.assign_levels(cands, scratch);
         let finest = (LOD_LEVELS - 1) as u8;
-        level.fill(u8::MAX);
-        let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
-        for k in 0..finest {
-            let spacing = libm::powf(2.0, 0.5 * (finest - k) as f32);
-            grid.reset(GRID_CELL * self.radius * spacing);
-            for (i, c) in cands.iter().enumerate() {
-                if level[i] < k && c.edge_distance < spacing {
-                    grid.insert(i as u32, Vec3::from(c.position));
-                }
-            }
-            for (j, c) in cands.iter().enumerate() {
-                if level[j] != u8::MAX || c.level > k as u32 {
-                    continue;
-                }
-                if c.edge_distance >= spacing {
-                    level[j] = k;
-                    continue;
-                }
-                let p = Vec3::from(c.position);
-                let clash = grid.any_within(p, self.local_radius(c) * spacing, |i| {
-                    let o = &cands[i as usize];
-                    self.conflict(o, c, self.pair_radius(o, c) * spacing)
-                });
-                if !clash {
-                    level[j] = k;
-                    grid.insert(j as u32, p);
-                }
-            }
-        }
+        let keys = &mut scratch.keys[..n];
         for (j, key) in keys.iter_mut().enumerate() {
-            let l = level[j].min(finest) as u64;
+            let l = scratch.level[j].min(finest) as u64;
             let h = rng::hash(self.seed, j as u64, Purpose::LodOrder, 0) >> 40;
             *key = (l << 56) | (h << 32) | j as u64;
         }
-        keys.sort_unstable();
+        radix_sort_high32(keys, &mut scratch.spare[..n]);
         let rank_of = &mut scratch.next[..n];
         for (rank, key) in keys.iter().enumerate() {
             rank_of[(*key & 0xFFFF_FFFF) as usize] = rank as u32;
@@ -689,6 +718,83 @@ impl<'m, 'a> Stamper<'m, 'a> {
             }
         }
         Ok(())
+    }
+
+    /// Nested LOD levels across triangles: coarse to fine, each candidate
+    /// whose tile level allows it takes level k unless it is closer than the
+    /// level's spacing to a point of another triangle already at level <= k,
+    /// in which case it is tried again at the next level. Candidates are
+    /// visited in index order at every level, through per-level lists, so a
+    /// level touches only its own candidates.
+    fn assign_levels(&self, cands: &[Candidate], scratch: &mut Scratch) {
+        let n = cands.len();
+        let finest = (LOD_LEVELS - 1) as u8;
+        let level = &mut scratch.level[..n];
+        level.fill(finest);
+        let (by_level, assigned) =
+            bytemuck::cast_slice_mut::<u64, u32>(&mut scratch.keys[..n]).split_at_mut(n);
+        let (mut pending, mut next_pending) =
+            bytemuck::cast_slice_mut::<u64, u32>(&mut scratch.spare[..n]).split_at_mut(n);
+        let mut start = [0usize; LOD_LEVELS + 1];
+        for c in cands {
+            start[c.level as usize + 1] += 1;
+        }
+        for l in 0..LOD_LEVELS {
+            start[l + 1] += start[l];
+        }
+        let mut fill = start;
+        for (j, c) in cands.iter().enumerate() {
+            by_level[fill[c.level as usize]] = j as u32;
+            fill[c.level as usize] += 1;
+        }
+        let (mut n_assigned, mut n_pending) = (0usize, 0usize);
+        let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
+        for k in 0..finest {
+            let spacing = libm::powf(2.0, 0.5 * (finest - k) as f32);
+            grid.reset(GRID_CELL * self.radius * spacing);
+            for &i in &assigned[..n_assigned] {
+                let c = &cands[i as usize];
+                if c.edge_distance < spacing {
+                    grid.insert(i, Vec3::from(c.position));
+                }
+            }
+            let fresh = &by_level[start[k as usize]..start[k as usize + 1]];
+            let (mut a, mut b, mut carried) = (0, 0, 0);
+            while a < n_pending || b < fresh.len() {
+                let take_pending = b == fresh.len() || (a < n_pending && pending[a] < fresh[b]);
+                let j = if take_pending {
+                    a += 1;
+                    pending[a - 1]
+                } else {
+                    b += 1;
+                    fresh[b - 1]
+                };
+                let c = &cands[j as usize];
+                // interior points cannot conflict with other triangles
+                if c.edge_distance >= spacing {
+                    level[j as usize] = k;
+                    assigned[n_assigned] = j;
+                    n_assigned += 1;
+                    continue;
+                }
+                let p = Vec3::from(c.position);
+                let clash = grid.any_within(p, self.local_radius(c) * spacing, |i| {
+                    let o = &cands[i as usize];
+                    self.conflict(o, c, self.pair_radius(o, c) * spacing)
+                });
+                if clash {
+                    next_pending[carried] = j;
+                    carried += 1;
+                } else {
+                    level[j as usize] = k;
+                    grid.insert(j, p);
+                    assigned[n_assigned] = j;
+                    n_assigned += 1;
+                }
+            }
+            core::mem::swap(&mut pending, &mut next_pending);
+            n_pending = carried;
+        }
     }
 
     fn report(&self, candidates: usize, kept: usize) -> StampReport {

@@ -114,7 +114,7 @@ fn torus_dist2(a: [f32; 2], b: [f32; 2]) -> f32 {
 
 #[inline]
 fn wrap_coord(x: f32) -> f32 {
-    let w = x - SIDE * libm::floorf(x / SIDE);
+    let w = x - SIDE * crate::grid::floor_i32(x / SIDE) as f32;
     if !(0.0..SIDE).contains(&w) {
         0.0
     } else {
