@@ -1,6 +1,8 @@
 #include "creature_io.h"
 
 #include <png.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
@@ -182,15 +184,6 @@ void evaluate(const Mesh& mesh, const std::vector<PelageRoot>& roots, std::vecto
 
 namespace {
 
-struct V3 {
-  float x, y, z;
-};
-V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator*(float s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
-float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V3 normalize(V3 a) { return (1.0f / std::sqrt(dot(a, a))) * a; }
-
 // The comb direction projected onto the tangent plane of `n`; where the comb
 // is (nearly) parallel to the normal, the world axis least aligned with it.
 V3 comb_tangent(V3 n, V3 comb) {
@@ -241,13 +234,98 @@ Strands grow_strands(const std::vector<float>& positions, const std::vector<floa
 }
 
 size_t count_bad_control_points(const Strands& strands) {
+  return count_bad_points(strands.control_points.data(), strands.control_points.size() / 4);
+}
+
+size_t count_bad_points(const float* float4, size_t count) {
   size_t bad = 0;
-  for (size_t i = 0; i + 3 < strands.control_points.size(); i += 4) {
-    const float* c = &strands.control_points[i];
+  for (size_t i = 0; i < count; ++i) {
+    const float* c = &float4[4 * i];
     const bool finite = std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]) && std::isfinite(c[3]);
     if (!finite || c[3] < 0.0f) ++bad;
   }
   return bad;
+}
+
+// --- Guide interpolation ---------------------------------------------------
+
+std::vector<float> combed_guides(const Mesh& mesh, const std::vector<PelageRoot>& roots, uint32_t cvs, float length) {
+  if (cvs < 2) throw std::runtime_error("combed_guides: a guide needs at least 2 points");
+  std::vector<float> positions, normals;
+  evaluate(mesh, roots, positions, normals);
+  std::vector<float> points(3 * size_t(cvs) * roots.size());
+  const float seg = length / float(cvs - 1);
+  for (size_t g = 0; g < roots.size(); ++g) {
+    const V3 n = at3(normals, g);
+    const V3 down = V3{0.0f, -1.0f, 0.0f} - dot(n, V3{0.0f, -1.0f, 0.0f}) * n;
+    const float len = creature::length(down);
+    const V3 comb = len > 0.0f && std::isfinite(1.0f / len) ? (1.0f / len) * down : V3{};  // zero at the poles
+    V3 q = at3(positions, g);
+    float* out = &points[3 * size_t(cvs) * g];
+    for (uint32_t j = 0; j < cvs; ++j) {
+      if (j > 0) {
+        const float t = float(j) / float(cvs - 1);
+        q = q + seg * normalize((1.0f - 0.6f * t) * n + (0.6f * t) * comb);
+      }
+      out[3 * j] = q.x, out[3 * j + 1] = q.y, out[3 * j + 2] = q.z;
+    }
+  }
+  return points;
+}
+
+PelageGuidesDesc guides_desc(const std::vector<PelageRoot>& roots, const std::vector<float>& points, uint32_t cvs) {
+  PelageGuidesDesc d{};
+  d.roots = roots.data();
+  d.guide_count = roots.size();
+  d.points = points.data();
+  d.point_stride = 3 * sizeof(float);
+  d.point_count = points.size() / 3;
+  d.points_per_guide = cvs;
+  d.offsets = nullptr;
+  return d;
+}
+
+std::vector<PelageStrandBinding> bind(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageRoot* strands,
+                                      size_t count, const PelageBindParams& params, PelageBindInfo* info) {
+  const PelageMeshDesc desc = mesh.desc();
+  size_t arena_bytes = 0;
+  check(pelage_bind_query(guides.guide_count, &arena_bytes), "pelage_bind_query");
+  std::vector<unsigned char> arena(arena_bytes);
+  std::vector<PelageStrandBinding> bindings(count);
+  check(pelage_bind(&desc, &guides, strands, count, &params, arena.data(), arena.size(), bindings.data(),
+                    bindings.size(), info),
+        "pelage_bind");
+  return bindings;
+}
+
+std::vector<PelageStrandGroom> groom(const Mesh& mesh, const PelageGroomMaps& maps, const PelageRoot* roots,
+                                     size_t count) {
+  const PelageMeshDesc desc = mesh.desc();
+  std::vector<PelageStrandGroom> grooms(count);
+  check(pelage_groom_evaluate(&desc, &maps, roots, count, grooms.data(), grooms.size()), "pelage_groom_evaluate");
+  return grooms;
+}
+
+Expander::Expander(size_t guide_count, const PelageExpandParams& params) : params_(params) {
+  size_t arena_bytes = 0;
+  check(pelage_expand_query(guide_count, &params_, &arena_bytes, &per_curve_), "pelage_expand_query");
+  arena_.resize(arena_bytes);
+}
+
+void Expander::expand(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageRoot* strands,
+                      const PelageStrandBinding* bindings, const PelageStrandGroom* grooms, size_t count,
+                      float* points, size_t capacity, uint32_t* curve_counts, uint32_t* curve_ids) {
+  const PelageMeshDesc desc = mesh.desc();
+  check(pelage_expand(&desc, &guides, strands, bindings, grooms, count, &params_, arena_.data(), arena_.size(),
+                      points, 4 * sizeof(float), capacity, curve_counts, curve_ids),
+        "pelage_expand");
+}
+
+std::vector<uint32_t> segment_indices(size_t curves, size_t per_curve) {
+  std::vector<uint32_t> indices(curves * (per_curve >= 3 ? per_curve - 3 : 0));
+  check(pelage_curves_segment_indices(curves, per_curve, indices.data(), indices.size()),
+        "pelage_curves_segment_indices");
+  return indices;
 }
 
 // --- Embree -------------------------------------------------------------------
@@ -307,15 +385,140 @@ unsigned attach_mesh(RTCDevice device, RTCScene scene, const Mesh& mesh) {
 }
 
 unsigned attach_strands(RTCDevice device, RTCScene scene, const Strands& strands) {
+  return attach_curves(device, scene, strands.control_points.data(), strands.control_points.size() / 4,
+                       strands.indices.data(), strands.indices.size());
+}
+
+unsigned attach_curves(RTCDevice device, RTCScene scene, const float* points, size_t point_count,
+                       const uint32_t* indices, size_t segment_count) {
   RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, strands.control_points.data(), 0,
-                             4 * sizeof(float), strands.control_points.size() / 4);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, strands.indices.data(), 0,
-                             sizeof(uint32_t), strands.indices.size());
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, points, 0, 4 * sizeof(float),
+                             point_count);
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, indices, 0, sizeof(uint32_t),
+                             segment_count);
   rtcCommitGeometry(g);
   const unsigned id = rtcAttachGeometry(scene, g);
   rtcReleaseGeometry(g);
   return id;
+}
+
+// --- Skin coverage -------------------------------------------------------------
+
+std::vector<double> random_root_cdf(const Mesh& mesh, const GrayImage& density, const PelageStampParams& params) {
+  std::vector<double> cdf(mesh.triangle_count());
+  double total = 0.0;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    float uv[2];
+    mesh.uv_at(t, 1.0f / 3.0f, 1.0f / 3.0f, uv);
+    const float d = density.bilinear(uv[0], uv[1]);
+    double w = 0.0;
+    if (d >= params.bald_below) {
+      const double s = params.black_scale + (1.0 - params.black_scale) * std::clamp(d, 0.0f, 1.0f);
+      w = mesh.area(t) * s * s;
+    }
+    total += w;
+    cdf[t] = total;
+  }
+  for (double& c : cdf) c /= total;
+  return cdf;
+}
+
+std::vector<PelageRoot> random_roots(const std::vector<double>& cdf, size_t count, uint64_t seed) {
+  Rng rng{seed};
+  std::vector<PelageRoot> roots(count);
+  for (size_t i = 0; i < count; ++i) {
+    const double x = double(rng.next() >> 11) * (1.0 / 9007199254740992.0);
+    const size_t face = size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin());
+    const float r = std::sqrt(rng.unit()), b = rng.unit();  // uniform on the triangle
+    roots[i] = PelageRoot{uint32_t(std::min(face, cdf.size() - 1)), r * (1.0f - b), r * b, uint32_t(i), uint32_t(i)};
+  }
+  return roots;
+}
+
+RTCRayHit trace(RTCScene scene, V3 org, V3 dir, float tfar) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh{};
+  rh.ray.org_x = org.x, rh.ray.org_y = org.y, rh.ray.org_z = org.z;
+  rh.ray.dir_x = dir.x, rh.ray.dir_y = dir.y, rh.ray.dir_z = dir.z;
+  rh.ray.tnear = 0.0f, rh.ray.tfar = tfar, rh.ray.mask = ~0u;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene, &ctx, &rh);
+  return rh;
+}
+
+Coverage::Coverage(const Mesh& m, const GrayImage& d, int r)
+    : mesh(m),
+      density(d),
+      views{{"front", {0, 0, -1}}, {"right", {-1, 0, 0}}, {"back", {0, 0, 1}}, {"left", {1, 0, 0}}},
+      resolution(r) {}
+
+void Coverage::ray(size_t view, int x, int y, V3& org, V3& dir) const {
+  const V3 f = views[view].forward;
+  const V3 right = normalize(cross(f, V3{0.0f, 1.0f, 0.0f}));
+  const V3 up = cross(right, f);
+  const float sx = ((float(x) + 0.5f) / float(resolution) * 2.0f - 1.0f) * half;
+  const float sy = (1.0f - (float(y) + 0.5f) / float(resolution) * 2.0f) * half;
+  org = center + sx * right + sy * up - 5.0f * f;
+  dir = f;
+}
+
+void Coverage::prepare(RTCScene skin_only) {
+  furred.assign(views.size() * rays_per_view(), 0);
+  for (size_t v = 0; v < views.size(); ++v) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        for (int x = 0; x < resolution; ++x) {
+          V3 org, dir;
+          ray(v, x, y, org, dir);
+          const RTCRayHit h = trace(skin_only, org, dir);
+          if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+          float uv[2];
+          mesh.uv_at(h.hit.primID, h.hit.u, h.hit.v, uv);
+          furred[v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x)] =
+              density.nearest(uv[0], uv[1]) > 0 ? 1 : 0;
+        }
+      }
+    });
+  }
+  furred_rays = size_t(std::count(furred.begin(), furred.end(), uint8_t(1)));
+}
+
+Coverage::Seen Coverage::skin_visible(RTCScene scene, unsigned skin_id) const {
+  std::vector<uint8_t> sees_skin(furred.size(), 0);
+  for (size_t v = 0; v < views.size(); ++v) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        for (int x = 0; x < resolution; ++x) {
+          const size_t i = v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x);
+          if (!furred[i]) continue;
+          V3 org, dir;
+          ray(v, x, y, org, dir);
+          sees_skin[i] = trace(scene, org, dir).hit.geomID == skin_id;
+        }
+      }
+    });
+  }
+  const size_t visible = size_t(std::count(sees_skin.begin(), sees_skin.end(), uint8_t(1)));
+  size_t tiles = 0, patchy = 0;
+  for (size_t v = 0; v < views.size(); ++v) {
+    for (int ty = 0; ty + tile <= resolution; ty += tile) {
+      for (int tx = 0; tx + tile <= resolution; tx += tile) {
+        size_t on_fur = 0, skin = 0;
+        for (int y = ty; y < ty + tile; ++y) {
+          for (int x = tx; x < tx + tile; ++x) {
+            const size_t i = v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x);
+            on_fur += furred[i];
+            skin += sees_skin[i];
+          }
+        }
+        if (on_fur < size_t(tile * tile)) continue;
+        ++tiles;
+        patchy += 4 * skin >= on_fur;
+      }
+    }
+  }
+  return {double(visible) / double(furred_rays), double(patchy) / double(std::max<size_t>(tiles, 1))};
 }
 
 }  // namespace creature

@@ -1,12 +1,14 @@
 // Helpers shared by the creature demo and the C++ tests: OBJ and PNG I/O,
-// a checked pelage stamping call, straight/combed strand growth into
-// Embree-ready buffers, and an Embree device that records its errors.
+// checked pelage calls (stamp, bind, groom, expand), combed guides, straight
+// strand growth into Embree-ready buffers, an Embree device that records its
+// errors, and the skin-coverage measurement (stamped vs. random roots).
 #pragma once
 
 #include <embree3/rtcore.h>
 #include <pelage.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -23,6 +25,20 @@ struct PelageError : std::runtime_error {
 
 // Throws PelageError unless `status` is PELAGE_STATUS_OK.
 void check(PelageStatus status, const char* what);
+
+// A small float3 for hosts' geometry code (found by ADL).
+struct V3 {
+  float x = 0, y = 0, z = 0;
+};
+inline V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3 operator*(float s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
+inline float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline float length(V3 a) { return std::sqrt(dot(a, a)); }
+inline V3 normalize(V3 a) { return (1.0f / length(a)) * a; }
+// Element `i` of a packed float3 array.
+inline V3 at3(const std::vector<float>& v, size_t i) { return {v[3 * i], v[3 * i + 1], v[3 * i + 2]}; }
 
 // An indexed triangle mesh with per-vertex attributes, packed (stride 12/8).
 struct Mesh {
@@ -105,6 +121,50 @@ Strands grow_strands(const std::vector<float>& positions, const std::vector<floa
 // Control points that are not finite or have a negative radius (Embree drops
 // such primitives silently, so hosts must check them).
 size_t count_bad_control_points(const Strands& strands);
+// The same for `count` float4 (x, y, z, radius) points, packed.
+size_t count_bad_points(const float* float4, size_t count);
+
+// --- Guide interpolation ---------------------------------------------------
+
+// Guides combed like `combed_guides` in tests/src/measure.rs: `cvs` points per
+// root, `length / (cvs - 1)` apart, leaving along the normal n and turning
+// toward world -y projected on the tangent plane (comb): the step at
+// t = j / (cvs - 1) goes along normalize(n (1 - 0.6 t) + comb 0.6 t). float3, packed.
+std::vector<float> combed_guides(const Mesh& mesh, const std::vector<PelageRoot>& roots, uint32_t cvs, float length);
+
+// `roots.size()` guides of `cvs` packed float3 points each; borrows both vectors.
+PelageGuidesDesc guides_desc(const std::vector<PelageRoot>& roots, const std::vector<float>& points, uint32_t cvs);
+
+// Query, allocate and bind `count` strands to `guides` on the rest pose. Throws.
+std::vector<PelageStrandBinding> bind(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageRoot* strands,
+                                      size_t count, const PelageBindParams& params, PelageBindInfo* info = nullptr);
+
+// Groom values of `count` roots sampled from `maps`. Throws.
+std::vector<PelageStrandGroom> groom(const Mesh& mesh, const PelageGroomMaps& maps, const PelageRoot* roots,
+                                     size_t count);
+
+// pelage_expand with an arena sized once (per groom) and reused every frame.
+class Expander {
+ public:
+  Expander(size_t guide_count, const PelageExpandParams& params);
+  // float4 points written per curve (points_per_strand, + 2 when pinned).
+  size_t points_per_curve() const { return per_curve_; }
+  const PelageExpandParams& params() const { return params_; }
+  // Writes the curves of strands[0..count) (bindings and grooms parallel)
+  // into `points`: float4, stride 16, `capacity` points. Throws.
+  void expand(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageRoot* strands,
+              const PelageStrandBinding* bindings, const PelageStrandGroom* grooms, size_t count, float* points,
+              size_t capacity, uint32_t* curve_counts = nullptr, uint32_t* curve_ids = nullptr);
+
+ private:
+  PelageExpandParams params_;
+  size_t per_curve_ = 0;
+  std::vector<unsigned char> arena_;
+};
+
+// Embree's index buffer for `curves` curves of `per_curve` points stored back
+// to back (pelage_curves_segment_indices). Throws.
+std::vector<uint32_t> segment_indices(size_t curves, size_t per_curve);
 
 // An Embree device whose error callback records every error.
 struct Device {
@@ -122,6 +182,69 @@ struct Device {
 unsigned attach_mesh(RTCDevice device, RTCScene scene, const Mesh& mesh);
 // Adds `strands` to `scene` as round Catmull-Rom curves sharing its buffers.
 unsigned attach_strands(RTCDevice device, RTCScene scene, const Strands& strands);
+// Adds round Catmull-Rom curves sharing the host's buffers: `point_count`
+// float4 points (stride 16) and `segment_count` uint32 indices, each the
+// first of a segment's 4 control points. Several geometries may share one
+// point buffer with different index buffers (a level of detail).
+unsigned attach_curves(RTCDevice device, RTCScene scene, const float* points, size_t point_count,
+                       const uint32_t* indices, size_t segment_count);
+
+// --- Skin coverage: stamped vs. uniformly random roots -----------------------
+
+// splitmix64: a small deterministic generator for random baselines.
+struct Rng {
+  uint64_t state;
+  uint64_t next() {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  float unit() { return float(next() >> 40) * (1.0f / 16777216.0f); }
+};
+
+// Per-triangle cumulative weights for random roots with the same expected
+// density as pelage's stamp: the density is sampled at the centroid,
+// triangles below bald_below get nothing, and a triangle scaled by s takes s^2
+// as many roots.
+std::vector<double> random_root_cdf(const Mesh& mesh, const GrayImage& density, const PelageStampParams& params);
+// `count` uniformly random roots drawn from `cdf`; id = rank = index.
+std::vector<PelageRoot> random_roots(const std::vector<double>& cdf, size_t count, uint64_t seed);
+
+// First hit of a ray, or geomID == RTC_INVALID_GEOMETRY_ID.
+RTCRayHit trace(RTCScene scene, V3 org, V3 dir, float tfar = 1e30f);
+
+// Orthographic views of `resolution`^2 parallel rays around the creature;
+// measures how much furred skin a set of strands leaves visible.
+struct Coverage {
+  struct View {
+    const char* name;
+    V3 forward;
+  };
+  const Mesh& mesh;
+  const GrayImage& density;
+  std::vector<View> views;
+  int resolution;
+  V3 center{0.0f, 0.06f, 0.0f};
+  float half = 1.3f;            // half the side of the square each view covers
+  std::vector<uint8_t> furred;  // per ray: hits skin with density > 0 in the skin-only scene
+  size_t furred_rays = 0;
+  static constexpr int tile = 8;
+
+  // The four side views (front, right, back, left).
+  Coverage(const Mesh& mesh, const GrayImage& density, int resolution);
+  void ray(size_t view, int x, int y, V3& org, V3& dir) const;
+  size_t rays_per_view() const { return size_t(resolution) * size_t(resolution); }
+  // Marks the rays that see furred skin when there is no fur.
+  void prepare(RTCScene skin_only);
+
+  // What one set of strands leaves visible.
+  struct Seen {
+    double skin;     // fraction of the furred-skin rays whose first hit is the skin
+    double patches;  // fraction of tiles (tile x tile rays, all on furred skin) where >= 25 % of the rays see skin
+  };
+  Seen skin_visible(RTCScene scene, unsigned skin_id) const;
+};
 
 // Seconds since construction.
 struct Stopwatch {

@@ -26,7 +26,7 @@
 #define PELAGE_VERSION_PATCH 0
 
 // Most guides a strand can use.
-#define PELAGE_MAX_NEIGHBOURS (uint32_t)MAX_NEIGHBOURS
+#define PELAGE_MAX_NEIGHBOURS 8
 
 // Result of every pelage call. Values are stable: a retired code is never reused.
 typedef enum PelageStatus {
@@ -79,7 +79,8 @@ typedef enum PelageEndPoints {
 
 // Binding parameters; start from pelage_bind_params_defaults().
 typedef struct PelageBindParams {
-  // Fewest guides per strand (>= 1).
+  // Fewest guides per strand when that many qualify (>= 1); strands with
+  // fewer eligible guides use those they have.
   uint32_t min_neighbours;
   // Most guides per strand (<= PELAGE_MAX_NEIGHBOURS); equal to the minimum
   // turns off the per-strand randomization.

@@ -8,13 +8,14 @@ use pelage_core::bind::{self, BindParams, StrandBinding, MAX_NEIGHBOURS};
 use pelage_core::{Arena, Root};
 
 /// Most guides a strand can use.
-pub const PELAGE_MAX_NEIGHBOURS: u32 = MAX_NEIGHBOURS as u32;
+pub const PELAGE_MAX_NEIGHBOURS: u32 = 8;
 
 /// Binding parameters; start from pelage_bind_params_defaults().
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct PelageBindParams {
-    /// Fewest guides per strand (>= 1).
+    /// Fewest guides per strand when that many qualify (>= 1); strands with
+    /// fewer eligible guides use those they have.
     pub min_neighbours: u32,
     /// Most guides per strand (<= PELAGE_MAX_NEIGHBOURS); equal to the minimum
     /// turns off the per-strand randomization.
@@ -52,7 +53,7 @@ pub struct PelageStrandBinding {
 
 const _: () =
     assert!(std::mem::size_of::<PelageStrandBinding>() == std::mem::size_of::<StrandBinding>());
-const _: () = assert!(MAX_NEIGHBOURS == 8);
+const _: () = assert!(MAX_NEIGHBOURS == PELAGE_MAX_NEIGHBOURS as usize);
 
 /// What binding found.
 #[repr(C)]

@@ -65,11 +65,13 @@ fn core_params(p: &PelageExpandParams) -> Result<ExpandParams, Failure> {
             ))
         }
     };
-    Ok(ExpandParams {
+    let params = ExpandParams {
         points_per_strand: p.points_per_strand as usize,
         end_points,
         orphan_length: p.orphan_length,
-    })
+    };
+    params.check()?;
+    Ok(params)
 }
 
 /// Sizes an expansion: arena bytes for `guide_count` guides and the control
@@ -87,10 +89,11 @@ pub extern "C" fn pelage_expand_query(
         let p = req(params, "params")?;
         let bytes = req_mut(arena_bytes, "arena_bytes")?;
         let per = req_mut(points_per_curve, "points_per_curve")?;
+        let core = core_params(p)?;
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, guide_count, p.points_per_strand as usize);
+        PreparedGuides::layout(&mut layout, guide_count, core.points_per_strand);
         *bytes = layout.bytes();
-        *per = core_params(p)?.output_points();
+        *per = core.output_points();
         Ok(())
     }
 }
@@ -153,29 +156,9 @@ pub extern "C" fn pelage_expand(
         let threads = match p.thread_count {
             0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
             n => n as usize,
-        }
-        .clamp(1, strand_count.max(1));
-        let chunk_bytes = |a: usize, b: usize| (b - a) * per * point_stride;
-        std::thread::scope(|scope| -> Result<(), Failure> {
-            let mut rest = out;
-            let mut handles = vec![];
-            for t in 0..threads {
-                let (a, b) = (t * strand_count / threads, (t + 1) * strand_count / threads);
-                let take = if t + 1 == threads { rest.len() } else { chunk_bytes(a, b) };
-                let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
-                rest = tail;
-                let (mesh, prepared, core, part) = (&mesh, &prepared, &core, all.range(a..b));
-                let mut work = move || expand::expand(mesh, &part, prepared, core, mine, point_stride);
-                if t + 1 == threads {
-                    work()?;
-                } else {
-                    handles.push(scope.spawn(work));
-                }
-            }
-            for h in handles {
-                h.join().map_err(|_| Failure::new(PelageStatus::Panic, "an expansion thread panicked"))??;
-            }
-            Ok(())
+        };
+        split_over_threads(&all, threads, per * point_stride, out, |part, bytes| {
+            expand::expand(&mesh, &part, &prepared, &core, bytes, point_stride)
         })?;
         counts.fill(per as u32);
         for (id, s) in ids.iter_mut().zip(strands) {
@@ -183,6 +166,48 @@ pub extern "C" fn pelage_expand(
         }
         Ok(())
     }
+}
+
+/// Runs `work` on `threads` contiguous ranges of `strands`, each with its
+/// own slice of `out` (`bytes_per_strand` each), on scoped threads; one
+/// range runs on the calling thread, so a single thread spawns nothing.
+fn split_over_threads(
+    strands: &Strands,
+    threads: usize,
+    bytes_per_strand: usize,
+    out: &mut [u8],
+    work: impl Fn(Strands, &mut [u8]) -> Result<(), pelage_core::Error> + Sync,
+) -> Result<(), Failure> {
+    let n = strands.len();
+    let threads = threads.clamp(1, n.max(1));
+    if threads == 1 {
+        return Ok(work(*strands, out)?);
+    }
+    std::thread::scope(|scope| {
+        let mut rest = out;
+        let mut handles = vec![];
+        for t in 0..threads {
+            let (a, b) = (t * n / threads, (t + 1) * n / threads);
+            let take = if t + 1 == threads {
+                rest.len()
+            } else {
+                (b - a) * bytes_per_strand
+            };
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
+            rest = tail;
+            let (part, work) = (strands.range(a..b), &work);
+            if t + 1 == threads {
+                work(part, mine)?;
+            } else {
+                handles.push(scope.spawn(move || work(part, mine)));
+            }
+        }
+        for h in handles {
+            h.join()
+                .map_err(|_| Failure::new(PelageStatus::Panic, "an expansion thread panicked"))??;
+        }
+        Ok(())
+    })
 }
 
 fn float4_out<'a>(

@@ -29,7 +29,8 @@ const MAX_SPACING_RATIO: f32 = 3.0;
 /// Binding parameters.
 #[derive(Clone, Copy, Debug)]
 pub struct BindParams<'a> {
-    /// Fewest guides a strand uses (>= 1).
+    /// Fewest guides a strand uses when that many qualify (>= 1); a strand
+    /// with fewer eligible guides uses those it has.
     pub min_neighbours: u32,
     /// Most guides a strand uses (<= [`MAX_NEIGHBOURS`]); equal to the
     /// minimum to turn off the paper's per-strand randomization.

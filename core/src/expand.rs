@@ -46,7 +46,8 @@ impl ExpandParams {
         self.points_per_strand + 2 * (self.end_points == EndPoints::Pinned) as usize
     }
 
-    fn check(&self) -> Result<(), Error> {
+    /// Checks the point count and orphan length.
+    pub fn check(&self) -> Result<(), Error> {
         if !(2..=MAX_STRAND_POINTS).contains(&self.points_per_strand) {
             return Err(Error::InvalidArgument(
                 "points_per_strand must be in 2..=64",

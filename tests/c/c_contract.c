@@ -11,6 +11,15 @@
  * Then the success path on a UV sphere: counts, ranges, ranks, ids, root
  * positions on their triangles, determinism, strided outputs, maps.
  *
+ * Interpolation (bind, groom, expand, segment indices) gets the same
+ * treatment on the sphere with a few dozen guides and a few hundred strands:
+ * every pointer NULL, short arenas and outputs, bad strides, NaN, zero-length
+ * and zero guides, roots off the mesh, bad parameters, maps and bindings;
+ * every output canary-filled and checked untouched after each failure. The
+ * success path checks bindings, grooms, pinned curves on their roots, counts,
+ * ids, thread-count and range independence, strided output, RAW ends and the
+ * segment index buffer.
+ *
  * Bad inputs are memory-safe: a buffer declared with stride 13 really holds
  * elements 13 bytes apart, so a missing check shows up as a wrong status,
  * not as an out-of-bounds read. Failed checks are counted, not fatal. */
@@ -775,6 +784,721 @@ static void test_evaluate(void) {
   free(pos), free(nrm), free(roots);
 }
 
+/* --- Interpolation: bind, groom, expand, segment indices -------------------------- */
+
+#define GCVS 8          /* points per guide */
+#define GLEN 0.2f       /* guide length on the unit sphere */
+#define NGUIDES 60      /* guide roots wanted */
+#define NSTRANDS 400    /* render strands wanted */
+#define MAXSTRIDE 32    /* widest output stride tested (bytes) */
+
+/* The interpolation fixture on the sphere: guides leaning toward -y, strands,
+ * and every output buffer the failure cases canary-fill and check. */
+typedef struct Interp {
+  PelageMeshDesc mesh;
+  PelageRoot *guide_roots, *strands;
+  size_t guide_count, strand_count;
+  float (*guide_points)[3];
+  PelageGuidesDesc guides;
+  PelageBindParams bind_params;
+  unsigned char *bind_arena;
+  size_t bind_arena_bytes;
+  PelageStrandBinding *bindings; /* the reference binding */
+  PelageBindInfo info;
+  PelageGroomMaps maps;
+  PelageStrandGroom *grooms; /* the reference grooms */
+  PelageExpandParams expand_params;
+  unsigned char *expand_arena;
+  size_t expand_arena_bytes, per;
+  float *points; /* the reference curves, stride 16 */
+  /* outputs of the failure cases */
+  PelageStrandBinding *bind_out;
+  PelageBindInfo info_out;
+  PelageStrandGroom *groom_out;
+  unsigned char *points_out; /* strand_count * per * MAXSTRIDE bytes */
+  uint32_t *counts_out, *ids_out, *index_out;
+  size_t sizes_out[2];
+} Interp;
+
+static Interp g_in;
+
+/* room for per points at MAXSTRIDE, and for 67 points (points_per_strand 65, pinned) at stride 16 */
+static size_t points_out_bytes(void) {
+  const size_t a = g_in.strand_count * g_in.per * MAXSTRIDE, b = g_in.strand_count * 67 * 16;
+  return a > b ? a : b;
+}
+static size_t index_out_count(void) { return g_in.strand_count * (g_in.per - 3); }
+/* index_out holds one entry more, so that a misaligned pointer still has room */
+
+static void fill_outputs(void) {
+  FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
+  FILL(&g_in.info_out, sizeof g_in.info_out);
+  FILL(g_in.groom_out, g_in.strand_count * sizeof *g_in.groom_out);
+  FILL(g_in.points_out, points_out_bytes());
+  FILL(g_in.counts_out, g_in.strand_count * 4), FILL(g_in.ids_out, g_in.strand_count * 4);
+  FILL(g_in.index_out, index_out_count() * 4 + 4);
+  FILL(g_in.sizes_out, sizeof g_in.sizes_out);
+}
+
+static int outputs_untouched(void) {
+  return untouched(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out) &&
+         untouched(&g_in.info_out, sizeof g_in.info_out) &&
+         untouched(g_in.groom_out, g_in.strand_count * sizeof *g_in.groom_out) &&
+         untouched(g_in.points_out, points_out_bytes()) && untouched(g_in.counts_out, g_in.strand_count * 4) &&
+         untouched(g_in.ids_out, g_in.strand_count * 4) && untouched(g_in.index_out, index_out_count() * 4 + 4) &&
+         untouched(g_in.sizes_out, sizeof g_in.sizes_out);
+}
+
+/* `call` must fail with `want` and leave every output of the fixture untouched. */
+#define FAILS(want, call)                                                                   \
+  do {                                                                                      \
+    fill_outputs();                                                                         \
+    expect_(__FILE__, __LINE__, #call, (call), (want));                                     \
+    ++g_checks;                                                                             \
+    if (!outputs_untouched()) {                                                             \
+      ++g_failures;                                                                         \
+      fprintf(stderr, "%s:%d: %s failed but wrote an output\n", __FILE__, __LINE__, #call); \
+    }                                                                                       \
+  } while (0)
+
+/* The calls with the fixture's valid arguments, one argument replaced. */
+#define BIND(mesh, guides, strands, count, params, arena, bytes, out, capacity) \
+  pelage_bind(mesh, guides, strands, count, params, arena, bytes, out, capacity, &g_in.info_out)
+#define BIND_OK_ARGS                                                                                    \
+  &g_in.mesh, &g_in.guides, g_in.strands, g_in.strand_count, &g_in.bind_params, g_in.bind_arena, \
+      g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count
+#define EXPAND(mesh, guides, strands, bindings, grooms, count, params, arena, bytes, points, stride, capacity) \
+  pelage_expand(mesh, guides, strands, bindings, grooms, count, params, arena, bytes, points, stride, capacity, \
+                g_in.counts_out, g_in.ids_out)
+#define POINTS_CAPACITY (g_in.strand_count * g_in.per)
+
+static size_t stamp_sphere(uint32_t target, uint64_t seed, PelageRoot **out) {
+  PelageStampParams p = pelage_stamp_params_defaults();
+  p.target_count = target, p.seed = seed;
+  size_t bytes = 0, max_roots = 0, n = 0;
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&g_in.mesh, &p, &bytes, &max_roots));
+  void *arena = malloc(bytes);
+  *out = malloc(max_roots * sizeof **out);
+  REQUIRE(arena && *out);
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&g_in.mesh, &p, arena, bytes, *out, max_roots, &n, NULL));
+  free(arena);
+  return n;
+}
+
+static void test_interp_defaults(void) {
+  const PelageBindParams b = pelage_bind_params_defaults();
+  CHECK(b.min_neighbours == 3 && b.max_neighbours == 6 && b.seed == 0);
+  CHECK(b.min_normal_dot == 0.25f && b.search_factor == 2.5f && b.max_wrap_slope == 0.3f);
+  CHECK(b.regions == NULL && b.region_stride >= 4);
+  const PelageGroomMaps m = pelage_groom_maps_defaults();
+  const PelageMap *all[7] = {&m.length, &m.root_width, &m.tip_width, &m.bend, &m.kink_amplitude, &m.kink_frequency,
+                             &m.clump};
+  for (int i = 0; i < 7; ++i) CHECK(all[i]->kind == PELAGE_MAP_KIND_CONSTANT);
+  CHECK(m.length.constant == 1.0f && m.root_width.constant == 0.002f && m.tip_width.constant == 0.0005f);
+  CHECK(m.bend.constant == 0.0f && m.kink_amplitude.constant == 0.0f && m.kink_frequency.constant == 3.0f);
+  CHECK(m.clump.constant == 0.0f && m.seed == 0);
+  const PelageExpandParams e = pelage_expand_params_defaults();
+  CHECK(e.points_per_strand == 16 && e.end_points == PELAGE_END_POINTS_PINNED);
+  CHECK(e.orphan_length == 0.1f && e.thread_count == 1);
+}
+
+/* Guides, strands, bind, groom and expand on the sphere; the success-path invariants. */
+static void test_interp_success(void) {
+  g_in.mesh = sphere_desc(&g_sphere);
+  g_in.guide_count = stamp_sphere(NGUIDES, 5, &g_in.guide_roots);
+  g_in.strand_count = stamp_sphere(NSTRANDS, 6, &g_in.strands);
+  REQUIRE(g_in.guide_count > 10 && g_in.strand_count > 100);
+
+  /* guides: leave along the normal, lean toward -y (the comb), GCVS points */
+  float(*gp)[3] = malloc(g_in.guide_count * sizeof *gp), (*gn)[3] = malloc(g_in.guide_count * sizeof *gn);
+  g_in.guide_points = malloc(g_in.guide_count * GCVS * sizeof *g_in.guide_points);
+  REQUIRE(gp && gn && g_in.guide_points);
+  EXPECT(PELAGE_STATUS_OK, pelage_roots_evaluate(&g_in.mesh, g_in.guide_roots, g_in.guide_count, gp, 12, gn, 12));
+  for (size_t g = 0; g < g_in.guide_count; ++g) {
+    const float *n = gn[g];
+    float comb[3] = {-n[1] * n[0], -1.0f + n[1] * n[1], -n[1] * n[2]}; /* -y minus its normal part */
+    for (int j = 0; j < GCVS; ++j) {
+      const float t = (float)j / (GCVS - 1), lean = 0.4f * t * t;
+      float *q = g_in.guide_points[g * GCVS + (size_t)j];
+      for (int k = 0; k < 3; ++k) q[k] = gp[g][k] + GLEN * (t * n[k] + lean * comb[k]);
+    }
+  }
+  free(gp), free(gn);
+  memset(&g_in.guides, 0, sizeof g_in.guides);
+  g_in.guides.roots = g_in.guide_roots, g_in.guides.guide_count = g_in.guide_count;
+  g_in.guides.points = g_in.guide_points, g_in.guides.point_stride = 12;
+  g_in.guides.point_count = g_in.guide_count * GCVS, g_in.guides.points_per_guide = GCVS;
+
+  /* bind */
+  g_in.bind_params = pelage_bind_params_defaults();
+  EXPECT(PELAGE_STATUS_OK, pelage_bind_query(g_in.guide_count, &g_in.bind_arena_bytes));
+  CHECK(g_in.bind_arena_bytes > 0);
+  g_in.bind_arena = malloc(g_in.bind_arena_bytes);
+  g_in.bindings = malloc(g_in.strand_count * sizeof *g_in.bindings);
+  g_in.bind_out = malloc(g_in.strand_count * sizeof *g_in.bind_out);
+  REQUIRE(g_in.bind_arena && g_in.bindings && g_in.bind_out);
+  FILL(g_in.bindings, g_in.strand_count * sizeof *g_in.bindings), FILL(&g_in.info, sizeof g_in.info);
+  EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &g_in.guides, g_in.strands, g_in.strand_count, &g_in.bind_params,
+                                       g_in.bind_arena, g_in.bind_arena_bytes, g_in.bindings, g_in.strand_count,
+                                       &g_in.info));
+  size_t bad_binding = 0, orphans = 0, fewer = 0;
+  for (size_t i = 0; i < g_in.strand_count; ++i) {
+    const PelageStrandBinding *b = &g_in.bindings[i];
+    if (b->count == 0) {
+      orphans++, bad_binding += b->clump != 0xFFFFFFFFu;
+      continue;
+    }
+    double sum = 0.0;
+    /* fewer than min_neighbours when fewer guides are eligible */
+    int ok = b->count >= 1 && b->count <= g_in.bind_params.max_neighbours;
+    fewer += b->count < g_in.bind_params.min_neighbours;
+    for (uint32_t k = 0; k < b->count && k < 8; ++k) {
+      ok &= b->guides[k] < g_in.guide_count && b->weights[k] >= 0.0f;
+      sum += b->weights[k];
+    }
+    ok &= fabs(sum - 1.0) < 1e-4 && b->clump == b->guides[0]; /* clump: the nearest eligible guide */
+    bad_binding += !ok;
+  }
+  printf("interp: %zu guides x %d points, %zu strands; bind arena %zu bytes; %u orphans, %zu strands with fewer "
+         "than min_neighbours guides; mean guide length %.4f, spacing %.4f\n",
+         g_in.guide_count, GCVS, g_in.strand_count, g_in.bind_arena_bytes, g_in.info.orphans, fewer,
+         (double)g_in.info.mean_guide_length, (double)g_in.info.mean_spacing);
+  CHECK(bad_binding == 0);
+  CHECK(orphans == g_in.info.orphans && orphans < g_in.strand_count / 20);
+  CHECK(fabs((double)g_in.info.mean_guide_length - 0.2 * 1.02) < 0.02 && g_in.info.mean_spacing > 0.0f);
+  /* info is optional; the result does not depend on it */
+  FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
+  EXPECT(PELAGE_STATUS_OK, pelage_bind(BIND_OK_ARGS, NULL));
+  CHECK(memcmp(g_in.bind_out, g_in.bindings, g_in.strand_count * sizeof *g_in.bind_out) == 0);
+  /* the same guides read from float4 slots (stride 16) bind the same */
+  {
+    PelageGuidesDesc wide = g_in.guides;
+    wide.points = restride(g_in.guide_points, 12, g_in.guide_count * GCVS, 16, 0), wide.point_stride = 16;
+    FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
+    EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &wide, g_in.strands, g_in.strand_count, &g_in.bind_params,
+                                         g_in.bind_arena, g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count,
+                                         NULL));
+    CHECK(memcmp(g_in.bind_out, g_in.bindings, g_in.strand_count * sizeof *g_in.bind_out) == 0);
+    scratch_free();
+  }
+  /* no strands: nothing to do, NULL buffers are fine */
+  EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &g_in.guides, NULL, 0, &g_in.bind_params, g_in.bind_arena,
+                                       g_in.bind_arena_bytes, NULL, 0, NULL));
+
+  /* groom */
+  g_in.maps = pelage_groom_maps_defaults();
+  g_in.maps.kink_amplitude.constant = 0.05f, g_in.maps.clump.constant = 0.3f, g_in.maps.bend.constant = 0.1f;
+  g_in.maps.seed = 9;
+  g_in.grooms = malloc(g_in.strand_count * sizeof *g_in.grooms);
+  g_in.groom_out = malloc(g_in.strand_count * sizeof *g_in.groom_out);
+  REQUIRE(g_in.grooms && g_in.groom_out);
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_evaluate(&g_in.mesh, &g_in.maps, g_in.strands, g_in.strand_count,
+                                                 g_in.grooms, g_in.strand_count));
+  size_t bad_groom = 0;
+  for (size_t i = 0; i < g_in.strand_count; ++i) {
+    const PelageStrandGroom *q = &g_in.grooms[i];
+    bad_groom += !(q->length == 1.0f && q->root_radius == 0.001f && q->tip_radius == 0.00025f && q->bend == 0.1f &&
+                   q->kink_amplitude == 0.05f && q->kink_frequency == 3.0f && q->clump == 0.3f &&
+                   q->kink_phase >= 0.0f && q->kink_phase <= 6.2832f);
+  }
+  CHECK(bad_groom == 0); /* widths are diameters; the groom holds radii */
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_evaluate(&g_in.mesh, &g_in.maps, NULL, 0, NULL, 0));
+
+  /* expand: query, then pinned 16-point curves with counts and ids */
+  g_in.expand_params = pelage_expand_params_defaults();
+  g_in.expand_params.orphan_length = g_in.info.mean_guide_length;
+  EXPECT(PELAGE_STATUS_OK,
+         pelage_expand_query(g_in.guide_count, &g_in.expand_params, &g_in.expand_arena_bytes, &g_in.per));
+  CHECK(g_in.per == 18);
+  REQUIRE(g_in.per >= 4);
+  const size_t per = g_in.per, n = g_in.strand_count;
+  g_in.expand_arena = malloc(g_in.expand_arena_bytes);
+  g_in.points = malloc(n * per * 16);
+  g_in.points_out = malloc(points_out_bytes());
+  g_in.counts_out = malloc(n * 4), g_in.ids_out = malloc(n * 4);
+  g_in.index_out = malloc(index_out_count() * 4 + 4);
+  REQUIRE(g_in.expand_arena && g_in.points && g_in.points_out && g_in.counts_out && g_in.ids_out && g_in.index_out);
+  FILL(g_in.points, n * per * 16), FILL(g_in.counts_out, n * 4), FILL(g_in.ids_out, n * 4);
+  EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                         &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes,
+                                         g_in.points, 16, n * per, g_in.counts_out, g_in.ids_out));
+  float(*root)[3] = malloc(n * sizeof *root);
+  REQUIRE(root);
+  EXPECT(PELAGE_STATUS_OK, pelage_roots_evaluate(&g_in.mesh, g_in.strands, n, root, 12, NULL, 0));
+  size_t non_finite = 0, negative = 0, off_root = 0, unpinned = 0, bad_count = 0, bad_id = 0;
+  double worst_root = 0.0, shortest = 1e30, longest = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const float *c = g_in.points + 4 * per * i;
+    for (size_t j = 0; j < 4 * per; ++j) non_finite += !isfinite(c[j]);
+    for (size_t j = 0; j < per; ++j) negative += c[4 * j + 3] < 0.0f;
+    double d = 0.0, len = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      d += ((double)c[k] - root[i][k]) * ((double)c[k] - root[i][k]);
+      len += ((double)c[4 * (per - 1) + (size_t)k] - c[k]) * ((double)c[4 * (per - 1) + (size_t)k] - c[k]);
+    }
+    worst_root = sqrt(d) > worst_root ? sqrt(d) : worst_root;
+    off_root += !(sqrt(d) < 1e-5);
+    shortest = sqrt(len) < shortest ? sqrt(len) : shortest, longest = sqrt(len) > longest ? sqrt(len) : longest;
+    unpinned += memcmp(c, c + 4, 16) != 0 || memcmp(c + 4 * (per - 1), c + 4 * (per - 2), 16) != 0;
+    unpinned += c[3] != g_in.grooms[i].root_radius; /* the root's radius */
+    bad_count += g_in.counts_out[i] != per;
+    bad_id += g_in.ids_out[i] != g_in.strands[i].id;
+  }
+  printf("expand: %zu curves x %zu points, arena %zu bytes; max |point 0 - root| %.2e; chord %.3f .. %.3f\n", n, per,
+         g_in.expand_arena_bytes, worst_root, shortest, longest);
+  CHECK(non_finite == 0 && negative == 0);
+  CHECK(off_root == 0);  /* PINNED: point 0 is the root */
+  CHECK(unpinned == 0);  /* ... repeated as point 1, the tip repeated at the end */
+  CHECK(bad_count == 0); /* curve_counts filled */
+  CHECK(bad_id == 0);    /* curve_ids filled */
+  CHECK(shortest > 0.05 && longest < 0.4);
+  free(root);
+
+  /* the bits do not depend on the thread count, and a range gives the same curves */
+  {
+    PelageExpandParams p = g_in.expand_params;
+    const unsigned threads[3] = {0, 2, 7};
+    for (int t = 0; t < 3; ++t) {
+      p.thread_count = threads[t];
+      FILL(g_in.points_out, points_out_bytes());
+      EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                             &p, g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16,
+                                             n * per, NULL, NULL));
+      CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) == 0);
+    }
+    const size_t first = n / 3;
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands + first, g_in.bindings + first,
+                                           g_in.grooms + first, n - first, &g_in.expand_params, g_in.expand_arena,
+                                           g_in.expand_arena_bytes, g_in.points_out, 16, (n - first) * per, NULL,
+                                           NULL));
+    CHECK(memcmp(g_in.points_out, g_in.points + 4 * per * first, (n - first) * per * 16) == 0);
+    CHECK(untouched(g_in.points_out + (n - first) * per * 16, points_out_bytes() - (n - first) * per * 16));
+  }
+  /* a padded stride: the same points, the padding untouched */
+  {
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                           &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes,
+                                           g_in.points_out, MAXSTRIDE, n * per, NULL, NULL));
+    size_t differ = 0, padding = 0;
+    for (size_t i = 0; i < n * per; ++i) {
+      differ += memcmp(g_in.points_out + i * MAXSTRIDE, g_in.points + 4 * i, 16) != 0;
+      padding += !untouched(g_in.points_out + i * MAXSTRIDE + 16, MAXSTRIDE - 16);
+    }
+    CHECK(differ == 0 && padding == 0);
+  }
+  /* RAW ends: 16 points per curve, the pinned curve without its repeated ends */
+  {
+    PelageExpandParams raw = g_in.expand_params;
+    raw.end_points = PELAGE_END_POINTS_RAW;
+    size_t bytes = 0, raw_per = 0;
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(g_in.guide_count, &raw, &bytes, &raw_per));
+    CHECK(raw_per == 16 && bytes <= g_in.expand_arena_bytes);
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                           &raw, g_in.expand_arena, bytes, g_in.points_out, 16, n * raw_per, NULL,
+                                           NULL));
+    size_t differ = 0;
+    for (size_t i = 0; i < n; ++i) {
+      differ += memcmp(g_in.points_out + 16 * raw_per * i, g_in.points + 4 * (per * i + 1), 16 * raw_per) != 0;
+    }
+    CHECK(differ == 0);
+  }
+  /* no strands */
+  EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, NULL, NULL, NULL, 0, &g_in.expand_params,
+                                         g_in.expand_arena, g_in.expand_arena_bytes, NULL, 16, 0, NULL, NULL));
+
+  /* segment indices: curve c, segment s -> c * per + s */
+  FILL(g_in.index_out, index_out_count() * 4);
+  EXPECT(PELAGE_STATUS_OK, pelage_curves_segment_indices(n, per, g_in.index_out, index_out_count()));
+  size_t bad_index = 0;
+  for (size_t k = 0; k < index_out_count(); ++k) {
+    bad_index += g_in.index_out[k] != (k / (per - 3)) * per + k % (per - 3);
+  }
+  CHECK(bad_index == 0);
+  EXPECT(PELAGE_STATUS_OK, pelage_curves_segment_indices(0, per, NULL, 0));
+  {
+    uint32_t four[3] = {7, 7, 7};
+    EXPECT(PELAGE_STATUS_OK, pelage_curves_segment_indices(3, 4, four, 3)); /* one segment per curve */
+    CHECK(four[0] == 0 && four[1] == 4 && four[2] == 8);
+  }
+}
+
+static void test_interp_null_pointers(void) {
+  const size_t n = g_in.strand_count;
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_query(g_in.guide_count, NULL));
+
+  /* pelage_bind: every pointer argument, and the pointers inside the descriptors */
+  PelageGuidesDesc guides = g_in.guides;
+  PelageMeshDesc mesh = g_in.mesh;
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(NULL, &g_in.guides, g_in.strands, n, &g_in.bind_params, g_in.bind_arena,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&g_in.mesh, NULL, g_in.strands, n, &g_in.bind_params, g_in.bind_arena,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&g_in.mesh, &g_in.guides, NULL, n, &g_in.bind_params, g_in.bind_arena,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, NULL, g_in.bind_arena,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params, NULL,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params,
+                                           g_in.bind_arena, g_in.bind_arena_bytes, NULL, n));
+  guides.roots = NULL;
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&g_in.mesh, &guides, g_in.strands, n, &g_in.bind_params, g_in.bind_arena,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+  guides = g_in.guides, guides.points = NULL;
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&g_in.mesh, &guides, g_in.strands, n, &g_in.bind_params, g_in.bind_arena,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+  mesh.positions = NULL;
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, BIND(&mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params, g_in.bind_arena,
+                                           g_in.bind_arena_bytes, g_in.bind_out, n));
+
+  /* pelage_groom_evaluate */
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_evaluate(NULL, &g_in.maps, g_in.strands, n, g_in.groom_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_evaluate(&g_in.mesh, NULL, g_in.strands, n, g_in.groom_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_evaluate(&g_in.mesh, &g_in.maps, NULL, n, g_in.groom_out, n));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_evaluate(&g_in.mesh, &g_in.maps, g_in.strands, n, NULL, n));
+  {
+    PelageGroomMaps maps = g_in.maps;
+    static const unsigned char tex[4] = {1, 2, 3, 4};
+    maps.clump.kind = PELAGE_MAP_KIND_TEXTURE_U8, maps.clump.data = NULL;
+    maps.clump.width = 2, maps.clump.height = 2, maps.clump.stride = 2;
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_evaluate(&g_in.mesh, &maps, g_in.strands, n, g_in.groom_out, n));
+    maps.clump.data = tex;
+    fill_outputs();
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_evaluate(&g_in.mesh, &maps, g_in.strands, n, g_in.groom_out, n));
+  }
+
+  /* pelage_expand_query */
+  size_t *bytes = &g_in.sizes_out[0], *per = &g_in.sizes_out[1];
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, NULL, bytes, per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, &g_in.expand_params, NULL, per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, &g_in.expand_params, bytes, NULL));
+
+  /* pelage_expand: every pointer argument (curve_counts and curve_ids are optional) */
+#define EXPAND_NULL(mesh, guides, strands, bindings, grooms, params, arena, points)                               \
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, EXPAND(mesh, guides, strands, bindings, grooms, n, params, arena,          \
+                                             g_in.expand_arena_bytes, points, 16, POINTS_CAPACITY))
+  EXPAND_NULL(NULL, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
+              g_in.points_out);
+  EXPAND_NULL(&g_in.mesh, NULL, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
+              g_in.points_out);
+  EXPAND_NULL(&g_in.mesh, &g_in.guides, NULL, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
+              g_in.points_out);
+  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, NULL, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
+              g_in.points_out);
+  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, NULL, &g_in.expand_params, g_in.expand_arena,
+              g_in.points_out);
+  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, NULL, g_in.expand_arena,
+              g_in.points_out);
+  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, NULL,
+              g_in.points_out);
+  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params,
+              g_in.expand_arena, NULL);
+  guides = g_in.guides, guides.points = NULL;
+  EXPAND_NULL(&g_in.mesh, &guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
+              g_in.points_out);
+  EXPAND_NULL(&mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
+              g_in.points_out);
+
+  /* pelage_curves_segment_indices */
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_curves_segment_indices(n, g_in.per, NULL, index_out_count()));
+}
+
+static void test_interp_capacity(void) {
+  const size_t n = g_in.strand_count;
+  /* The queried arena sizes hold at any alignment (the layout adds the
+   * worst-case padding), so a few bytes short can still fit: half is too small. */
+  /* bind: arena half the size, no arena, bindings one short */
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params,
+                                              g_in.bind_arena, g_in.bind_arena_bytes / 2, g_in.bind_out, n));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params, NULL, 0, g_in.bind_out, n));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params,
+                                              g_in.bind_arena, g_in.bind_arena_bytes, g_in.bind_out, n - 1));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params,
+                                              g_in.bind_arena, g_in.bind_arena_bytes, NULL, 0));
+  /* groom: one record short */
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        pelage_groom_evaluate(&g_in.mesh, &g_in.maps, g_in.strands, n, g_in.groom_out, n - 1));
+  /* expand: arena half the size, no arena, points one short */
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+               g_in.expand_arena, g_in.expand_arena_bytes / 2, g_in.points_out, 16, POINTS_CAPACITY));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params, NULL, 0,
+               g_in.points_out, 16, POINTS_CAPACITY));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+               g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY - 1));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+               g_in.expand_arena, g_in.expand_arena_bytes, NULL, 16, 0));
+  /* segment indices: one entry short */
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        pelage_curves_segment_indices(n, g_in.per, g_in.index_out, index_out_count() - 1));
+  /* the sizes asked for are enough at any arena alignment, and give the same results */
+  unsigned char *bind_arena = malloc(g_in.bind_arena_bytes + 3), *expand_arena = malloc(g_in.expand_arena_bytes + 3);
+  REQUIRE(bind_arena && expand_arena);
+  for (size_t offset = 0; offset < 4; ++offset) {
+    fill_outputs();
+    EXPECT(PELAGE_STATUS_OK, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params, bind_arena + offset,
+                                  g_in.bind_arena_bytes, g_in.bind_out, n));
+    CHECK(memcmp(g_in.bind_out, g_in.bindings, n * sizeof *g_in.bind_out) == 0);
+    EXPECT(PELAGE_STATUS_OK, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                    &g_in.expand_params, expand_arena + offset, g_in.expand_arena_bytes,
+                                    g_in.points_out, 16, POINTS_CAPACITY));
+    CHECK(memcmp(g_in.points_out, g_in.points, n * g_in.per * 16) == 0);
+  }
+  free(bind_arena), free(expand_arena);
+}
+
+/* pelage_bind and pelage_expand with the guides replaced must both fail with `want`. */
+#define BAD_GUIDES(want, guides_ptr)                                                                                \
+  do {                                                                                                              \
+    FAILS(want, BIND(&g_in.mesh, guides_ptr, g_in.strands, g_in.strand_count, &g_in.bind_params, g_in.bind_arena, \
+                     g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count));                                     \
+    FAILS(want, EXPAND(&g_in.mesh, guides_ptr, g_in.strands, g_in.bindings, g_in.grooms, g_in.strand_count,        \
+                       &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16,       \
+                       POINTS_CAPACITY));                                                                           \
+  } while (0)
+
+static void test_interp_bad_input(void) {
+  const size_t n = g_in.strand_count, points = g_in.guide_count * GCVS;
+  PelageGuidesDesc g;
+
+  /* guide buffers: strides (the data really is laid out that way), alignment, sizes */
+  g = g_in.guides, g.point_stride = 8;
+  BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
+  g = g_in.guides, g.points = restride(g_in.guide_points, 12, points, 14, 0), g.point_stride = 14;
+  BAD_GUIDES(PELAGE_STATUS_MISALIGNED, &g);
+  g = g_in.guides, g.points = restride(g_in.guide_points, 12, points, 12, 2);
+  BAD_GUIDES(PELAGE_STATUS_MISALIGNED, &g);
+  g = g_in.guides, g.roots = restride(g_in.guide_roots, sizeof(PelageRoot), g_in.guide_count, sizeof(PelageRoot), 2);
+  BAD_GUIDES(PELAGE_STATUS_MISALIGNED, &g);
+  g = g_in.guides, g.point_count = points - 1;
+  BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g); /* not guide_count x points_per_guide */
+  g = g_in.guides, g.points_per_guide = 1, g.point_count = g_in.guide_count;
+  BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g); /* a guide needs 2 points */
+  /* zero guides */
+  g = g_in.guides, g.roots = NULL, g.guide_count = 0, g.points = NULL, g.point_count = 0;
+  BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
+  g = g_in.guides, g.guide_count = 0, g.point_count = 0;
+  BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
+
+  /* guide contents: NaN, a zero-length guide, a root off the mesh */
+  float(*copy)[3] = malloc(points * sizeof *copy);
+  PelageRoot *roots = malloc(g_in.guide_count * sizeof *roots);
+  REQUIRE(copy && roots);
+  memcpy(copy, g_in.guide_points, points * sizeof *copy);
+  copy[points - 3][1] = NAN;
+  g = g_in.guides, g.points = copy;
+  BAD_GUIDES(PELAGE_STATUS_NON_FINITE, &g);
+  copy[points - 3][1] = INFINITY;
+  BAD_GUIDES(PELAGE_STATUS_NON_FINITE, &g);
+  memcpy(copy, g_in.guide_points, points * sizeof *copy);
+  for (int j = 1; j < GCVS; ++j) memcpy(copy[3 * GCVS + j], copy[3 * GCVS], sizeof copy[0]);
+  BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
+  memcpy(roots, g_in.guide_roots, g_in.guide_count * sizeof *roots);
+  roots[g_in.guide_count - 1].face = (uint32_t)g_sphere.nt;
+  g = g_in.guides, g.roots = roots;
+  BAD_GUIDES(PELAGE_STATUS_OUT_OF_RANGE, &g);
+  roots[g_in.guide_count - 1].face = UINT32_MAX;
+  BAD_GUIDES(PELAGE_STATUS_OUT_OF_RANGE, &g);
+  roots[g_in.guide_count - 1] = g_in.guide_roots[g_in.guide_count - 1];
+  roots[1].u = NAN;
+  BAD_GUIDES(PELAGE_STATUS_NON_FINITE, &g);
+  free(copy), free(roots);
+
+  /* strands: a root off the mesh or NaN fails bind, groom and expand; counts that overflow */
+  PelageRoot *strands = malloc(n * sizeof *strands);
+  REQUIRE(strands);
+  memcpy(strands, g_in.strands, n * sizeof *strands);
+  strands[n - 1].face = (uint32_t)g_sphere.nt;
+  for (int pass = 0; pass < 2; ++pass) {
+    const PelageStatus want = pass == 0 ? PELAGE_STATUS_OUT_OF_RANGE : PELAGE_STATUS_NON_FINITE;
+    FAILS(want, BIND(&g_in.mesh, &g_in.guides, strands, n, &g_in.bind_params, g_in.bind_arena, g_in.bind_arena_bytes,
+                     g_in.bind_out, n));
+    FAILS(want, pelage_groom_evaluate(&g_in.mesh, &g_in.maps, strands, n, g_in.groom_out, n));
+    FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                       g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY));
+    strands[n - 1] = g_in.strands[n - 1];
+    strands[n / 2].v = NAN;
+  }
+  free(strands);
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, BIND(&g_in.mesh, &g_in.guides, g_in.strands, SIZE_MAX / 8, &g_in.bind_params,
+                                             g_in.bind_arena, g_in.bind_arena_bytes, g_in.bind_out, SIZE_MAX));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+        pelage_groom_evaluate(&g_in.mesh, &g_in.maps, g_in.strands, SIZE_MAX / 8, g_in.groom_out, SIZE_MAX));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, SIZE_MAX / 8, &g_in.expand_params,
+               g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, SIZE_MAX));
+
+  /* bind parameters */
+  PelageBindParams bp;
+#define BAD_BIND_PARAMS(want)                                                                                 \
+  FAILS(want, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena, g_in.bind_arena_bytes, \
+                   g_in.bind_out, n))
+  bp = g_in.bind_params, bp.min_neighbours = 0;
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  bp = g_in.bind_params, bp.min_neighbours = 0, bp.max_neighbours = 0;
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  bp = g_in.bind_params, bp.min_neighbours = 6, bp.max_neighbours = 2;
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  bp = g_in.bind_params, bp.max_neighbours = 9; /* PELAGE_MAX_NEIGHBOURS is 8 (see PelageStrandBinding) */
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  bp = g_in.bind_params, bp.search_factor = 0.0f;
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  bp = g_in.bind_params, bp.search_factor = INFINITY;
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  bp = g_in.bind_params, bp.min_normal_dot = NAN;
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  bp = g_in.bind_params, bp.max_wrap_slope = 0.0f;
+  BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  {
+    uint32_t *regions = calloc(g_sphere.nv, sizeof *regions);
+    REQUIRE(regions);
+    bp = g_in.bind_params, bp.regions = restride(regions, 4, g_sphere.nv, 6, 0), bp.region_stride = 6;
+    BAD_BIND_PARAMS(PELAGE_STATUS_MISALIGNED);
+    bp = g_in.bind_params, bp.regions = regions, bp.region_stride = 0;
+    BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+    bp = g_in.bind_params, bp.regions = regions, bp.region_stride = 4; /* one region: the same binding */
+    fill_outputs();
+    EXPECT(PELAGE_STATUS_OK, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
+                                  g_in.bind_arena_bytes, g_in.bind_out, n));
+    CHECK(memcmp(g_in.bind_out, g_in.bindings, n * sizeof *g_in.bind_out) == 0);
+    free(regions);
+  }
+
+  /* groom maps: zero-size texture, unknown kind, NaN, texture without UVs */
+  {
+    static const unsigned char tex[4] = {0, 64, 128, 255};
+    PelageMap t;
+    memset(&t, 0, sizeof t);
+    t.kind = PELAGE_MAP_KIND_TEXTURE_U8, t.data = tex, t.width = 2, t.height = 2, t.stride = 2;
+    PelageGroomMaps m;
+    PelageMeshDesc no_uvs = g_in.mesh;
+    no_uvs.uvs = NULL;
+#define BAD_MAPS(want, mesh) FAILS(want, pelage_groom_evaluate(mesh, &m, g_in.strands, n, g_in.groom_out, n))
+    m = g_in.maps, m.length = t, m.length.width = 0;
+    BAD_MAPS(PELAGE_STATUS_INVALID_ARGUMENT, &g_in.mesh);
+    m = g_in.maps, m.root_width = t, m.root_width.height = 0;
+    BAD_MAPS(PELAGE_STATUS_INVALID_ARGUMENT, &g_in.mesh);
+    m = g_in.maps, m.clump = t, m.clump.width = 0, m.clump.height = 0, m.clump.stride = 0;
+    BAD_MAPS(PELAGE_STATUS_INVALID_ARGUMENT, &g_in.mesh);
+    m = g_in.maps, m.kink_amplitude.kind = 77;
+    BAD_MAPS(PELAGE_STATUS_INVALID_ARGUMENT, &g_in.mesh);
+    m = g_in.maps, m.tip_width.kind = 4;
+    BAD_MAPS(PELAGE_STATUS_INVALID_ARGUMENT, &g_in.mesh);
+    m = g_in.maps, m.bend.constant = NAN;
+    BAD_MAPS(PELAGE_STATUS_NON_FINITE, &g_in.mesh);
+    m = g_in.maps, m.kink_frequency = t;
+    BAD_MAPS(PELAGE_STATUS_INVALID_ARGUMENT, &no_uvs);
+    m = g_in.maps, m.kink_frequency = t; /* the same map on a mesh with UVs */
+    fill_outputs();
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_evaluate(&g_in.mesh, &m, g_in.strands, n, g_in.groom_out, n));
+  }
+
+  /* expansion parameters and output layout */
+  PelageExpandParams ep;
+#define BAD_EXPAND_PARAMS(want)                                                                               \
+  FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,            \
+                     g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY))
+  ep = g_in.expand_params, ep.end_points = 9;
+  BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(g_in.guide_count, &ep, &g_in.sizes_out[0],
+                                                            &g_in.sizes_out[1]));
+  ep = g_in.expand_params, ep.points_per_strand = 1;
+  BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  ep = g_in.expand_params, ep.points_per_strand = 65; /* points_out has room for 67 points per curve */
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &ep, g_in.expand_arena,
+               g_in.expand_arena_bytes, g_in.points_out, 16, n * 67));
+  ep = g_in.expand_params, ep.orphan_length = NAN;
+  BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  ep = g_in.expand_params, ep.orphan_length = -1.0f;
+  BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  {
+    /* with a buffer sized for the valid 18 points, the invalid count is reported as a capacity problem */
+    ep = g_in.expand_params, ep.points_per_strand = 65;
+    const PelageStatus s = EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,
+                                  g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, n * g_in.per);
+    printf("note: pelage_expand with points_per_strand 65 and room for %zu points per curve gives %s (\"%s\")\n",
+           g_in.per, status_name(s), pelage_last_error());
+    CHECK(s != PELAGE_STATUS_OK);
+  }
+  {
+    /* pelage_expand_query on points_per_strand outside 2..64: printed, not required */
+    size_t sizes[2] = {0, 0};
+    ep = g_in.expand_params, ep.points_per_strand = 65;
+    const PelageStatus s = pelage_expand_query(g_in.guide_count, &ep, &sizes[0], &sizes[1]);
+    printf("note: pelage_expand_query with points_per_strand 65 gives %s (arena %zu, %zu points per curve); "
+           "pelage_expand rejects it\n", status_name(s), sizes[0], sizes[1]);
+  }
+#define BAD_LAYOUT(want, points, stride)                                                                   \
+  FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,              \
+                     &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes, points, stride,   \
+                     POINTS_CAPACITY))
+  BAD_LAYOUT(PELAGE_STATUS_INVALID_ARGUMENT, g_in.points_out, 12);
+  BAD_LAYOUT(PELAGE_STATUS_INVALID_ARGUMENT, g_in.points_out, 0);
+  BAD_LAYOUT(PELAGE_STATUS_MISALIGNED, g_in.points_out, 18);
+  BAD_LAYOUT(PELAGE_STATUS_MISALIGNED, g_in.points_out + 2, 16);
+  FAILS(PELAGE_STATUS_MISALIGNED, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                                &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes,
+                                                g_in.points_out, 16, POINTS_CAPACITY,
+                                                (uint32_t *)(void *)((unsigned char *)g_in.counts_out + 2), NULL));
+
+  /* bindings that point past the guides */
+  PelageStrandBinding *b = malloc(n * sizeof *b);
+  REQUIRE(b);
+#define BAD_BINDINGS(want)                                                                                  \
+  FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, b, g_in.grooms, n, &g_in.expand_params,     \
+                     g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY))
+  size_t bound = 0;
+  while (bound < n && g_in.bindings[bound].count == 0) ++bound;
+  REQUIRE(bound < n);
+  memcpy(b, g_in.bindings, n * sizeof *b);
+  b[bound].guides[0] = (uint32_t)g_in.guide_count;
+  BAD_BINDINGS(PELAGE_STATUS_OUT_OF_RANGE);
+  b[bound].guides[0] = UINT32_MAX;
+  BAD_BINDINGS(PELAGE_STATUS_OUT_OF_RANGE);
+  memcpy(b, g_in.bindings, n * sizeof *b);
+  b[n - 1].clump = (uint32_t)g_in.guide_count;
+  BAD_BINDINGS(PELAGE_STATUS_OUT_OF_RANGE);
+  memcpy(b, g_in.bindings, n * sizeof *b);
+  b[bound].count = 9;
+  BAD_BINDINGS(PELAGE_STATUS_OUT_OF_RANGE);
+  memcpy(b, g_in.bindings, n * sizeof *b);
+  b[bound].count = 0xCDCDCDCDu; /* a canary-filled record */
+  BAD_BINDINGS(PELAGE_STATUS_OUT_OF_RANGE);
+  /* unused slots past `count` are not read */
+  memcpy(b, g_in.bindings, n * sizeof *b);
+  for (size_t i = 0; i < n; ++i) {
+    for (uint32_t k = b[i].count; k < 8; ++k) b[i].guides[k] = UINT32_MAX, b[i].weights[k] = NAN;
+  }
+  fill_outputs();
+  EXPECT(PELAGE_STATUS_OK, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, b, g_in.grooms, n, &g_in.expand_params,
+                                  g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY));
+  CHECK(memcmp(g_in.points_out, g_in.points, n * g_in.per * 16) == 0);
+  free(b);
+
+  /* segment indices */
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_curves_segment_indices(n, 3, g_in.index_out, index_out_count()));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_curves_segment_indices(n, 0, g_in.index_out, index_out_count()));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, /* more points than a uint32 index addresses */
+        pelage_curves_segment_indices((size_t)1 << 28, 18, g_in.index_out, SIZE_MAX));
+  uint32_t *odd = (uint32_t *)(void *)((unsigned char *)g_in.index_out + 1); /* never dereferenced here */
+  FAILS(PELAGE_STATUS_MISALIGNED, pelage_curves_segment_indices(n, g_in.per, odd, index_out_count()));
+  scratch_free();
+}
+
+static void interp_free(void) {
+  free(g_in.guide_roots), free(g_in.strands), free(g_in.guide_points), free(g_in.bind_arena), free(g_in.bindings);
+  free(g_in.grooms), free(g_in.expand_arena), free(g_in.points), free(g_in.bind_out), free(g_in.groom_out);
+  free(g_in.points_out), free(g_in.counts_out), free(g_in.ids_out), free(g_in.index_out);
+}
+
 /* The last error is per thread. */
 static char g_worker_first[256], g_worker_after[256];
 static PelageStatus g_worker_status;
@@ -816,6 +1540,12 @@ int main(void) {
   test_bad_params();
   test_capacity();
   test_evaluate();
+  test_interp_defaults();
+  test_interp_success();
+  test_interp_null_pointers();
+  test_interp_capacity();
+  test_interp_bad_input();
+  interp_free();
   test_threads();
   free(g_arena), free(g_roots);
   sphere_free(&g_sphere);

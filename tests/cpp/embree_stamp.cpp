@@ -44,77 +44,12 @@ std::string fmt(const char* f, ...) {
   return buf;
 }
 
-struct V3 {
-  float x = 0, y = 0, z = 0;
-};
-V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator*(float s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
-float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-float length(V3 a) { return std::sqrt(dot(a, a)); }
-V3 normalize(V3 a) { return (1.0f / length(a)) * a; }
-V3 at3(const std::vector<float>& v, size_t i) { return {v[3 * i], v[3 * i + 1], v[3 * i + 2]}; }
-
-// First hit of a ray, or geomID == RTC_INVALID_GEOMETRY_ID.
-RTCRayHit trace(RTCScene scene, V3 org, V3 dir, float tfar = 1e30f) {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRayHit rh{};
-  rh.ray.org_x = org.x, rh.ray.org_y = org.y, rh.ray.org_z = org.z;
-  rh.ray.dir_x = dir.x, rh.ray.dir_y = dir.y, rh.ray.dir_z = dir.z;
-  rh.ray.tnear = 0.0f, rh.ray.tfar = tfar, rh.ray.mask = ~0u;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(scene, &ctx, &rh);
-  return rh;
-}
-
-// splitmix64: a small deterministic generator for the random baseline.
-struct Rng {
-  uint64_t state;
-  uint64_t next() {
-    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  float unit() { return float(next() >> 40) * (1.0f / 16777216.0f); }
-};
-
-// Per-triangle weights for random roots with the same expected density as
-// pelage's stamp: the density is sampled at the centroid, triangles below
-// bald_below get nothing, and a triangle scaled by s takes s^2 as many roots.
-std::vector<double> random_root_cdf(const creature::Mesh& mesh, const creature::GrayImage& density,
-                                    const PelageStampParams& params) {
-  std::vector<double> cdf(mesh.triangle_count());
-  double total = 0.0;
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    float uv[2];
-    mesh.uv_at(t, 1.0f / 3.0f, 1.0f / 3.0f, uv);
-    const float d = density.bilinear(uv[0], uv[1]);
-    double w = 0.0;
-    if (d >= params.bald_below) {
-      const double s = params.black_scale + (1.0 - params.black_scale) * std::clamp(d, 0.0f, 1.0f);
-      w = mesh.area(t) * s * s;
-    }
-    total += w;
-    cdf[t] = total;
-  }
-  for (double& c : cdf) c /= total;
-  return cdf;
-}
-
-std::vector<PelageRoot> random_roots(const std::vector<double>& cdf, size_t count, uint64_t seed) {
-  Rng rng{seed};
-  std::vector<PelageRoot> roots(count);
-  for (size_t i = 0; i < count; ++i) {
-    const double x = double(rng.next() >> 11) * (1.0 / 9007199254740992.0);
-    const size_t face = size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin());
-    const float r = std::sqrt(rng.unit()), b = rng.unit();  // uniform on the triangle
-    roots[i] = PelageRoot{uint32_t(std::min(face, cdf.size() - 1)), r * (1.0f - b), r * b, uint32_t(i), uint32_t(i)};
-  }
-  return roots;
-}
+using creature::at3;
+using creature::Coverage;
+using creature::V3;
+using creature::random_root_cdf;
+using creature::random_roots;
+using creature::trace;
 
 // Distance from each root to its nearest neighbour on the same side of the
 // surface (face normals not opposed, pelage's rule), searched up to `reach`
@@ -170,101 +105,6 @@ std::vector<float> nearest_neighbours(const creature::Mesh& mesh, const std::vec
   });
   return nn;
 }
-
-// An orthographic view: `resolution`^2 parallel rays along `forward`.
-struct View {
-  const char* name;
-  V3 forward;
-};
-
-struct Coverage {
-  const creature::Mesh& mesh;
-  const creature::GrayImage& density;
-  std::vector<View> views;
-  int resolution;
-  V3 center{0.0f, 0.06f, 0.0f};
-  float half = 1.3f;  // half the side of the square each view covers
-  std::vector<uint8_t> furred;  // per ray: hits skin with density > 0 in the skin-only scene
-  size_t furred_rays = 0;
-
-  void ray(size_t view, int x, int y, V3& org, V3& dir) const {
-    const V3 f = views[view].forward;
-    const V3 right = normalize(cross(f, V3{0.0f, 1.0f, 0.0f}));
-    const V3 up = cross(right, f);
-    const float sx = ((float(x) + 0.5f) / float(resolution) * 2.0f - 1.0f) * half;
-    const float sy = (1.0f - (float(y) + 0.5f) / float(resolution) * 2.0f) * half;
-    org = center + sx * right + sy * up - 5.0f * f;
-    dir = f;
-  }
-
-  size_t rays_per_view() const { return size_t(resolution) * size_t(resolution); }
-
-  // Marks the rays that see furred skin when there is no fur.
-  void prepare(RTCScene skin_only) {
-    furred.assign(views.size() * rays_per_view(), 0);
-    for (size_t v = 0; v < views.size(); ++v) {
-      tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& rows) {
-        for (int y = rows.begin(); y < rows.end(); ++y) {
-          for (int x = 0; x < resolution; ++x) {
-            V3 org, dir;
-            ray(v, x, y, org, dir);
-            const RTCRayHit h = trace(skin_only, org, dir);
-            if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-            float uv[2];
-            mesh.uv_at(h.hit.primID, h.hit.u, h.hit.v, uv);
-            furred[v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x)] =
-                density.nearest(uv[0], uv[1]) > 0 ? 1 : 0;
-          }
-        }
-      });
-    }
-    furred_rays = size_t(std::count(furred.begin(), furred.end(), uint8_t(1)));
-  }
-
-  // What one set of strands leaves visible.
-  struct Seen {
-    double skin;     // fraction of the furred-skin rays whose first hit is the skin
-    double patches;  // fraction of tiles (tile x tile rays, all on furred skin) where >= 25 % of the rays see skin
-  };
-  static constexpr int tile = 8;
-
-  Seen skin_visible(RTCScene scene, unsigned skin_id) const {
-    std::vector<uint8_t> sees_skin(furred.size(), 0);
-    for (size_t v = 0; v < views.size(); ++v) {
-      tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& rows) {
-        for (int y = rows.begin(); y < rows.end(); ++y) {
-          for (int x = 0; x < resolution; ++x) {
-            const size_t i = v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x);
-            if (!furred[i]) continue;
-            V3 org, dir;
-            ray(v, x, y, org, dir);
-            sees_skin[i] = trace(scene, org, dir).hit.geomID == skin_id;
-          }
-        }
-      });
-    }
-    size_t visible = size_t(std::count(sees_skin.begin(), sees_skin.end(), uint8_t(1)));
-    size_t tiles = 0, patchy = 0;
-    for (size_t v = 0; v < views.size(); ++v) {
-      for (int ty = 0; ty + tile <= resolution; ty += tile) {
-        for (int tx = 0; tx + tile <= resolution; tx += tile) {
-          size_t on_fur = 0, skin = 0;
-          for (int y = ty; y < ty + tile; ++y) {
-            for (int x = tx; x < tx + tile; ++x) {
-              const size_t i = v * rays_per_view() + size_t(y) * size_t(resolution) + size_t(x);
-              on_fur += furred[i];
-              skin += sees_skin[i];
-            }
-          }
-          if (on_fur < size_t(tile * tile)) continue;
-          ++tiles;
-          patchy += 4 * skin >= on_fur;
-        }
-      }
-    }
-    return {double(visible) / double(furred_rays), double(patchy) / double(std::max<size_t>(tiles, 1))};
-  }
-};
 
 struct Options {
   std::string obj, density;
@@ -476,9 +316,7 @@ int main(int argc, char** argv) try {
   // --- (d) skin coverage: stamped vs. random roots -------------------------
   std::printf("\n(d) skin coverage\n");
   {
-    Coverage cov{mesh, density,
-                 {{"front", {0, 0, -1}}, {"right", {-1, 0, 0}}, {"back", {0, 0, 1}}, {"left", {1, 0, 0}}},
-                 opt.resolution, {0.0f, 0.06f, 0.0f}, 1.3f, {}, 0};
+    Coverage cov(mesh, density, opt.resolution);
     RTCScene skin = rtcNewScene(device.device);
     creature::attach_mesh(device.device, skin, mesh);
     rtcCommitScene(skin);
