@@ -50,7 +50,8 @@ typedef enum PelageStatus {
   PELAGE_STATUS_VERSION_MISMATCH = 8,
   // A progress callback asked to stop.
   PELAGE_STATUS_CANCELLED = 9,
-  // An internal error (a bug in pelage); the call had no effect on outputs.
+  // An internal error (a bug in pelage, or the system refused a thread);
+  // outputs may be partly written.
   PELAGE_STATUS_PANIC = 10,
 } PelageStatus;
 
@@ -63,7 +64,8 @@ typedef enum PelageMapKind {
   PELAGE_MAP_KIND_TEXTURE_U8 = 1,
   // 32-bit float texture over UV, as `TextureU8` otherwise.
   PELAGE_MAP_KIND_TEXTURE_F32 = 2,
-  // One float per mesh vertex, `stride` bytes apart, interpolated over triangles.
+  // One float per mesh vertex, `stride` bytes apart (4-byte aligned),
+  // interpolated over triangles.
   PELAGE_MAP_KIND_PER_VERTEX = 3,
 } PelageMapKind;
 
@@ -203,7 +205,8 @@ typedef struct PelageExpandParams {
   // Length of orphan strands (use PelageBindInfo.mean_guide_length).
   float orphan_length;
   // Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
-  // calling thread only. The output is bitwise identical for any value.
+  // calling thread only; at most max(cores, 64). The output is bitwise
+  // identical for any value.
   uint32_t thread_count;
 } PelageExpandParams;
 
@@ -266,7 +269,8 @@ typedef struct PelageGroomMaps {
 
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
-  // Number of roots wanted on the whole mesh (at most 2^28). The result is
+  // Number of roots wanted on the whole mesh (at most 2^28; unused when
+  // `radius` is set). The result is
   // exactly this unless the mesh cannot hold that many at any spacing the
   // correction reaches (then a little fewer).
   uint32_t target_count;
@@ -278,7 +282,8 @@ typedef struct PelageStampParams {
   uint64_t seed;
   // Grayscale density in [0, 1], sampled at each triangle's centroid.
   struct PelageMap density;
-  // Triangle scale for black; white is 1. The paper's "black = half size" is 0.5.
+  // Triangle scale for black, in [0.1, 1]; white is 1. The paper's
+  // "black = half size" is 0.5.
   float black_scale;
   // Triangles with density below this get no roots (bald regions); 0 disables it.
   float bald_below;
@@ -391,7 +396,9 @@ enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const
 // positions into `positions` (float3, `position_stride` bytes apart) and, if
 // `normals` is not NULL, unit normals (interpolated vertex normals when the
 // mesh has them, else face normals). Pass `roots + first` to evaluate a range.
-// Every root is checked before anything is written.
+// Every root is checked (face in range, u, v inside the triangle within
+// 1e-4) before anything is written. The two outputs may interleave in one
+// buffer; neither may overlap the inputs.
 //
 // Thread safety: reentrant; concurrent calls may share inputs but not outputs.
 enum PelageStatus pelage_roots_evaluate(const struct PelageMeshDesc *mesh, const struct PelageRoot *roots, size_t root_count, void *positions, size_t position_stride, void *normals, size_t normal_stride);

@@ -95,13 +95,9 @@ pub(crate) fn bytes<'a>(
     if len == 0 {
         return Ok(&[]);
     }
-    if ptr.is_null() {
-        return Err(Failure::new(
-            PelageStatus::NullParameter,
-            format!("{name} is NULL"),
-        ));
-    }
-    // SAFETY: the host promises `len` readable bytes at `ptr` for the call.
+    check_array(ptr.cast::<u8>(), len, name)?;
+    // SAFETY: the host promises `len` readable bytes at `ptr` for the call;
+    // check_array rejected NULL and lengths past isize::MAX.
     Ok(unsafe { std::slice::from_raw_parts(ptr.cast::<u8>(), len) })
 }
 
@@ -114,13 +110,9 @@ pub(crate) fn bytes_mut<'a>(
     if len == 0 {
         return Ok(&mut []);
     }
-    if ptr.is_null() {
-        return Err(Failure::new(
-            PelageStatus::NullParameter,
-            format!("{name} is NULL"),
-        ));
-    }
-    // SAFETY: the host grants exclusive access to `len` bytes at `ptr` for the call.
+    check_array(ptr.cast_const().cast::<u8>(), len, name)?;
+    // SAFETY: the host grants exclusive access to `len` bytes at `ptr` for the
+    // call; check_array rejected NULL and lengths past isize::MAX.
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), len) })
 }
 
@@ -184,13 +176,16 @@ pub(crate) fn slice_mut<'a, T: bytemuck::Pod>(
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr, count) })
 }
 
-/// A strided float3 output buffer, checked but not yet written.
-pub(crate) struct Float3Out<'a> {
-    bytes: &'a mut [u8],
+/// A strided float3 output buffer, checked but not yet written. It holds a
+/// raw pointer rather than a slice so that two outputs may interleave in one
+/// host buffer (positions and normals in one vertex array).
+pub(crate) struct Float3Out {
+    ptr: *mut u8,
     stride: usize,
+    count: usize,
 }
 
-impl<'a> Float3Out<'a> {
+impl Float3Out {
     /// `count` float3 slots `stride` bytes apart; NULL gives `None` (output not wanted).
     pub fn new(
         ptr: *mut std::ffi::c_void,
@@ -202,15 +197,24 @@ impl<'a> Float3Out<'a> {
             return Ok(None);
         }
         check_align(ptr as usize, stride, name)?;
-        let len = byte_len::<[f32; 3]>(stride, count, name)?;
-        // SAFETY: the host grants exclusive access to `count` float3 slots at
-        // `stride` bytes apart for the duration of the call.
-        let bytes = unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), len) };
-        Ok(Some(Float3Out { bytes, stride }))
+        byte_len::<[f32; 3]>(stride, count, name)?;
+        Ok(Some(Float3Out {
+            ptr: ptr.cast(),
+            stride,
+            count,
+        }))
     }
 
     pub fn set(&mut self, i: usize, v: [f32; 3]) {
-        let at = i * self.stride;
-        self.bytes[at..at + 12].copy_from_slice(bytemuck::bytes_of(&v));
+        assert!(i < self.count, "float3 output index out of range");
+        // SAFETY: `i < count`, and the host grants write access to `count`
+        // float3 slots `stride` bytes apart (byte_len checked the span fits
+        // in isize); the write is unaligned-safe and creates no reference.
+        unsafe {
+            self.ptr
+                .add(i * self.stride)
+                .cast::<[f32; 3]>()
+                .write_unaligned(v)
+        }
     }
 }

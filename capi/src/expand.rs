@@ -35,7 +35,8 @@ pub struct PelageExpandParams {
     /// Length of orphan strands (use PelageBindInfo.mean_guide_length).
     pub orphan_length: f32,
     /// Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
-    /// calling thread only. The output is bitwise identical for any value.
+    /// calling thread only; at most max(cores, 64). The output is bitwise
+    /// identical for any value.
     pub thread_count: u32,
 }
 
@@ -153,9 +154,12 @@ pub extern "C" fn pelage_expand(
         let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
         let all = Strands { roots: strands, bindings, grooms };
         expand::check_inputs(&mesh, &all, &prepared, &core, out.len(), point_stride)?;
+        // more threads than cores never helps; the cap keeps a huge
+        // "as many as possible" value from spawning one thread per strand
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let threads = match p.thread_count {
-            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-            n => n as usize,
+            0 => cores,
+            n => (n as usize).min(cores.max(MAX_THREADS)),
         };
         split_over_threads(&all, threads, per * point_stride, out, |part, bytes| {
             expand::expand(&mesh, &part, &prepared, &core, bytes, point_stride)
@@ -167,6 +171,9 @@ pub extern "C" fn pelage_expand(
         Ok(())
     }
 }
+
+/// Most threads `thread_count` may ask for beyond the machine's cores.
+const MAX_THREADS: usize = 64;
 
 /// Runs `work` on `threads` contiguous ranges of `strands`, each with its
 /// own slice of `out` (`bytes_per_strand` each), on scoped threads; one
@@ -199,7 +206,16 @@ fn split_over_threads(
             if t + 1 == threads {
                 work(part, mine)?;
             } else {
-                handles.push(scope.spawn(move || work(part, mine)));
+                match std::thread::Builder::new().spawn_scoped(scope, move || work(part, mine)) {
+                    Ok(h) => handles.push(h),
+                    // the scope still joins the threads already running
+                    Err(e) => {
+                        return Err(Failure::new(
+                            PelageStatus::Panic,
+                            format!("could not start an expansion thread ({e}); the points may be partly written"),
+                        ))
+                    }
+                }
             }
         }
         for h in handles {

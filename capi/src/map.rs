@@ -18,7 +18,8 @@ pub enum PelageMapKind {
     TextureU8 = 1,
     /// 32-bit float texture over UV, as `TextureU8` otherwise.
     TextureF32 = 2,
-    /// One float per mesh vertex, `stride` bytes apart, interpolated over triangles.
+    /// One float per mesh vertex, `stride` bytes apart (4-byte aligned),
+    /// interpolated over triangles.
     PerVertex = 3,
 }
 

@@ -32,7 +32,9 @@ const _: () =
 /// positions into `positions` (float3, `position_stride` bytes apart) and, if
 /// `normals` is not NULL, unit normals (interpolated vertex normals when the
 /// mesh has them, else face normals). Pass `roots + first` to evaluate a range.
-/// Every root is checked before anything is written.
+/// Every root is checked (face in range, u, v inside the triangle within
+/// 1e-4) before anything is written. The two outputs may interleave in one
+/// buffer; neither may overlap the inputs.
 ///
 /// Thread safety: reentrant; concurrent calls may share inputs but not outputs.
 #[no_mangle]
@@ -55,17 +57,7 @@ pub extern "C" fn pelage_roots_evaluate(
         }
         let mut pos_out = Float3Out::new(positions, position_stride, root_count, "positions")?;
         let mut nrm_out = Float3Out::new(normals, normal_stride, root_count, "normals")?;
-        for (i, r) in roots.iter().enumerate() {
-            if r.face as usize >= mesh.triangle_count() {
-                return Err(Failure::new(
-                    PelageStatus::OutOfRange,
-                    format!("roots[{i}].face = {} but the mesh has {} triangles", r.face, mesh.triangle_count()),
-                ));
-            }
-            if !(r.u.is_finite() && r.v.is_finite()) {
-                return Err(Failure::new(PelageStatus::NonFinite, format!("roots[{i}] has a non-finite coordinate")));
-            }
-        }
+        pelage_core::root::check_roots(&mesh, bytemuck::cast_slice(roots), "roots")?;
         for (i, r) in roots.iter().enumerate() {
             let f = r.face as usize;
             if let Some(out) = pos_out.as_mut() {

@@ -9,7 +9,8 @@ use pelage_core::{stamp, Arena, Root, StampParams};
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct PelageStampParams {
-    /// Number of roots wanted on the whole mesh (at most 2^28). The result is
+    /// Number of roots wanted on the whole mesh (at most 2^28; unused when
+    /// `radius` is set). The result is
     /// exactly this unless the mesh cannot hold that many at any spacing the
     /// correction reaches (then a little fewer).
     pub target_count: u32,
@@ -21,7 +22,8 @@ pub struct PelageStampParams {
     pub seed: u64,
     /// Grayscale density in [0, 1], sampled at each triangle's centroid.
     pub density: PelageMap,
-    /// Triangle scale for black; white is 1. The paper's "black = half size" is 0.5.
+    /// Triangle scale for black, in [0.1, 1]; white is 1. The paper's
+    /// "black = half size" is 0.5.
     pub black_scale: f32,
     /// Triangles with density below this get no roots (bald regions); 0 disables it.
     pub bald_below: f32,
@@ -158,7 +160,7 @@ pub extern "C" fn pelage_stamp(
                 }
                 Ok(())
             }
-            Err(e @ pelage_core::Error::CapacityExceeded { needed, .. }) => {
+            Err(e @ pelage_core::Error::OutputTooSmall { needed, .. }) => {
                 *root_count = needed;
                 Err(Failure::from(e))
             }

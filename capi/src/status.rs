@@ -28,7 +28,8 @@ pub enum PelageStatus {
     VersionMismatch = 8,
     /// A progress callback asked to stop.
     Cancelled = 9,
-    /// An internal error (a bug in pelage); the call had no effect on outputs.
+    /// An internal error (a bug in pelage, or the system refused a thread);
+    /// outputs may be partly written.
     Panic = 10,
 }
 
@@ -102,7 +103,9 @@ impl Failure {
 impl From<Error> for Failure {
     fn from(e: Error) -> Self {
         let status = match e {
-            Error::CapacityExceeded { .. } => PelageStatus::CapacityExceeded,
+            Error::CapacityExceeded { .. } | Error::OutputTooSmall { .. } => {
+                PelageStatus::CapacityExceeded
+            }
             Error::InvalidArgument(_) | Error::BadStride { .. } => PelageStatus::InvalidArgument,
             Error::NonFinite { .. } => PelageStatus::NonFinite,
             Error::OutOfRange { .. } => PelageStatus::OutOfRange,

@@ -239,7 +239,7 @@ impl<'a> GuideIndex<'a> {
             spacing[g] = if near.len > SPACING_RANK {
                 libm::sqrtf(near.items[SPACING_RANK].0).min(MAX_SPACING_RATIO * mean_spacing)
             } else {
-                cell
+                MAX_SPACING_RATIO * mean_spacing
             };
         }
         Ok(GuideIndex {

@@ -13,6 +13,13 @@ pub enum Error {
         /// Bytes (or elements) that were provided.
         available: usize,
     },
+    /// The caller's output buffer (roots, curves, records) is too small.
+    OutputTooSmall {
+        /// Elements the operation writes.
+        needed: usize,
+        /// Elements the buffer holds.
+        available: usize,
+    },
     /// A parameter is outside its documented domain.
     InvalidArgument(&'static str),
     /// An input value is NaN or infinite.
@@ -47,6 +54,12 @@ impl fmt::Display for Error {
                 write!(
                     f,
                     "capacity exceeded: {needed} needed, {available} available"
+                )
+            }
+            Error::OutputTooSmall { needed, available } => {
+                write!(
+                    f,
+                    "output buffer too small: {needed} needed, {available} available"
                 )
             }
             Error::InvalidArgument(why) => write!(f, "invalid argument: {why}"),

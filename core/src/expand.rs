@@ -32,7 +32,8 @@ pub enum EndPoints {
 #[derive(Clone, Copy, Debug)]
 pub struct ExpandParams {
     /// Control points per strand before end handling (2..=64); guides are
-    /// resampled to it.
+    /// resampled to it. Catmull-Rom consumers need 4 points per curve, so
+    /// with `Raw` ends use at least 4.
     pub points_per_strand: usize,
     /// End-point convention of the output.
     pub end_points: EndPoints,
@@ -214,27 +215,62 @@ pub fn check_inputs(
             what: "curve points",
         });
     }
-    let total = roots.len() * params.output_points();
-    if total > 0 && out_len < (total - 1) * stride + 16 {
-        return Err(Error::CapacityExceeded {
-            needed: (total - 1) * stride + 16,
+    let needed = roots
+        .len()
+        .checked_mul(params.output_points())
+        .and_then(|total| total.checked_sub(1))
+        .map_or(Some(0), |last| {
+            last.checked_mul(stride).and_then(|b| b.checked_add(16))
+        })
+        .ok_or(Error::InvalidArgument("curve output size overflows"))?;
+    if out_len < needed {
+        return Err(Error::OutputTooSmall {
+            needed,
             available: out_len,
         });
     }
+    mesh.validate()?;
     crate::root::check_roots(mesh, roots, "strand roots")?;
+    let bound = guides.guides;
     for (i, b) in bindings[..roots.len()].iter().enumerate() {
-        let bad = b.count as usize > crate::bind::MAX_NEIGHBOURS
-            || b.guides[..(b.count as usize).min(crate::bind::MAX_NEIGHBOURS)]
-                .iter()
-                .any(|&g| g as usize >= guides.guides)
-            || (b.clump != NO_GUIDE && b.clump as usize >= guides.guides);
-        if bad {
+        let count = b.count as usize;
+        if count > crate::bind::MAX_NEIGHBOURS {
+            return Err(Error::OutOfRange {
+                what: "binding counts",
+                index: i,
+                value: count,
+                bound: crate::bind::MAX_NEIGHBOURS + 1,
+            });
+        }
+        let bad_guide = b.guides[..count].iter().find(|&&g| g as usize >= bound);
+        let bad_clump = (b.clump != NO_GUIDE && b.clump as usize >= bound).then_some(&b.clump);
+        if let Some(&value) = bad_guide.or(bad_clump) {
             return Err(Error::OutOfRange {
                 what: "bindings",
                 index: i,
-                value: b.clump as usize,
-                bound: guides.guides,
+                value: value as usize,
+                bound,
             });
+        }
+        if !b.weights[..count].iter().all(|w| w.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "binding weights",
+                index: i,
+            });
+        }
+    }
+    for (i, g) in grooms[..roots.len()].iter().enumerate() {
+        let values = bytemuck::cast_ref::<StrandGroom, [f32; 8]>(g);
+        if !values.iter().all(|v| v.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "grooms",
+                index: i,
+            });
+        }
+        if g.root_radius < 0.0 || g.tip_radius < 0.0 || g.length < 0.0 {
+            return Err(Error::InvalidArgument(
+                "a groom has a negative radius or length",
+            ));
         }
     }
     Ok(())

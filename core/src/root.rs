@@ -24,7 +24,11 @@ pub struct Root {
 
 const _: () = assert!(core::mem::size_of::<Root>() == 20);
 
-/// Checks that every root is on an existing face with finite coordinates.
+/// Slack on the barycentric range a root may have (stamped roots sit exactly
+/// inside; hosts may round).
+const BARYCENTRIC_SLACK: f32 = 1e-4;
+
+/// Checks that every root is on an existing face, inside it.
 pub fn check_roots(
     mesh: &crate::Mesh,
     roots: &[Root],
@@ -41,6 +45,12 @@ pub fn check_roots(
         }
         if !(r.u.is_finite() && r.v.is_finite()) {
             return Err(crate::Error::NonFinite { what, index: i });
+        }
+        let e = BARYCENTRIC_SLACK;
+        if r.u < -e || r.v < -e || r.u + r.v > 1.0 + e {
+            return Err(crate::Error::InvalidArgument(
+                "a root's barycentric coordinates lie outside its triangle",
+            ));
         }
     }
     Ok(())

@@ -188,6 +188,10 @@ pub struct Stamper<'m, 'a> {
     degenerate: u32,
 }
 
+/// Smallest `black_scale`: the spacing in black regions is the radius over
+/// it, and the grid queries grow with its cube.
+pub const MIN_BLACK_SCALE: f32 = 0.1;
+
 /// Largest target count (ids and ranks are 32-bit; arenas stay addressable).
 pub const MAX_TARGET: u32 = 1 << 28;
 
@@ -212,8 +216,8 @@ fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
             index: 0,
         });
     }
-    if !(params.black_scale > 0.0 && params.black_scale <= 1.0) {
-        return Err(Error::InvalidArgument("black_scale must be in (0, 1]"));
+    if !(MIN_BLACK_SCALE..=1.0).contains(&params.black_scale) {
+        return Err(Error::InvalidArgument("black_scale must be in [0.1, 1]"));
     }
     if !params.bald_below.is_finite() {
         return Err(Error::NonFinite {
@@ -232,7 +236,7 @@ fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
         return 0.0;
     }
     let d = params.density.sample(mesh, face, 1.0 / 3.0, 1.0 / 3.0);
-    if d < params.bald_below || d <= 0.0 && params.black_scale <= 0.0 {
+    if d < params.bald_below {
         return 0.0;
     }
     params.black_scale + (1.0 - params.black_scale) * d.clamp(0.0, 1.0)
@@ -297,7 +301,8 @@ fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize {
     let area = mesh.area(face) * k * k;
     let perimeter = ((b - a).length() + (c - b).length() + (a - c).length()) * k;
     let dilated = area + 0.5 * perimeter + core::f32::consts::FRAC_PI_4;
-    (dilated * 1.154_700_6) as usize + 2
+    // saturating: a radius tiny next to the face is reported by the caller
+    (dilated as f64 * 1.154_700_6).min(usize::MAX as f64 / 4.0) as usize + 2
 }
 
 /// Upper bound on the roots [`stamp`] writes: the target (surplus stamps
@@ -328,9 +333,16 @@ fn candidates_bound(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
         };
         r * min_radius_factor(params.target_count, mesh.triangle_count())
     };
-    Ok((0..mesh.triangle_count())
+    let bound = (0..mesh.triangle_count())
         .map(|f| face_bound(mesh, f, face_scale(mesh, params, f), r_min))
-        .sum())
+        .fold(0usize, usize::saturating_add);
+    // ids, ranks and sort keys are 32-bit
+    if bound > 4 * MAX_TARGET as usize {
+        return Err(Error::InvalidArgument(
+            "radius too small for this mesh (over 2^30 candidates)",
+        ));
+    }
+    Ok(bound)
 }
 
 /// The tile's density is not known before it is built, only bounded;
@@ -685,7 +697,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let n = cands.len();
         let m = self.output_count(n);
         if out.len() < m {
-            return Err(Error::CapacityExceeded {
+            return Err(Error::OutputTooSmall {
                 needed: m,
                 available: out.len(),
             });
@@ -843,7 +855,7 @@ pub fn stamp(
         if stamper.converged(n, kept) {
             let m = stamper.output_count(kept);
             if out.len() < m {
-                return Err(Error::CapacityExceeded {
+                return Err(Error::OutputTooSmall {
                     needed: m,
                     available: out.len(),
                 });

@@ -481,3 +481,90 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
     assert_eq!(s, PelageStatus::CapacityExceeded);
     assert!(pts.iter().all(|p| *p == [-1.0; 4]));
 }
+
+#[test]
+fn interleaved_outputs_and_host_records_are_checked() {
+    let m = default_creature();
+    let g = groom(&m, 300, 1000, &pelage_groom_maps_defaults());
+    let d = desc(&m);
+    // positions and normals interleaved in one vertex buffer
+    let mut vertices = vec![[0.0f32; 6]; g.strands.len()];
+    let base = vertices.as_mut_ptr().cast::<f32>();
+    let s = pelage_roots_evaluate(
+        &d,
+        as_c(&g.strands).as_ptr(),
+        g.strands.len(),
+        base.cast(),
+        24,
+        base.wrapping_add(3).cast(),
+        24,
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let mesh = mesh_view(&m);
+    for (v, r) in vertices.iter().zip(&g.strands) {
+        assert_eq!(
+            Vec3::new(v[0], v[1], v[2]),
+            mesh.point(r.face as usize, r.u, r.v)
+        );
+        assert_eq!(
+            Vec3::new(v[3], v[4], v[5]),
+            mesh.normal(r.face as usize, r.u, r.v)
+        );
+    }
+    // a root outside its triangle
+    let mut off = g.strands.clone();
+    off[4].u = 3.0;
+    let s = pelage_roots_evaluate(
+        &d,
+        as_c(&off).as_ptr(),
+        off.len(),
+        base.cast(),
+        24,
+        null_mut(),
+        0,
+    );
+    assert_eq!(s, PelageStatus::InvalidArgument);
+    // groom and binding records read back from a file are checked too
+    let params = pelage_expand_params_defaults();
+    let (mut bytes, mut per) = (0, 0);
+    assert_eq!(
+        pelage_expand_query(g.guide_roots.len(), &params, &mut bytes, &mut per),
+        PelageStatus::Ok
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
+    let good = guides_desc(&g.guide_roots, &g.guide_points);
+    let mut run = |bindings: &[PelageStrandBinding], grooms: &[PelageStrandGroom]| {
+        let s = pelage_expand(
+            &d,
+            &good,
+            as_c(&g.strands).as_ptr(),
+            bindings.as_ptr(),
+            grooms.as_ptr(),
+            g.strands.len(),
+            &params,
+            arena.as_mut_ptr().cast(),
+            bytes,
+            pts.as_mut_ptr().cast(),
+            16,
+            pts.len(),
+            null_mut(),
+            null_mut(),
+        );
+        (s, pts.iter().all(|p| *p == [-1.0; 4]))
+    };
+    let mut grooms = g.grooms.clone();
+    grooms[9].tip_radius = f32::NAN;
+    assert_eq!(run(&g.bindings, &grooms), (PelageStatus::NonFinite, true));
+    grooms[9].tip_radius = -0.001;
+    assert_eq!(
+        run(&g.bindings, &grooms),
+        (PelageStatus::InvalidArgument, true)
+    );
+    let mut bindings = g.bindings.clone();
+    bindings[3].weights[0] = f32::INFINITY;
+    assert_eq!(run(&bindings, &g.grooms), (PelageStatus::NonFinite, true));
+    bindings[3] = g.bindings[3];
+    bindings[3].count = 9;
+    assert_eq!(run(&bindings, &g.grooms), (PelageStatus::OutOfRange, true));
+}
