@@ -162,7 +162,8 @@ pub extern "C" fn pelage_expand(
             n => (n as usize).min(cores.max(MAX_THREADS)),
         };
         split_over_threads(&all, threads, per * point_stride, out, |part, bytes| {
-            expand::expand(&mesh, &part, &prepared, &core, bytes, point_stride)
+            expand::expand_checked(&mesh, &part, &prepared, &core, bytes, point_stride);
+            Ok(())
         })?;
         counts.fill(per as u32);
         for (id, s) in ids.iter_mut().zip(strands) {

@@ -290,6 +290,22 @@ pub fn expand(
     stride: usize,
 ) -> Result<(), Error> {
     check_inputs(mesh, strands, guides, params, out.len(), stride)?;
+    expand_checked(mesh, strands, guides, params, out, stride);
+    Ok(())
+}
+
+/// [`expand`] without the input checks, for a host that ran
+/// [`check_inputs`] once over all strands before splitting them into ranges
+/// (each range of checked inputs is itself checked). Inputs that would have
+/// failed the checks make it panic instead of returning an error.
+pub fn expand_checked(
+    mesh: &Mesh,
+    strands: &Strands,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+    stride: usize,
+) {
     let Strands {
         roots,
         bindings,
@@ -298,10 +314,10 @@ pub fn expand(
     let per = params.output_points();
     let n = params.points_per_strand;
     let shift = (params.end_points == EndPoints::Pinned) as usize;
-    let mut pts = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
     let mut lanes = Lanes::new(n);
     let mut basis: Option<(u32, FaceBasis)> = None;
-    for (s, root) in roots.iter().enumerate() {
+    let mut fill = |s: usize, curve: &mut [[f32; 4]]| {
+        let root = &roots[s];
         let face = match basis {
             Some((f, b)) if f == root.face => b,
             _ => {
@@ -318,26 +334,32 @@ pub fn expand(
             guides,
             params,
             &mut lanes,
-            &mut pts[shift..shift + n],
+            &mut curve[shift..shift + n],
         );
         if shift == 1 {
-            pts[0] = pts[1];
-            pts[n + 1] = pts[n];
+            curve[0] = curve[1];
+            curve[n + 1] = curve[n];
         }
-        let curve = &pts[..per];
-        let region = &mut out[s * per * stride..];
-        if stride == 16 {
-            if let Ok(typed) = bytemuck::try_cast_slice_mut::<u8, [f32; 4]>(&mut region[..per * 16])
-            {
-                typed.copy_from_slice(curve);
-                continue;
+    };
+    // packed float4 output is written in place
+    if stride == 16 {
+        if let Ok(all) =
+            bytemuck::try_cast_slice_mut::<u8, [f32; 4]>(&mut out[..roots.len() * per * 16])
+        {
+            for (s, curve) in all.chunks_exact_mut(per).enumerate() {
+                fill(s, curve);
             }
+            return;
         }
-        for (j, p) in curve.iter().enumerate() {
+    }
+    let mut buffer = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
+    for s in 0..roots.len() {
+        fill(s, &mut buffer[..per]);
+        let region = &mut out[s * per * stride..];
+        for (j, p) in buffer[..per].iter().enumerate() {
             region[j * stride..j * stride + 16].copy_from_slice(bytemuck::bytes_of(p));
         }
     }
-    Ok(())
 }
 
 /// Per-strand working lanes, reused across the strands of one call (zeroing
@@ -455,7 +477,9 @@ fn kink_wave(groom: &StrandGroom, n: usize, sin: &mut [f32], cos: &mut [f32]) {
     const CHAINS: usize = 4;
     let delta = core::f32::consts::TAU * groom.kink_frequency / (n - 1) as f32;
     let (s1, c1) = libm::sincosf(delta);
-    let (s4, c4) = libm::sincosf(delta * CHAINS as f32);
+    // the rotation by 4 delta by two double-angle steps, not another sincos
+    let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
+    let (s4, c4) = (2.0 * s2 * c2, c2 * c2 - s2 * s2);
     let (mut s, mut c) = ([0.0f32; CHAINS], [0.0f32; CHAINS]);
     (s[0], c[0]) = libm::sincosf(groom.kink_phase);
     for i in 1..CHAINS {
