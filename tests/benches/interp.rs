@@ -9,10 +9,9 @@ use pelage::*;
 use pelage_core::bind::{self, BindParams, StrandBinding};
 use pelage_core::groom::{GroomMaps, StrandGroom};
 use pelage_core::guides::{CvLayout, Guides};
-use pelage_core::stamp::StampParams;
 use pelage_core::{Arena, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
-use pelage_tests::measure::{combed_guides, guides_desc, mesh_desc, mesh_view, stamp_vec};
+use pelage_tests::measure::{combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots};
 use std::hint::black_box;
 use std::ptr::null_mut;
 use std::time::Instant;
@@ -56,21 +55,10 @@ fn write_floor(out: &mut [[f32; 4]], threads: usize) {
 fn main() {
     let m = default_creature();
     let mesh = mesh_view(&m);
-    let stamp = |n, seed| {
-        stamp_vec(
-            mesh,
-            &StampParams {
-                target_count: n,
-                seed,
-                ..StampParams::default()
-            },
-        )
-        .0
-    };
-    let guide_roots = stamp(GUIDES, 1);
+    let guide_roots = stamp_roots(mesh, GUIDES, 1);
     let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.06);
     let hairs: Vec<Root> = {
-        let mut h = stamp(HAIRS + HAIRS / 50, 2);
+        let mut h = stamp_roots(mesh, HAIRS + HAIRS / 50, 2);
         h.retain(|r| r.rank < HAIRS);
         h
     };

@@ -18,6 +18,7 @@
 //
 //   embree_interp <creature.obj> <creature_density.png> [--roots N] [--guides N]
 //                 [--coverage-roots N] [--every K] [--resolution R]
+#include "check.h"
 #include "creature_io.h"
 
 #include <tbb/blocked_range.h>
@@ -39,22 +40,8 @@ namespace {
 using creature::at3;
 using creature::V3;
 
-int g_failures = 0;
-
-void expect(bool ok, const std::string& what) {
-  std::printf("  %s  %s\n", ok ? "PASS" : "FAIL", what.c_str());
-  if (!ok) ++g_failures;
-}
-
-std::string fmt(const char* f, ...) __attribute__((format(printf, 1, 2)));
-std::string fmt(const char* f, ...) {
-  char buf[512];
-  va_list args;
-  va_start(args, f);
-  std::vsnprintf(buf, sizeof buf, f, args);
-  va_end(args);
-  return buf;
-}
+using check::expect;
+using check::fmt;
 
 struct Options {
   std::string obj, density;
@@ -649,9 +636,9 @@ int main(int argc, char** argv) try {
 
   rtcReleaseScene(body);
   device.check("end");
-  std::printf("\nembree_interp: %s (%d failed checks) in %.1f s\n", g_failures ? "FAILED" : "passed", g_failures,
+  std::printf("\nembree_interp: %s (%d failed checks) in %.1f s\n", check::failures ? "FAILED" : "passed", check::failures,
               total.seconds());
-  return g_failures ? EXIT_FAILURE : EXIT_SUCCESS;
+  return check::failures ? EXIT_FAILURE : EXIT_SUCCESS;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "embree_interp: %s\n", e.what());
   return EXIT_FAILURE;

@@ -10,6 +10,7 @@
 //
 //   embree_stamp <creature.obj> <creature_density.png> [--roots N] [--resolution R]
 //                [--length L] [--radius R] [--tilt DEGREES]   (strands; defaults 0.06, 0.0015, 60)
+#include "check.h"
 #include "creature_io.h"
 
 #include <tbb/blocked_range.h>
@@ -27,22 +28,8 @@
 
 namespace {
 
-int g_failures = 0;
-
-void expect(bool ok, const std::string& what) {
-  std::printf("  %s  %s\n", ok ? "PASS" : "FAIL", what.c_str());
-  if (!ok) ++g_failures;
-}
-
-std::string fmt(const char* f, ...) __attribute__((format(printf, 1, 2)));
-std::string fmt(const char* f, ...) {
-  char buf[512];
-  va_list args;
-  va_start(args, f);
-  std::vsnprintf(buf, sizeof buf, f, args);
-  va_end(args);
-  return buf;
-}
+using check::expect;
+using check::fmt;
 
 using creature::at3;
 using creature::Coverage;
@@ -415,9 +402,9 @@ int main(int argc, char** argv) try {
   }
 
   device.check("end");
-  std::printf("\nembree_stamp: %s (%d failed checks) in %.1f s\n", g_failures ? "FAILED" : "passed", g_failures,
+  std::printf("\nembree_stamp: %s (%d failed checks) in %.1f s\n", check::failures ? "FAILED" : "passed", check::failures,
               total.seconds());
-  return g_failures ? EXIT_FAILURE : EXIT_SUCCESS;
+  return check::failures ? EXIT_FAILURE : EXIT_SUCCESS;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "embree_stamp: %s\n", e.what());
   return EXIT_FAILURE;

@@ -29,6 +29,16 @@ pub fn stamp_vec(mesh: Mesh, params: &StampParams) -> (Vec<Root>, StampReport) {
     (roots, report)
 }
 
+/// Stamps `n` roots with `seed` and default parameters.
+pub fn stamp_roots(mesh: Mesh, n: u32, seed: u64) -> Vec<Root> {
+    let params = StampParams {
+        target_count: n,
+        seed,
+        ..StampParams::default()
+    };
+    stamp_vec(mesh, &params).0
+}
+
 /// `n` roots placed uniformly at random by area (the baseline stamping is
 /// compared against), skipping degenerate faces.
 pub fn uniform_roots(mesh: &Mesh, n: usize, seed: u64) -> Vec<Root> {

@@ -3,10 +3,11 @@
 
 use glam::Vec3;
 use pelage::*;
-use pelage_core::stamp::StampParams;
 use pelage_core::Root;
 use pelage_tests::creature::{default_creature, CreatureMesh};
-use pelage_tests::measure::{combed_guides, guides_desc, mesh_desc as desc, mesh_view, stamp_vec};
+use pelage_tests::measure::{
+    combed_guides, guides_desc, mesh_desc as desc, mesh_view, stamp_roots,
+};
 use std::ptr::{null, null_mut};
 
 const CVS: usize = 12;
@@ -26,20 +27,9 @@ struct Groom {
 
 fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) -> Groom {
     let mesh = mesh_view(m);
-    let stamp = |n, seed| {
-        stamp_vec(
-            mesh,
-            &StampParams {
-                target_count: n,
-                seed,
-                ..StampParams::default()
-            },
-        )
-        .0
-    };
-    let guide_roots = stamp(guides, 1);
+    let guide_roots = stamp_roots(mesh, guides, 1);
     let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.08);
-    let strands = stamp(strands, 2);
+    let strands = stamp_roots(mesh, strands, 2);
     let d = desc(m);
     let g = guides_desc(&guide_roots, &guide_points);
     let params = pelage_bind_params_defaults();
@@ -240,15 +230,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
         offsets: null(),
     };
     let mesh = mesh_view(&m);
-    let render = stamp_vec(
-        mesh,
-        &StampParams {
-            target_count: 50_000,
-            seed: 3,
-            ..StampParams::default()
-        },
-    )
-    .0;
+    let render = stamp_roots(mesh, 50_000, 3);
     let mut bytes = 0;
     assert_eq!(
         pelage_bind_query(sim.strands.len(), &mut bytes),
