@@ -615,16 +615,9 @@ int main(int argc, char** argv) try {
                   100.0 * r.seen.patches);
     }
     auto match = [&](double creature::Coverage::Seen::*metric) {
-      const double stamped_value = rows[0].seen.*metric;
-      if (stamped_value >= rows[1].seen.*metric) return std::string("<= 1x");
-      for (size_t k = 1; k + 1 < rows.size(); ++k) {
-        const double a = rows[k].seen.*metric, b = rows[k + 1].seen.*metric;
-        if (stamped_value <= a && stamped_value >= b) {
-          const double t = (a - stamped_value) / std::max(a - b, 1e-12);
-          return fmt("~%.1fx", rows[k].multiple + t * (rows[k + 1].multiple - rows[k].multiple));
-        }
-      }
-      return fmt("> %.0fx", rows.back().multiple);
+      std::vector<std::pair<double, double>> random;
+      for (size_t k = 1; k < rows.size(); ++k) random.emplace_back(rows[k].multiple, rows[k].seen.*metric);
+      return check::matching_multiple(rows[0].seen.*metric, random);
     };
     std::printf("\n  random roots needed to match stamped: %s (skin visible), %s (bald patches)  (%.1f s)\n",
                 match(&creature::Coverage::Seen::skin).c_str(), match(&creature::Coverage::Seen::patches).c_str(),

@@ -353,18 +353,10 @@ int main(int argc, char** argv) try {
                   100.0 * r.seen.patches);
     }
 
-    // Interpolate the multiple of random roots that matches the stamped roots.
     auto match = [&](double Coverage::Seen::*metric) {
-      const double stamped = rows[0].seen.*metric;
-      if (stamped >= rows[1].seen.*metric) return std::string("<= 1x");
-      for (size_t k = 1; k + 1 < rows.size(); ++k) {
-        const double a = rows[k].seen.*metric, b = rows[k + 1].seen.*metric;
-        if (stamped <= a && stamped >= b) {
-          const double t = (a - stamped) / std::max(a - b, 1e-12);
-          return fmt("~%.1fx", rows[k].multiple + t * (rows[k + 1].multiple - rows[k].multiple));
-        }
-      }
-      return fmt("> %.0fx", rows.back().multiple);
+      std::vector<std::pair<double, double>> random;
+      for (size_t k = 1; k < rows.size(); ++k) random.emplace_back(rows[k].multiple, rows[k].seen.*metric);
+      return check::matching_multiple(rows[0].seen.*metric, random);
     };
     std::printf("\n  random roots needed to match stamped: %s (skin visible), %s (bald patches)\n",
                 match(&Coverage::Seen::skin).c_str(), match(&Coverage::Seen::patches).c_str());
