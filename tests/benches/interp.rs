@@ -11,9 +11,10 @@ use pelage_core::groom::{GroomMaps, StrandGroom};
 use pelage_core::guides::{CvLayout, Guides};
 use pelage_core::{Arena, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
-use pelage_tests::measure::{combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots};
+use pelage_tests::measure::{
+    combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots, ExpandCall,
+};
 use std::hint::black_box;
-use std::ptr::null_mut;
 use std::time::Instant;
 
 const GUIDES: u32 = 13_030;
@@ -113,25 +114,22 @@ fn main() {
         "{:>7} | {:>10} {:>8} {:>11} | {:>13} {:>9} | {:>8}",
         "threads", "expand ms", "frames/s", "hairs/s", "write-floor ms", "GB/s", "ratio"
     );
+    let (binds, groom_records) = (
+        bytemuck::cast_slice(&bindings),
+        bytemuck::cast_slice(&grooms),
+    );
     for threads in [1u32, 2] {
         ep.thread_count = threads;
+        let call = ExpandCall {
+            mesh: &desc,
+            guides: &gdesc,
+            strands: &hairs,
+            bindings: binds,
+            grooms: groom_records,
+            params: &ep,
+        };
         let t_expand = time(7, || {
-            let s = pelage_expand(
-                &desc,
-                &gdesc,
-                bytemuck::cast_slice::<Root, PelageRoot>(&hairs).as_ptr(),
-                bytemuck::cast_slice::<StrandBinding, PelageStrandBinding>(&bindings).as_ptr(),
-                bytemuck::cast_slice::<StrandGroom, PelageStrandGroom>(&grooms).as_ptr(),
-                hairs.len(),
-                &ep,
-                earena.as_mut_ptr().cast(),
-                bytes,
-                out.as_mut_ptr().cast(),
-                16,
-                out.len(),
-                null_mut(),
-                null_mut(),
-            );
+            let s = call.run(&mut earena, &mut out, None);
             assert_eq!(s, PelageStatus::Ok);
             black_box(&out);
         });

@@ -182,3 +182,47 @@ pub fn guides_desc(roots: &[Root], points: &[[f32; 3]]) -> pelage::PelageGuidesD
         offsets: std::ptr::null(),
     }
 }
+
+/// The borrowed inputs of a `pelage_expand` call, so tests state only what differs.
+pub struct ExpandCall<'a> {
+    /// The (deformed) mesh.
+    pub mesh: &'a pelage::PelageMeshDesc,
+    /// The (posed) guides.
+    pub guides: &'a pelage::PelageGuidesDesc,
+    /// Strand roots.
+    pub strands: &'a [Root],
+    /// One binding per strand.
+    pub bindings: &'a [pelage::PelageStrandBinding],
+    /// One groom record per strand.
+    pub grooms: &'a [pelage::PelageStrandGroom],
+    /// Expansion parameters.
+    pub params: &'a pelage::PelageExpandParams,
+}
+
+impl ExpandCall<'_> {
+    /// Expands every strand into `out` (capacity `out.len()` points, stride
+    /// 16), optionally filling per-curve point counts.
+    pub fn run(
+        &self,
+        arena: &mut [u8],
+        out: &mut [[f32; 4]],
+        counts: Option<&mut [u32]>,
+    ) -> pelage::PelageStatus {
+        pelage::pelage_expand(
+            self.mesh,
+            self.guides,
+            bytemuck::cast_slice::<Root, pelage::PelageRoot>(self.strands).as_ptr(),
+            self.bindings.as_ptr(),
+            self.grooms.as_ptr(),
+            self.strands.len(),
+            self.params,
+            arena.as_mut_ptr().cast(),
+            arena.len(),
+            out.as_mut_ptr().cast(),
+            16,
+            out.len(),
+            counts.map_or(std::ptr::null_mut(), |c| c.as_mut_ptr()),
+            std::ptr::null_mut(),
+        )
+    }
+}

@@ -6,7 +6,7 @@ use pelage::*;
 use pelage_core::Root;
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
-    combed_guides, guides_desc, mesh_desc as desc, mesh_view, stamp_roots,
+    combed_guides, guides_desc, mesh_desc as desc, mesh_view, stamp_roots, ExpandCall,
 };
 use std::ptr::{null, null_mut};
 
@@ -83,22 +83,15 @@ fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32;
     let mut arena = vec![0u8; bytes];
     let mut out = vec![[0.0f32; 4]; g.strands.len() * per];
     let mut counts = vec![0u32; g.strands.len()];
-    let s = pelage_expand(
-        &desc(m),
-        &guides_desc(&g.guide_roots, &g.guide_points),
-        as_c(&g.strands).as_ptr(),
-        g.bindings.as_ptr(),
-        g.grooms.as_ptr(),
-        g.strands.len(),
+    let call = ExpandCall {
+        mesh: &desc(m),
+        guides: &guides_desc(&g.guide_roots, &g.guide_points),
+        strands: &g.strands,
+        bindings: &g.bindings,
+        grooms: &g.grooms,
         params,
-        arena.as_mut_ptr().cast(),
-        bytes,
-        out.as_mut_ptr().cast(),
-        16,
-        out.len(),
-        counts.as_mut_ptr(),
-        null_mut(),
-    );
+    };
+    let s = call.run(&mut arena, &mut out, Some(&mut counts));
     assert_eq!(s, PelageStatus::Ok);
     assert!(counts.iter().all(|&c| c as usize == per));
     out
@@ -273,22 +266,15 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     );
     let mut earena = vec![0u8; ebytes];
     let mut out = vec![[0.0f32; 4]; render.len() * per];
-    let s = pelage_expand(
-        &d,
-        &sim_guides,
-        as_c(&render).as_ptr(),
-        bindings.as_ptr(),
-        grooms.as_ptr(),
-        render.len(),
-        &params,
-        earena.as_mut_ptr().cast(),
-        ebytes,
-        out.as_mut_ptr().cast(),
-        16,
-        out.len(),
-        null_mut(),
-        null_mut(),
-    );
+    let call = ExpandCall {
+        mesh: &d,
+        guides: &sim_guides,
+        strands: &render,
+        bindings: &bindings,
+        grooms: &grooms,
+        params: &params,
+    };
+    let s = call.run(&mut earena, &mut out, None);
     assert_eq!(s, PelageStatus::Ok);
     // every render hair starts on the surface and ends outside, about a guide length away
     for (i, r) in render.iter().enumerate() {
@@ -426,40 +412,20 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
     pelage_expand_query(g.guide_roots.len(), &params, &mut bytes, &mut per);
     let mut earena = vec![0u8; bytes];
     let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
-    let s = pelage_expand(
-        &d,
-        &good,
-        as_c(&g.strands).as_ptr(),
-        broken.as_ptr(),
-        g.grooms.as_ptr(),
-        g.strands.len(),
-        &params,
-        earena.as_mut_ptr().cast(),
-        bytes,
-        pts.as_mut_ptr().cast(),
-        16,
-        pts.len(),
-        null_mut(),
-        null_mut(),
-    );
+    let mut call = ExpandCall {
+        mesh: &d,
+        guides: &good,
+        strands: &g.strands,
+        bindings: &broken,
+        grooms: &g.grooms,
+        params: &params,
+    };
+    let s = call.run(&mut earena, &mut pts, None);
     assert_eq!(s, PelageStatus::OutOfRange);
     assert!(pts.iter().all(|p| *p == [-1.0; 4]));
-    let s = pelage_expand(
-        &d,
-        &good,
-        as_c(&g.strands).as_ptr(),
-        g.bindings.as_ptr(),
-        g.grooms.as_ptr(),
-        g.strands.len(),
-        &params,
-        earena.as_mut_ptr().cast(),
-        bytes,
-        pts.as_mut_ptr().cast(),
-        16,
-        pts.len() - 1,
-        null_mut(),
-        null_mut(),
-    );
+    call.bindings = &g.bindings;
+    let short = pts.len() - 1;
+    let s = call.run(&mut earena, &mut pts[..short], None);
     assert_eq!(s, PelageStatus::CapacityExceeded);
     assert!(pts.iter().all(|p| *p == [-1.0; 4]));
 }
@@ -517,22 +483,15 @@ fn interleaved_outputs_and_host_records_are_checked() {
     let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
     let good = guides_desc(&g.guide_roots, &g.guide_points);
     let mut run = |bindings: &[PelageStrandBinding], grooms: &[PelageStrandGroom]| {
-        let s = pelage_expand(
-            &d,
-            &good,
-            as_c(&g.strands).as_ptr(),
-            bindings.as_ptr(),
-            grooms.as_ptr(),
-            g.strands.len(),
-            &params,
-            arena.as_mut_ptr().cast(),
-            bytes,
-            pts.as_mut_ptr().cast(),
-            16,
-            pts.len(),
-            null_mut(),
-            null_mut(),
-        );
+        let call = ExpandCall {
+            mesh: &d,
+            guides: &good,
+            strands: &g.strands,
+            bindings,
+            grooms,
+            params: &params,
+        };
+        let s = call.run(&mut arena, &mut pts, None);
         (s, pts.iter().all(|p| *p == [-1.0; 4]))
     };
     let mut grooms = g.grooms.clone();
