@@ -79,6 +79,33 @@ typedef enum PelageEndPoints {
   PELAGE_END_POINTS_PINNED = 1,
 } PelageEndPoints;
 
+// How a [`PelageRegionMap`] stores its ids.
+typedef enum PelageRegionKind {
+  // No partings: every strand may use every guide; `data` is ignored.
+  PELAGE_REGION_KIND_NONE = 0,
+  // One uint32 id per mesh vertex, `stride` bytes apart (4-byte aligned);
+  // a root takes the id of its nearest corner.
+  PELAGE_REGION_KIND_PER_VERTEX = 1,
+  // An 8-bit id texture over UV, `width` x `height`, `stride` bytes per
+  // row, row 0 at v = 0; a root takes the texel it falls in, unfiltered.
+  // Needs mesh UVs.
+  PELAGE_REGION_KIND_TEXTURE_U8 = 2,
+} PelageRegionKind;
+
+// Parting regions: a strand only uses guides of its own region id.
+typedef struct PelageRegionMap {
+  // Storage kind: a PelageRegionKind value.
+  uint32_t kind;
+  // Ids; borrowed for the call.
+  const void *data;
+  // Texture width in texels.
+  size_t width;
+  // Texture height in texels.
+  size_t height;
+  // Bytes per texture row, or between per-vertex ids.
+  size_t stride;
+} PelageRegionMap;
+
 // Binding parameters; start from pelage_bind_params_defaults().
 typedef struct PelageBindParams {
   // Fewest guides per strand when that many qualify (>= 1); strands with
@@ -97,10 +124,8 @@ typedef struct PelageBindParams {
   // Excludes guides around a rim: either root below the other's tangent
   // plane by more than this times their distance.
   float max_wrap_slope;
-  // Optional uint32 parting region per mesh vertex, or NULL.
-  const uint32_t *regions;
-  // Bytes between region values (>= 4).
-  size_t region_stride;
+  // Parting regions (per-vertex ids or an id texture); kind NONE by default.
+  struct PelageRegionMap regions;
 } PelageBindParams;
 
 // A triangle mesh in host memory, borrowed for one call (like an Embree

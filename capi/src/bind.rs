@@ -1,8 +1,8 @@
 //! Binding strands to guides.
 
-use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut, strided};
+use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
-use crate::{PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus};
+use crate::{PelageGuidesDesc, PelageMeshDesc, PelageRegionMap, PelageRoot, PelageStatus};
 use bytemuck::{Pod, Zeroable};
 use pelage_core::bind::{self, BindParams, StrandBinding, MAX_NEIGHBOURS};
 use pelage_core::{Arena, Root};
@@ -30,10 +30,8 @@ pub struct PelageBindParams {
     /// Excludes guides around a rim: either root below the other's tangent
     /// plane by more than this times their distance.
     pub max_wrap_slope: f32,
-    /// Optional uint32 parting region per mesh vertex, or NULL.
-    pub regions: *const u32,
-    /// Bytes between region values (>= 4).
-    pub region_stride: usize,
+    /// Parting regions (per-vertex ids or an id texture); kind NONE by default.
+    pub regions: PelageRegionMap,
 }
 
 /// Guides and weights of one strand (the flat, Pod binding record; store it
@@ -81,8 +79,7 @@ pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
         min_normal_dot: d.min_normal_dot,
         search_factor: d.search_factor,
         max_wrap_slope: d.max_wrap_slope,
-        regions: std::ptr::null(),
-        region_stride: 4,
+        regions: PelageRegionMap::none(),
     }
 }
 
@@ -124,11 +121,7 @@ pub extern "C" fn pelage_bind(
         let guides = req(rest_guides, "rest_guides")?.view()?;
         let strands: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
         let p = req(params, "params")?;
-        let regions = if p.regions.is_null() {
-            None
-        } else {
-            Some(strided(p.regions.cast(), p.region_stride, mesh.positions.len(), "regions")?)
-        };
+        let regions = p.regions.view(mesh.positions.len())?;
         let core = BindParams {
             min_neighbours: p.min_neighbours,
             max_neighbours: p.max_neighbours,

@@ -14,6 +14,7 @@ mod groom;
 mod guides;
 mod map;
 mod mesh;
+mod region;
 mod roots;
 mod stamp;
 
@@ -31,6 +32,7 @@ pub use groom::{
 pub use guides::PelageGuidesDesc;
 pub use map::{PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
+pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use stamp::{
     pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageStampInfo,

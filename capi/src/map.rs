@@ -42,6 +42,40 @@ pub struct PelageMap {
     pub stride: usize,
 }
 
+/// The bytes of a `width` x `height` texture of `size`-byte texels with rows
+/// `stride` bytes apart.
+pub(crate) fn texture_bytes<'a>(
+    data: *const c_void,
+    width: usize,
+    height: usize,
+    stride: usize,
+    size: usize,
+    name: &str,
+) -> Result<&'a [u8], Failure> {
+    if width == 0 || height == 0 {
+        return Err(Failure::new(
+            PelageStatus::InvalidArgument,
+            format!("{name}: texture has zero size"),
+        ));
+    }
+    let len = stride
+        .checked_mul(height - 1)
+        .and_then(|b| b.checked_add(width.checked_mul(size)?))
+        .ok_or_else(|| {
+            Failure::new(
+                PelageStatus::InvalidArgument,
+                format!("{name}: size overflows"),
+            )
+        })?;
+    if stride < width * size {
+        return Err(Failure::new(
+            PelageStatus::InvalidArgument,
+            format!("{name}: row stride too small"),
+        ));
+    }
+    bytes(data, len, name)
+}
+
 impl PelageMap {
     /// A constant map.
     pub(crate) fn constant(value: f32) -> Self {
@@ -70,31 +104,8 @@ impl PelageMap {
         vertex_count: usize,
         name: &'static str,
     ) -> Result<ScalarMap<'_>, Failure> {
-        let texels = |size: usize| -> Result<&[u8], Failure> {
-            if self.width == 0 || self.height == 0 {
-                return Err(Failure::new(
-                    PelageStatus::InvalidArgument,
-                    format!("{name}: texture has zero size"),
-                ));
-            }
-            let len = self
-                .stride
-                .checked_mul(self.height - 1)
-                .and_then(|b| b.checked_add(self.width.checked_mul(size)?))
-                .ok_or_else(|| {
-                    Failure::new(
-                        PelageStatus::InvalidArgument,
-                        format!("{name}: size overflows"),
-                    )
-                })?;
-            if self.stride < self.width * size {
-                return Err(Failure::new(
-                    PelageStatus::InvalidArgument,
-                    format!("{name}: row stride too small"),
-                ));
-            }
-            bytes(self.data, len, name)
-        };
+        let texels =
+            |size| texture_bytes(self.data, self.width, self.height, self.stride, size, name);
         const CONSTANT: u32 = PelageMapKind::Constant as u32;
         const TEXTURE_U8: u32 = PelageMapKind::TextureU8 as u32;
         const TEXTURE_F32: u32 = PelageMapKind::TextureF32 as u32;

@@ -13,7 +13,7 @@ use crate::arena::{Arena, ArenaLayout};
 use crate::grid::HashGrid;
 use crate::guides::Guides;
 use crate::rng::{self, Purpose};
-use crate::{Error, Mesh, Root, Strided};
+use crate::{Error, Mesh, RegionMap, Root};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -50,9 +50,9 @@ pub struct BindParams<'a> {
     /// between them wraps around a rim (an ear's edge, a fingertip), so the
     /// guide grows on the far side even though its normal is not reversed.
     pub max_wrap_slope: f32,
-    /// Optional parting region per mesh vertex; a strand only uses guides of
-    /// its region (the region of the root's nearest corner).
-    pub regions: Option<Strided<'a, u32>>,
+    /// Optional parting regions (per vertex or an id texture); a strand
+    /// only uses guides of its own region.
+    pub regions: Option<RegionMap<'a>>,
 }
 
 impl Default for BindParams<'_> {
@@ -126,28 +126,14 @@ fn check(params: &BindParams, mesh: &Mesh) -> Result<(), Error> {
     if params.max_wrap_slope.is_nan() || params.max_wrap_slope <= 0.0 {
         return Err(Error::InvalidArgument("max_wrap_slope must be positive"));
     }
-    if let Some(r) = params.regions {
-        if r.len() != mesh.positions.len() {
-            return Err(Error::InvalidArgument(
-                "region map size differs from vertex count",
-            ));
-        }
+    match params.regions {
+        Some(map) => map.validate(mesh),
+        None => Ok(()),
     }
-    Ok(())
 }
 
-fn region_of(mesh: &Mesh, regions: Option<Strided<u32>>, r: &Root) -> u32 {
-    let Some(map) = regions else { return 0 };
-    let tri = mesh.triangles.get(r.face as usize);
-    let w = [1.0 - r.u - r.v, r.u, r.v];
-    let corner = if w[0] >= w[1] && w[0] >= w[2] {
-        0
-    } else if w[1] >= w[2] {
-        1
-    } else {
-        2
-    };
-    map.get(tri[corner] as usize)
+fn region_of(mesh: &Mesh, regions: Option<RegionMap>, r: &Root) -> u32 {
+    regions.map_or(0, |map| map.region(mesh, r))
 }
 
 /// Up to N nearest (distance^2, guide) pairs, sorted.
@@ -402,6 +388,7 @@ mod tests {
     use super::*;
     use crate::guides::CvLayout;
     use crate::testmesh::{graded_plane, roots, straight_guides, TestMesh};
+    use crate::Strided;
 
     /// Two parallel squares 0.01 apart facing away from each other: the two
     /// sides of an ear.
@@ -480,7 +467,7 @@ mod tests {
         let pts = straight_guides(&mesh, &g, 4, 0.05);
         let strands = roots(mesh, 3000, 2);
         let params = BindParams {
-            regions: Some(Strided::from_slice(&regions)),
+            regions: Some(RegionMap::PerVertex(Strided::from_slice(&regions))),
             ..BindParams::default()
         };
         let (b, report) = run(&m, &g, &pts, &strands, &params).unwrap();
@@ -493,6 +480,23 @@ mod tests {
         assert!(report.orphans as usize >= right);
         for (s, bind) in strands.iter().zip(&b) {
             if region_of(&mesh, params.regions, s) == 1 {
+                assert_eq!((bind.count, bind.clump), (0, NO_GUIDE));
+            }
+        }
+        // the same parting painted as an id texture (uv = xy on this plane)
+        let texels = [0u8, 1];
+        let painted = BindParams {
+            regions: Some(RegionMap::Texture(crate::map::Texture {
+                texels: crate::map::Texels::U8(&texels),
+                width: 2,
+                height: 1,
+                row_stride: 2,
+            })),
+            ..BindParams::default()
+        };
+        let (b, _) = run(&m, &g, &pts, &strands, &painted).unwrap();
+        for (s, bind) in strands.iter().zip(&b) {
+            if mesh.point(s.face as usize, s.u, s.v).x > 0.5 {
                 assert_eq!((bind.count, bind.clump), (0, NO_GUIDE));
             }
         }

@@ -55,6 +55,17 @@ impl Texture<'_> {
         }
     }
 
+    /// The raw byte of the texel `uv` falls in, unfiltered (for id maps);
+    /// 0 for float texels.
+    pub fn nearest_byte(&self, u: f32, v: f32) -> u8 {
+        let x = (u * self.width as f32).clamp(0.0, (self.width - 1) as f32) as usize;
+        let y = (v * self.height as f32).clamp(0.0, (self.height - 1) as f32) as usize;
+        match self.texels {
+            Texels::U8(b) => b[y * self.row_stride + x],
+            Texels::F32(_) => 0,
+        }
+    }
+
     /// Bilinear lookup at `uv`.
     pub fn sample(&self, u: f32, v: f32) -> f32 {
         let fx = (u * self.width as f32 - 0.5).clamp(0.0, (self.width - 1) as f32);

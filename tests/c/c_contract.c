@@ -889,7 +889,7 @@ static void test_interp_defaults(void) {
   const PelageBindParams b = pelage_bind_params_defaults();
   CHECK(b.min_neighbours == 3 && b.max_neighbours == 6 && b.seed == 0);
   CHECK(b.min_normal_dot == 0.25f && b.search_factor == 2.5f && b.max_wrap_slope == 0.3f);
-  CHECK(b.regions == NULL && b.region_stride >= 4);
+  CHECK(b.regions.kind == PELAGE_REGION_KIND_NONE && b.regions.data == NULL);
   const PelageGroomMaps m = pelage_groom_maps_defaults();
   const PelageMap *all[7] = {&m.length, &m.root_width, &m.tip_width, &m.bend, &m.kink_amplitude, &m.kink_frequency,
                              &m.clump};
@@ -1359,15 +1359,31 @@ static void test_interp_bad_input(void) {
   {
     uint32_t *regions = calloc(g_sphere.nv, sizeof *regions);
     REQUIRE(regions);
-    bp = g_in.bind_params, bp.regions = restride(regions, 4, g_sphere.nv, 6, 0), bp.region_stride = 6;
+    const PelageRegionMap per_vertex = {PELAGE_REGION_KIND_PER_VERTEX, regions, 0, 0, 4};
+    bp = g_in.bind_params, bp.regions = per_vertex;
+    bp.regions.data = restride(regions, 4, g_sphere.nv, 6, 0), bp.regions.stride = 6;
     BAD_BIND_PARAMS(PELAGE_STATUS_MISALIGNED);
-    bp = g_in.bind_params, bp.regions = regions, bp.region_stride = 0;
+    bp = g_in.bind_params, bp.regions = per_vertex, bp.regions.stride = 0;
     BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
-    bp = g_in.bind_params, bp.regions = regions, bp.region_stride = 4; /* one region: the same binding */
-    fill_outputs();
-    EXPECT(PELAGE_STATUS_OK, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
-                                  g_in.bind_arena_bytes, g_in.bind_out, n));
-    CHECK(memcmp(g_in.bind_out, g_in.bindings, n * sizeof *g_in.bind_out) == 0);
+    bp = g_in.bind_params, bp.regions = per_vertex, bp.regions.kind = 7;
+    BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+    bp = g_in.bind_params, bp.regions = per_vertex, bp.regions.data = NULL;
+    BAD_BIND_PARAMS(PELAGE_STATUS_NULL_PARAMETER);
+    const unsigned char ids[6] = {0};
+    const PelageRegionMap painted = {PELAGE_REGION_KIND_TEXTURE_U8, ids, 3, 2, 3};
+    bp = g_in.bind_params, bp.regions = painted, bp.regions.width = 0;
+    BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+    bp = g_in.bind_params, bp.regions = painted, bp.regions.stride = 2;
+    BAD_BIND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+    /* one region, per vertex or painted: the same binding as none */
+    const PelageRegionMap one_region[2] = {per_vertex, painted};
+    for (int k = 0; k < 2; ++k) {
+      bp = g_in.bind_params, bp.regions = one_region[k];
+      fill_outputs();
+      EXPECT(PELAGE_STATUS_OK, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
+                                    g_in.bind_arena_bytes, g_in.bind_out, n));
+      CHECK(memcmp(g_in.bind_out, g_in.bindings, n * sizeof *g_in.bind_out) == 0);
+    }
     free(regions);
   }
 
