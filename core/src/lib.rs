@@ -11,6 +11,7 @@
 
 pub mod arena;
 pub mod bind;
+pub mod body;
 pub mod error;
 pub mod expand;
 pub mod frame;
