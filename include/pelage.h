@@ -253,6 +253,9 @@ typedef struct PelageStrandGroom {
   float kink_phase;
   // Clump pull.
   float clump;
+  // Rotation about the root toward the normal (radians), 0 from the maps;
+  // pelage_settle sets it where a strand would enter the body.
+  float lift;
 } PelageStrandGroom;
 
 // A scalar value over the mesh surface: a constant, a texture, or per-vertex values.

@@ -49,6 +49,9 @@ pub struct PelageStrandGroom {
     pub kink_phase: f32,
     /// Clump pull.
     pub clump: f32,
+    /// Rotation about the root toward the normal (radians), 0 from the maps;
+    /// pelage_settle sets it where a strand would enter the body.
+    pub lift: f32,
 }
 
 const _: () =

@@ -195,6 +195,37 @@ pub fn check_inputs(
     stride: usize,
 ) -> Result<(), Error> {
     params.check()?;
+    if stride < 16 {
+        return Err(Error::BadStride {
+            what: "curve points",
+        });
+    }
+    let needed = strands
+        .len()
+        .checked_mul(params.output_points())
+        .and_then(|total| total.checked_sub(1))
+        .map_or(Some(0), |last| {
+            last.checked_mul(stride).and_then(|b| b.checked_add(16))
+        })
+        .ok_or(Error::InvalidArgument("curve output size overflows"))?;
+    if out_len < needed {
+        return Err(Error::OutputTooSmall {
+            needed,
+            available: out_len,
+        });
+    }
+    check_strands(mesh, strands, guides, params)
+}
+
+/// Validates the strands, their bindings and grooms against `mesh` and
+/// `guides` (what [`check_inputs`] checks besides the output buffer).
+pub fn check_strands(
+    mesh: &Mesh,
+    strands: &Strands,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+) -> Result<(), Error> {
+    params.check()?;
     if params.points_per_strand != guides.points {
         return Err(Error::InvalidArgument(
             "guides were prepared for another point count",
@@ -209,25 +240,6 @@ pub fn check_inputs(
         return Err(Error::InvalidArgument(
             "bindings and grooms must cover every strand",
         ));
-    }
-    if stride < 16 {
-        return Err(Error::BadStride {
-            what: "curve points",
-        });
-    }
-    let needed = roots
-        .len()
-        .checked_mul(params.output_points())
-        .and_then(|total| total.checked_sub(1))
-        .map_or(Some(0), |last| {
-            last.checked_mul(stride).and_then(|b| b.checked_add(16))
-        })
-        .ok_or(Error::InvalidArgument("curve output size overflows"))?;
-    if out_len < needed {
-        return Err(Error::OutputTooSmall {
-            needed,
-            available: out_len,
-        });
     }
     mesh.validate()?;
     crate::root::check_roots(mesh, roots, "strand roots")?;
@@ -260,16 +272,16 @@ pub fn check_inputs(
         }
     }
     for (i, g) in grooms[..roots.len()].iter().enumerate() {
-        let values = bytemuck::cast_ref::<StrandGroom, [f32; 8]>(g);
+        let values = bytemuck::cast_ref::<StrandGroom, [f32; 9]>(g);
         if !values.iter().all(|v| v.is_finite()) {
             return Err(Error::NonFinite {
                 what: "grooms",
                 index: i,
             });
         }
-        if g.root_radius < 0.0 || g.tip_radius < 0.0 || g.length < 0.0 {
+        if g.root_radius < 0.0 || g.tip_radius < 0.0 || g.length < 0.0 || g.lift < 0.0 {
             return Err(Error::InvalidArgument(
-                "a groom has a negative radius or length",
+                "a groom has a negative radius, length or lift",
             ));
         }
     }
@@ -364,7 +376,7 @@ pub fn expand_checked(
 
 /// Per-strand working lanes, reused across the strands of one call (zeroing
 /// fresh arrays per strand would cost more than the arithmetic).
-struct Lanes {
+pub(crate) struct Lanes {
     /// Parameter of each point along the strand, j / (n - 1).
     t: [f32; MAX_STRAND_POINTS],
     local: [[f32; MAX_STRAND_POINTS]; 3],
@@ -373,7 +385,7 @@ struct Lanes {
 }
 
 impl Lanes {
-    fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         let mut t = [0.0f32; MAX_STRAND_POINTS];
         let step = 1.0 / (n - 1) as f32;
         for (j, tj) in t[..n].iter_mut().enumerate() {
@@ -388,7 +400,8 @@ impl Lanes {
     }
 }
 
-fn strand(
+/// Writes the `points_per_strand` points of one strand into `out`.
+pub(crate) fn strand(
     frame: &Frame,
     bind: &StrandBinding,
     groom: &StrandGroom,
@@ -428,12 +441,19 @@ fn strand(
     let scale = groom.length;
     let length = Vec3::new(ax[n - 1], ay[n - 1], az[n - 1]).length() * scale;
     let bend = groom.bend * length;
+    for j in 0..n {
+        ax[j] = ax[j] * scale + bend * t[j] * t[j];
+        ay[j] *= scale;
+        az[j] *= scale;
+    }
+    if groom.lift > 0.0 {
+        lift(groom.lift, ax, ay, az);
+    }
     let (o, tt, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
     let [px, py, pz] = &mut lanes.world;
     let (px, py, pz) = (&mut px[..n], &mut py[..n], &mut pz[..n]);
     for j in 0..n {
-        let lx = ax[j] * scale + bend * t[j] * t[j];
-        let (ly, lz) = (ay[j] * scale, az[j] * scale);
+        let (lx, ly, lz) = (ax[j], ay[j], az[j]);
         px[j] = o.x + tt.x * lx + b.x * ly + nn.x * lz;
         py[j] = o.y + tt.y * lx + b.y * ly + nn.y * lz;
         pz[j] = o.z + tt.z * lx + b.z * ly + nn.z * lz;
@@ -467,6 +487,29 @@ fn strand(
     let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
     for (j, p) in out[..n].iter_mut().enumerate() {
         *p = [px[j], py[j], pz[j], r0 + dr * t[j]];
+    }
+}
+
+/// Rotates local points about the root toward the normal (z) by `angle`, in
+/// the vertical plane of the tip, stopping at the normal: the paper's
+/// collision push-out by rotation about the root, fixed per strand at rest.
+fn lift(angle: f32, x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
+    let last = x.len() - 1;
+    let (tx, ty, tz) = (x[last], y[last], z[last]);
+    let h = libm::sqrtf(tx * tx + ty * ty);
+    if h == 0.0 {
+        return;
+    }
+    let angle = angle.min(libm::atan2f(h, tz));
+    let (s, c) = libm::sincosf(angle);
+    let (ux, uy) = (tx / h, ty / h);
+    for j in 0..x.len() {
+        let along = x[j] * ux + y[j] * uy;
+        let (side_x, side_y) = (x[j] - along * ux, y[j] - along * uy);
+        let (r, up) = (along * c - z[j] * s, along * s + z[j] * c);
+        x[j] = side_x + r * ux;
+        y[j] = side_y + r * uy;
+        z[j] = up;
     }
 }
 

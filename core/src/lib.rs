@@ -23,6 +23,7 @@ pub mod mesh;
 pub mod region;
 pub mod rng;
 pub mod root;
+pub mod settle;
 pub mod stamp;
 pub mod strided;
 #[cfg(test)]

@@ -1,0 +1,357 @@
+//! Settling strands out of the body at rest (once per groom).
+//!
+//! Interpolated strands can enter the body even when every guide stays
+//! outside: a strand's own root frame turns its guides' shapes, and on a thin
+//! part (between fingers, along an ear) the turned shape reaches the next
+//! surface. Settling expands each strand at the rest pose, and where a point
+//! lies inside the [`Body`], pushes the strand out by rotating it about its
+//! root toward the normal (the paper's collision response), in steps, storing
+//! the angle as the groom's `lift`. Since `lift` is applied in the strand's
+//! own frame, the fix follows the body at every frame at no cost to strands
+//! that need none. Strands that a full lift does not free lose their clump
+//! pull, then length; any left inside are counted, never hidden.
+
+use crate::body::Body;
+use crate::expand::{check_strands, strand, ExpandParams, Lanes, PreparedGuides, Strands};
+use crate::frame::Frame;
+use crate::groom::StrandGroom;
+use crate::{Error, Mesh};
+use core::f32::consts::FRAC_PI_2;
+use glam::Vec3;
+
+/// Lift angles tried between none and the normal.
+const LIFT_STEPS: u32 = 16;
+/// Times a strand that a full lift leaves inside is shortened.
+const SHORTEN_STEPS: u32 = 6;
+/// Length kept at each shortening.
+const SHORTEN: f32 = 0.7;
+
+/// What settling changed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SettleReport {
+    /// Strands rotated toward their normal.
+    pub lifted: u32,
+    /// Strands a lift alone did not free (their clump pull was dropped).
+    pub unclumped: u32,
+    /// Strands that also had to be shortened.
+    pub shortened: u32,
+    /// Strands still partly inside after every step (left fully lifted,
+    /// unclumped and at the shortest length tried).
+    pub unresolved: u32,
+}
+
+impl SettleReport {
+    /// Adds the counts of another range.
+    pub fn merge(&mut self, other: SettleReport) {
+        self.lifted += other.lifted;
+        self.unclumped += other.unclumped;
+        self.shortened += other.shortened;
+        self.unresolved += other.unresolved;
+    }
+}
+
+/// Settles `strands` (grooms updated in place) on the rest `mesh` with its
+/// `body` and the rest `guides`. Validates first: nothing changes on error.
+/// Pure per strand, so disjoint ranges may run on different threads.
+pub fn settle(
+    mesh: &Mesh,
+    body: &Body,
+    strands: &Strands,
+    grooms: &mut [StrandGroom],
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+) -> Result<SettleReport, Error> {
+    let view = Strands {
+        grooms: &*grooms,
+        ..*strands
+    };
+    check_strands(mesh, &view, guides, params)?;
+    Ok(settle_checked(mesh, body, strands, grooms, guides, params))
+}
+
+/// [`settle`] for inputs already checked with
+/// [`check_strands`](crate::expand::check_strands); the grooms of `strands`
+/// are ignored in favour of `grooms`, which must be as long as the roots.
+pub fn settle_checked(
+    mesh: &Mesh,
+    body: &Body,
+    strands: &Strands,
+    grooms: &mut [StrandGroom],
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+) -> SettleReport {
+    let n = params.points_per_strand;
+    let mut lanes = Lanes::new(n);
+    let mut points = [[0.0f32; 4]; crate::expand::MAX_STRAND_POINTS];
+    let mut report = SettleReport::default();
+    for ((root, bind), groom) in strands.roots.iter().zip(strands.bindings).zip(grooms) {
+        let frame = Frame::at(mesh, root.face as usize, root.u, root.v);
+        // the root itself lies on the surface; every later point must be outside
+        let mut clear = |g: &StrandGroom| {
+            strand(
+                &frame,
+                bind,
+                g,
+                guides,
+                params,
+                &mut lanes,
+                &mut points[..n],
+            );
+            points[1..n]
+                .iter()
+                .all(|p| !body.contains(Vec3::new(p[0], p[1], p[2])))
+        };
+        let (settled, outcome) = settle_one(*groom, &mut clear);
+        *groom = settled;
+        let at_least = |o: Outcome| (outcome >= o) as u32;
+        report.lifted += at_least(Outcome::Lifted);
+        report.unclumped += at_least(Outcome::Unclumped);
+        report.shortened += at_least(Outcome::Shortened);
+        report.unresolved += at_least(Outcome::Unresolved);
+    }
+    report
+}
+
+/// How far settling had to go for one strand, in order.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Outcome {
+    Clear,
+    Lifted,
+    Unclumped,
+    Shortened,
+    Unresolved,
+}
+
+/// The first groom, in the order lift, lift without clump, shorten, that
+/// `clear` accepts, and how far it took.
+fn settle_one(
+    groom: StrandGroom,
+    clear: &mut impl FnMut(&StrandGroom) -> bool,
+) -> (StrandGroom, Outcome) {
+    if clear(&groom) {
+        return (groom, Outcome::Clear);
+    }
+    let step = FRAC_PI_2 / LIFT_STEPS as f32;
+    let with = |k: u32, clump: f32| StrandGroom {
+        lift: groom.lift + k as f32 * step,
+        clump,
+        ..groom
+    };
+    let passes = [
+        (groom.clump, 1, Outcome::Lifted),
+        (0.0, 0, Outcome::Unclumped),
+    ];
+    let tries = if groom.clump == 0.0 { 1 } else { 2 };
+    for &(clump, first, outcome) in &passes[..tries] {
+        for k in first..=LIFT_STEPS {
+            if clear(&with(k, clump)) {
+                // one step more where that stays clear, for a margin
+                let more = with(k + 1, clump);
+                let chosen = if clear(&more) { more } else { with(k, clump) };
+                return (chosen, outcome);
+            }
+        }
+    }
+    let mut trial = with(LIFT_STEPS, 0.0);
+    for _ in 0..SHORTEN_STEPS {
+        trial.length *= SHORTEN;
+        if clear(&trial) {
+            return (trial, Outcome::Shortened);
+        }
+    }
+    (trial, Outcome::Unresolved)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::arena::{Arena, ArenaLayout};
+    use crate::bind::{bind, BindParams, StrandBinding};
+    use crate::expand::{expand, EndPoints};
+    use crate::guides::{CvLayout, Guides};
+    use crate::rng::{self, Purpose};
+    use crate::testmesh::{roots, sphere};
+    use crate::{Root, Strided};
+
+    const CVS: usize = 8;
+
+    /// Guides combed flat over a unit sphere in random directions, 1% above
+    /// it: each guide is outside, but the average of two combed apart dips
+    /// below its strand's root.
+    fn hugging_guides(mesh: &Mesh, guides: &[Root]) -> Vec<[f32; 3]> {
+        let mut out = vec![];
+        for (g, r) in guides.iter().enumerate() {
+            let p = mesh.point(r.face as usize, r.u, r.v).normalize();
+            let a = rng::unit(3, g as u64, Purpose::Uniform, 0) * core::f32::consts::TAU;
+            let t = p.any_orthonormal_vector();
+            let d = t * libm::cosf(a) + p.cross(t) * libm::sinf(a);
+            for j in 0..CVS {
+                let s = 0.6 * j as f32 / (CVS - 1) as f32;
+                out.push(((p * libm::cosf(s) + d * libm::sinf(s)) * 1.01).into());
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn settled_strands_stay_outside_and_expand_honours_the_lift() {
+        let m = sphere(24, 48);
+        let mesh = m.mesh();
+        let guide_roots = roots(mesh, 150, 1);
+        let guide_points = hugging_guides(&mesh, &guide_roots);
+        assert!(guide_points.iter().all(|p| Vec3::from(*p).length() > 1.0));
+        let guides = Guides {
+            roots: &guide_roots,
+            points: Strided::from_slice(&guide_points),
+            layout: CvLayout::Fixed(CVS),
+        };
+        let strands = roots(mesh, 3000, 2);
+        let mut bindings = vec![StrandBinding::default(); strands.len()];
+        let mut buf = vec![0u8; crate::bind::required_bytes(guide_roots.len())];
+        let params = BindParams::default();
+        bind(
+            &mesh,
+            &guides,
+            &strands,
+            &params,
+            &mut Arena::new(&mut buf),
+            &mut bindings,
+        )
+        .unwrap();
+        let original = vec![
+            StrandGroom {
+                length: 1.0,
+                clump: 0.3,
+                root_radius: 0.001,
+                ..StrandGroom::default()
+            };
+            strands.len()
+        ];
+        let expand_params = ExpandParams {
+            points_per_strand: CVS,
+            end_points: EndPoints::Pinned,
+            orphan_length: 0.1,
+        };
+        let mut layout = ArenaLayout::new();
+        PreparedGuides::layout(&mut layout, guide_roots.len(), CVS);
+        let mut body_buf = vec![0u8; Body::required_bytes(&mesh).unwrap()];
+        let body = Body::new(&mesh, &mut Arena::new(&mut body_buf)).unwrap();
+        let mut guide_buf = vec![0u8; layout.bytes()];
+        let prepared =
+            PreparedGuides::new(&mesh, &guides, CVS, &mut Arena::new(&mut guide_buf)).unwrap();
+        let per = expand_params.output_points();
+        let curves = |grooms: &[StrandGroom]| {
+            let mut out = vec![[0.0f32; 4]; strands.len() * per];
+            let all = Strands {
+                roots: &strands,
+                bindings: &bindings,
+                grooms,
+            };
+            expand(
+                &mesh,
+                &all,
+                &prepared,
+                &expand_params,
+                bytemuck::cast_slice_mut(&mut out),
+                16,
+            )
+            .unwrap();
+            out
+        };
+        // points strictly inside the inscribed sphere of the polyhedron
+        let deep = |out: &[[f32; 4]]| {
+            out.chunks(per)
+                .filter(|c| {
+                    c[2..]
+                        .iter()
+                        .any(|p| Vec3::new(p[0], p[1], p[2]).length() < 0.99)
+                })
+                .count()
+        };
+        let before = deep(&curves(&original));
+        assert!(
+            before > 100,
+            "the scene must produce strands inside ({before})"
+        );
+
+        let mut settled = original.clone();
+        let all = Strands {
+            roots: &strands,
+            bindings: &bindings,
+            grooms: &original,
+        };
+        let report = settle(&mesh, &body, &all, &mut settled, &prepared, &expand_params).unwrap();
+        let out = curves(&settled);
+        assert_eq!(deep(&out), 0, "{report:?}");
+        assert_eq!(report.unresolved, 0);
+        let inside = out
+            .chunks(per)
+            .filter(|c| {
+                c[2..]
+                    .iter()
+                    .any(|p| body.contains(Vec3::new(p[0], p[1], p[2])))
+            })
+            .count();
+        assert_eq!(inside, 0);
+        let changed = original
+            .iter()
+            .zip(&settled)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(changed as u32, report.lifted);
+        assert!(report.lifted as usize >= before);
+        assert!(settled.iter().all(|g| g.lift >= 0.0 && g.lift <= 1.7));
+
+        // settling again changes nothing, and ranges settle independently
+        let mut again = settled.clone();
+        let all = Strands {
+            grooms: &settled,
+            ..all
+        };
+        let report = settle(&mesh, &body, &all, &mut again, &prepared, &expand_params).unwrap();
+        assert_eq!((report, &again), (SettleReport::default(), &settled));
+        let mut halves = original.clone();
+        let all = Strands {
+            grooms: &original,
+            ..all
+        };
+        let mid = strands.len() / 3;
+        let (a, b) = halves.split_at_mut(mid);
+        settle(
+            &mesh,
+            &body,
+            &all.range(0..mid),
+            a,
+            &prepared,
+            &expand_params,
+        )
+        .unwrap();
+        settle(
+            &mesh,
+            &body,
+            &all.range(mid..strands.len()),
+            b,
+            &prepared,
+            &expand_params,
+        )
+        .unwrap();
+        assert_eq!(halves, settled);
+
+        // bad grooms are refused before anything changes
+        let mut bad = original.clone();
+        bad[7].lift = f32::NAN;
+        let snapshot = bad.clone();
+        let all = Strands {
+            grooms: &snapshot,
+            ..all
+        };
+        assert!(matches!(
+            settle(&mesh, &body, &all, &mut bad, &prepared, &expand_params),
+            Err(Error::NonFinite {
+                what: "grooms",
+                index: 7
+            })
+        ));
+        assert_eq!(bad[..7], original[..7]);
+    }
+}
