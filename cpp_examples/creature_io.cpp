@@ -306,6 +306,22 @@ std::vector<PelageStrandGroom> groom(const Mesh& mesh, const PelageGroomMaps& ma
   return grooms;
 }
 
+PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, const PelageRoot* strands,
+                        const PelageStrandBinding* bindings, PelageStrandGroom* grooms, size_t count,
+                        const PelageExpandParams& params) {
+  const PelageMeshDesc desc = rest.desc();
+  PelageExpandParams all_cores = params;
+  all_cores.thread_count = 0;
+  size_t bytes = 0;
+  check(pelage_settle_query(&desc, rest_guides.guide_count, &all_cores, &bytes), "pelage_settle_query");
+  std::vector<unsigned char> arena(bytes);
+  PelageSettleInfo info{};
+  check(pelage_settle(&desc, &rest_guides, strands, bindings, grooms, count, &all_cores, arena.data(), arena.size(),
+                      &info),
+        "pelage_settle");
+  return info;
+}
+
 Expander::Expander(size_t guide_count, const PelageExpandParams& params) : params_(params) {
   size_t arena_bytes = 0;
   check(pelage_expand_query(guide_count, &params_, &arena_bytes, &per_curve_), "pelage_expand_query");

@@ -143,6 +143,12 @@ std::vector<PelageStrandBinding> bind(const Mesh& mesh, const PelageGuidesDesc& 
 std::vector<PelageStrandGroom> groom(const Mesh& mesh, const PelageGroomMaps& maps, const PelageRoot* roots,
                                      size_t count);
 
+// Settles `count` groomed strands out of the body at the rest pose
+// (pelage_settle, all cores): `grooms` updated in place. Throws.
+PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, const PelageRoot* strands,
+                        const PelageStrandBinding* bindings, PelageStrandGroom* grooms, size_t count,
+                        const PelageExpandParams& params);
+
 // pelage_expand with an arena sized once (per groom) and reused every frame.
 class Expander {
  public:

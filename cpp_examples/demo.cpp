@@ -3,7 +3,7 @@
 // Loads the creature mesh and its density map, stamps ~13,000 guide roots and
 // ~1,000,000 render roots (Poisson, density-mapped), combs 16-point guides,
 // binds the render hairs to the guides, samples the groom (kink, clump, bend,
-// widths), and expands every hair with pelage_expand straight into the float4
+// widths), settles the hairs out of the body, and expands every hair with pelage_expand straight into the float4
 // vertex buffer Embree shares (round Catmull-Rom curves, pinned ends). Shadow
 // rays see only the hairs with LOD rank < N/2 (half the hairs, as the paper's
 // shadow pass): a second curve geometry that shares the same vertex buffer
@@ -210,16 +210,24 @@ int main(int argc, char** argv) try {
   maps.clump.constant = 0.25f;
   maps.bend.constant = 0.1f;
   maps.seed = 7;
-  const std::vector<PelageStrandGroom> grooms = creature::groom(mesh, maps, roots.data(), n);
+  std::vector<PelageStrandGroom> grooms = creature::groom(mesh, maps, roots.data(), n);
   rows.push_back({"groom", clock.seconds(), "kink 0.03 x 3, clump 0.25, bend 0.1, width 0.0016 -> 0.0003"});
 
-  // 6. Embree geometry sharing our buffers: every hair for the camera; the
-  // segments of the hairs with rank < N/2 (same vertex buffer) for shadows.
+  // 6. Settle (once per groom): hairs that would enter the body at rest (in
+  // the gaps between fingers) are turned out about their root.
   PelageExpandParams ep = pelage_expand_params_defaults();  // 16 points, pinned ends
   ep.points_per_strand = 16;
   ep.end_points = PELAGE_END_POINTS_PINNED;
   ep.orphan_length = bind_info.mean_guide_length;
   ep.thread_count = 0;  // all cores
+  clock = {};
+  const PelageSettleInfo settled = creature::settle(mesh, guides, roots.data(), bindings.data(), grooms.data(), n, ep);
+  std::snprintf(note, sizeof note, "%u hairs lifted out of the body (%u turned, %u shortened, %u unresolved)",
+                settled.lifted, settled.turned, settled.shortened, settled.unresolved);
+  rows.push_back({"settle", clock.seconds(), note});
+
+  // 7. Embree geometry sharing our buffers: every hair for the camera; the
+  // segments of the hairs with rank < N/2 (same vertex buffer) for shadows.
   creature::Expander expander(guide_roots.size(), ep);
   const size_t per = expander.points_per_curve(), segments = per - 3;
   std::vector<float> points(4 * per * n);  // the vertex buffer Embree reads
@@ -240,7 +248,7 @@ int main(int argc, char** argv) try {
   creature::attach_curves(device.device, shadow, points.data(), per * n, shadow_indices.data(), shadow_indices.size());
   device.check("geometry");
 
-  // 7. Expand: a frame's work once guides are posed (here: the rest pose).
+  // 8. Expand: a frame's work once guides are posed (here: the rest pose).
   std::vector<double> frame_s;
   for (int f = 0; f < opt.frames; ++f) {
     clock = {};
@@ -256,7 +264,7 @@ int main(int argc, char** argv) try {
     throw std::runtime_error(std::to_string(bad) + " control points are non-finite or have a negative radius");
   }
 
-  // 8. BVHs: the camera scene and the half-density shadow scene.
+  // 9. BVHs: the camera scene and the half-density shadow scene.
   clock = {};
   rtcCommitScene(scene);
   rtcCommitScene(shadow);
@@ -265,7 +273,7 @@ int main(int argc, char** argv) try {
                 shadow_indices.size() / segments, shadow_indices.size());
   rows.push_back({"BVH", clock.seconds(), note});
 
-  // 9. Render: a pinhole camera, `spp` stratified samples per pixel.
+  // 10. Render: a pinhole camera, `spp` stratified samples per pixel.
   clock = {};
   Renderer r{scene, shadow, mesh, density, mesh_id, rtcGetGeometry(scene, curves_id), unsigned(segments),
              {}, {}, {}, {}, 0.0f};
@@ -298,7 +306,7 @@ int main(int argc, char** argv) try {
   rtcReleaseScene(scene);
   rtcReleaseScene(shadow);
 
-  // 10. Write the image.
+  // 11. Write the image.
   clock = {};
   creature::write_png_rgb(opt.out, size, size, rgb);
   rows.push_back({"write", clock.seconds(), opt.out});

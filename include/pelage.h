@@ -253,9 +253,10 @@ typedef struct PelageStrandGroom {
   float kink_phase;
   // Clump pull.
   float clump;
-  // Rotation about the root toward the normal (radians), 0 from the maps;
-  // pelage_settle sets it where a strand would enter the body.
-  float lift;
+  // Rotation of the strand about its root: a rotation vector in the root
+  // frame's tangent plane (tangent, bitangent; length = angle in radians).
+  // 0 from the maps; pelage_settle sets it where a strand would enter the body.
+  float lift[2];
 } PelageStrandGroom;
 
 // A scalar value over the mesh surface: a constant, a texture, or per-vertex values.
@@ -294,6 +295,21 @@ typedef struct PelageGroomMaps {
   // Seed of the per-strand kink phase.
   uint64_t seed;
 } PelageGroomMaps;
+
+// What pelage_settle changed.
+typedef struct PelageSettleInfo {
+  // Strands rotated toward their root normal (lift set).
+  uint32_t lifted;
+  // Strands a lift alone did not free (their clump pull was dropped).
+  uint32_t unclumped;
+  // Strands that were also turned about another axis, past the normal (a
+  // crease where the root normal grazes the surface).
+  uint32_t turned;
+  // Strands that also had to be shortened.
+  uint32_t shortened;
+  // Strands still partly inside after every step.
+  uint32_t unresolved;
+} PelageSettleInfo;
 
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
@@ -430,6 +446,26 @@ enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const
 //
 // Thread safety: reentrant; concurrent calls may share inputs but not outputs.
 enum PelageStatus pelage_roots_evaluate(const struct PelageMeshDesc *mesh, const struct PelageRoot *roots, size_t root_count, void *positions, size_t position_stride, void *normals, size_t normal_stride);
+
+// Arena bytes pelage_settle needs for `rest_mesh` (validated) and
+// `guide_count` guides at `params->points_per_strand` points.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, const struct PelageExpandParams *params, size_t *arena_bytes);
+
+// Settles strands out of the body at the rest pose, once per groom, after
+// pelage_groom_evaluate: each strand is expanded on the rest mesh from the
+// rest guides, and where a control point after the root lies inside the
+// (closed) mesh, the strand is rotated about its root toward the normal and
+// the angle stored in its groom's `lift`; strands a full lift does not free
+// lose their clump pull, are turned about other axes, then shortened. pelage_expand applies `lift` in the
+// strand's own frame at every frame. `grooms` is updated in place; it is
+// validated with everything else first and left untouched on failure.
+// Work is split over `params->thread_count` threads; the result does not
+// depend on it.
+//
+// Thread safety: reentrant; concurrent calls need distinct arenas and grooms.
+enum PelageStatus pelage_settle(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, struct PelageSettleInfo *info);
 
 // Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
 // seed 0, target_count 0, radius 0 (derived from the count).

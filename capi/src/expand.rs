@@ -2,6 +2,7 @@
 
 use crate::buffers::{bytes_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
+use crate::threads::split_over_threads;
 use crate::{
     PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus, PelageStrandBinding,
     PelageStrandGroom,
@@ -53,7 +54,7 @@ pub extern "C" fn pelage_expand_params_defaults() -> PelageExpandParams {
     }
 }
 
-fn core_params(p: &PelageExpandParams) -> Result<ExpandParams, Failure> {
+pub(crate) fn core_params(p: &PelageExpandParams) -> Result<ExpandParams, Failure> {
     const RAW: u32 = PelageEndPoints::Raw as u32;
     const PINNED: u32 = PelageEndPoints::Pinned as u32;
     let end_points = match p.end_points {
@@ -154,16 +155,8 @@ pub extern "C" fn pelage_expand(
         let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
         let all = Strands { roots: strands, bindings, grooms };
         expand::check_inputs(&mesh, &all, &prepared, &core, out.len(), point_stride)?;
-        // more threads than cores never helps; the cap keeps a huge
-        // "as many as possible" value from spawning one thread per strand
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let threads = match p.thread_count {
-            0 => cores,
-            n => (n as usize).min(cores.max(MAX_THREADS)),
-        };
-        split_over_threads(&all, threads, per * point_stride, out, |part, bytes| {
-            expand::expand_checked(&mesh, &part, &prepared, &core, bytes, point_stride);
-            Ok(())
+        split_over_threads(strand_count, p.thread_count, out, per * point_stride, |range, bytes| {
+            expand::expand_checked(&mesh, &all.range(range), &prepared, &core, bytes, point_stride);
         })?;
         counts.fill(per as u32);
         for (id, s) in ids.iter_mut().zip(strands) {
@@ -171,60 +164,6 @@ pub extern "C" fn pelage_expand(
         }
         Ok(())
     }
-}
-
-/// Most threads `thread_count` may ask for beyond the machine's cores.
-const MAX_THREADS: usize = 64;
-
-/// Runs `work` on `threads` contiguous ranges of `strands`, each with its
-/// own slice of `out` (`bytes_per_strand` each), on scoped threads; one
-/// range runs on the calling thread, so a single thread spawns nothing.
-fn split_over_threads(
-    strands: &Strands,
-    threads: usize,
-    bytes_per_strand: usize,
-    out: &mut [u8],
-    work: impl Fn(Strands, &mut [u8]) -> Result<(), pelage_core::Error> + Sync,
-) -> Result<(), Failure> {
-    let n = strands.len();
-    let threads = threads.clamp(1, n.max(1));
-    if threads == 1 {
-        return Ok(work(*strands, out)?);
-    }
-    std::thread::scope(|scope| {
-        let mut rest = out;
-        let mut handles = vec![];
-        for t in 0..threads {
-            let (a, b) = (t * n / threads, (t + 1) * n / threads);
-            let take = if t + 1 == threads {
-                rest.len()
-            } else {
-                (b - a) * bytes_per_strand
-            };
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
-            rest = tail;
-            let (part, work) = (strands.range(a..b), &work);
-            if t + 1 == threads {
-                work(part, mine)?;
-            } else {
-                match std::thread::Builder::new().spawn_scoped(scope, move || work(part, mine)) {
-                    Ok(h) => handles.push(h),
-                    // the scope still joins the threads already running
-                    Err(e) => {
-                        return Err(Failure::new(
-                            PelageStatus::Panic,
-                            format!("could not start an expansion thread ({e}); the points may be partly written"),
-                        ))
-                    }
-                }
-            }
-        }
-        for h in handles {
-            h.join()
-                .map_err(|_| Failure::new(PelageStatus::Panic, "an expansion thread panicked"))??;
-        }
-        Ok(())
-    })
 }
 
 fn float4_out<'a>(

@@ -49,9 +49,10 @@ pub struct PelageStrandGroom {
     pub kink_phase: f32,
     /// Clump pull.
     pub clump: f32,
-    /// Rotation about the root toward the normal (radians), 0 from the maps;
-    /// pelage_settle sets it where a strand would enter the body.
-    pub lift: f32,
+    /// Rotation of the strand about its root: a rotation vector in the root
+    /// frame's tangent plane (tangent, bitangent; length = angle in radians).
+    /// 0 from the maps; pelage_settle sets it where a strand would enter the body.
+    pub lift: [f32; 2],
 }
 
 const _: () =

@@ -16,7 +16,9 @@ mod map;
 mod mesh;
 mod region;
 mod roots;
+mod settle;
 mod stamp;
+mod threads;
 
 pub use bind::{
     pelage_bind, pelage_bind_params_defaults, pelage_bind_query, PelageBindInfo, PelageBindParams,
@@ -34,6 +36,7 @@ pub use map::{PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
 pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
+pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};
 pub use stamp::{
     pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageStampInfo,
     PelageStampParams,

@@ -11,7 +11,7 @@ use crate::frame::{FaceBasis, Frame};
 use crate::groom::StrandGroom;
 use crate::guides::Guides;
 use crate::{Error, Mesh, Root};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Most control points per strand.
 pub const MAX_STRAND_POINTS: usize = 64;
@@ -272,16 +272,21 @@ pub fn check_strands(
         }
     }
     for (i, g) in grooms[..roots.len()].iter().enumerate() {
-        let values = bytemuck::cast_ref::<StrandGroom, [f32; 9]>(g);
+        let values = bytemuck::cast_ref::<StrandGroom, [f32; 10]>(g);
         if !values.iter().all(|v| v.is_finite()) {
             return Err(Error::NonFinite {
                 what: "grooms",
                 index: i,
             });
         }
-        if g.root_radius < 0.0 || g.tip_radius < 0.0 || g.length < 0.0 || g.lift < 0.0 {
+        if g.root_radius < 0.0 || g.tip_radius < 0.0 || g.length < 0.0 {
             return Err(Error::InvalidArgument(
-                "a groom has a negative radius, length or lift",
+                "a groom has a negative radius or length",
+            ));
+        }
+        if Vec2::from(g.lift).length() > core::f32::consts::PI {
+            return Err(Error::InvalidArgument(
+                "a groom's lift turns by more than pi",
             ));
         }
     }
@@ -446,7 +451,7 @@ pub(crate) fn strand(
         ay[j] *= scale;
         az[j] *= scale;
     }
-    if groom.lift > 0.0 {
+    if groom.lift != [0.0; 2] {
         lift(groom.lift, ax, ay, az);
     }
     let (o, tt, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
@@ -490,26 +495,20 @@ pub(crate) fn strand(
     }
 }
 
-/// Rotates local points about the root toward the normal (z) by `angle`, in
-/// the vertical plane of the tip, stopping at the normal: the paper's
-/// collision push-out by rotation about the root, fixed per strand at rest.
-fn lift(angle: f32, x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
-    let last = x.len() - 1;
-    let (tx, ty, tz) = (x[last], y[last], z[last]);
-    let h = libm::sqrtf(tx * tx + ty * ty);
-    if h == 0.0 {
-        return;
-    }
-    let angle = angle.min(libm::atan2f(h, tz));
+/// Rotates local points about the root by the rotation vector `(w.x, w.y, 0)`
+/// (Rodrigues' formula): the paper's collision push-out by rotation about
+/// the root, fixed per strand at rest in the strand's own frame, so it
+/// follows the body and does not depend on the pose.
+fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
+    let angle = libm::sqrtf(w[0] * w[0] + w[1] * w[1]);
+    let (kx, ky) = (w[0] / angle, w[1] / angle);
     let (s, c) = libm::sincosf(angle);
-    let (ux, uy) = (tx / h, ty / h);
     for j in 0..x.len() {
-        let along = x[j] * ux + y[j] * uy;
-        let (side_x, side_y) = (x[j] - along * ux, y[j] - along * uy);
-        let (r, up) = (along * c - z[j] * s, along * s + z[j] * c);
-        x[j] = side_x + r * ux;
-        y[j] = side_y + r * uy;
-        z[j] = up;
+        let (vx, vy, vz) = (x[j], y[j], z[j]);
+        let along = (kx * vx + ky * vy) * (1.0 - c);
+        x[j] = vx * c + ky * vz * s + kx * along;
+        y[j] = vy * c - kx * vz * s + ky * along;
+        z[j] = vz * c + (kx * vy - ky * vx) * s;
     }
 }
 

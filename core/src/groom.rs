@@ -57,10 +57,11 @@ pub struct StrandGroom {
     pub kink_phase: f32,
     /// Clump pull at the tip.
     pub clump: f32,
-    /// Rotation of the whole strand about its root toward the root normal,
-    /// radians (never past the normal): 0 from the maps, set by
+    /// Rotation of the whole strand about its root, as a rotation vector in
+    /// the root frame's tangent plane (tangent and bitangent components; its
+    /// length is the angle in radians): 0 from the maps, set by
     /// [`settle`](crate::settle) where a strand would enter the body.
-    pub lift: f32,
+    pub lift: [f32; 2],
 }
 
 impl GroomMaps<'_> {
@@ -105,7 +106,7 @@ impl GroomMaps<'_> {
                 kink_phase: rng::unit(seed, r.id as u64, Purpose::KinkPhase, 0)
                     * core::f32::consts::TAU,
                 clump: at(&self.clump).clamp(0.0, 1.0),
-                lift: 0.0,
+                lift: [0.0; 2],
             };
         }
         Ok(())

@@ -11,16 +11,20 @@
 //! that need none. Strands that a full lift does not free lose their clump
 //! pull, then length; any left inside are counted, never hidden.
 
+use crate::bind::StrandBinding;
 use crate::body::Body;
 use crate::expand::{check_strands, strand, ExpandParams, Lanes, PreparedGuides, Strands};
 use crate::frame::Frame;
 use crate::groom::StrandGroom;
-use crate::{Error, Mesh};
+use crate::{Error, Mesh, Root};
 use core::f32::consts::FRAC_PI_2;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
-/// Lift angles tried between none and the normal.
+/// Lift angles tried between none and a right angle.
 const LIFT_STEPS: u32 = 16;
+/// Rotation axes tried around the tangent plane when lifting toward the
+/// normal is not enough.
+const AXES: u32 = 8;
 /// Times a strand that a full lift leaves inside is shortened.
 const SHORTEN_STEPS: u32 = 6;
 /// Length kept at each shortening.
@@ -33,6 +37,8 @@ pub struct SettleReport {
     pub lifted: u32,
     /// Strands a lift alone did not free (their clump pull was dropped).
     pub unclumped: u32,
+    /// Strands that were also turned about another axis, past the normal.
+    pub turned: u32,
     /// Strands that also had to be shortened.
     pub shortened: u32,
     /// Strands still partly inside after every step (left fully lifted,
@@ -45,37 +51,43 @@ impl SettleReport {
     pub fn merge(&mut self, other: SettleReport) {
         self.lifted += other.lifted;
         self.unclumped += other.unclumped;
+        self.turned += other.turned;
         self.shortened += other.shortened;
         self.unresolved += other.unresolved;
     }
 }
 
-/// Settles `strands` (grooms updated in place) on the rest `mesh` with its
-/// `body` and the rest `guides`. Validates first: nothing changes on error.
-/// Pure per strand, so disjoint ranges may run on different threads.
+/// Settles the strands at `roots`, bound by `bindings`, updating `grooms`
+/// (all three parallel) on the rest `mesh` with its `body` and the rest
+/// `guides`. Validates first: nothing changes on error. Pure per strand, so
+/// disjoint ranges may run on different threads.
 pub fn settle(
     mesh: &Mesh,
     body: &Body,
-    strands: &Strands,
+    roots: &[Root],
+    bindings: &[StrandBinding],
     grooms: &mut [StrandGroom],
     guides: &PreparedGuides,
     params: &ExpandParams,
 ) -> Result<SettleReport, Error> {
-    let view = Strands {
+    let strands = Strands {
+        roots,
+        bindings,
         grooms: &*grooms,
-        ..*strands
     };
-    check_strands(mesh, &view, guides, params)?;
-    Ok(settle_checked(mesh, body, strands, grooms, guides, params))
+    check_strands(mesh, &strands, guides, params)?;
+    Ok(settle_checked(
+        mesh, body, roots, bindings, grooms, guides, params,
+    ))
 }
 
 /// [`settle`] for inputs already checked with
-/// [`check_strands`](crate::expand::check_strands); the grooms of `strands`
-/// are ignored in favour of `grooms`, which must be as long as the roots.
+/// [`check_strands`](crate::expand::check_strands).
 pub fn settle_checked(
     mesh: &Mesh,
     body: &Body,
-    strands: &Strands,
+    roots: &[Root],
+    bindings: &[StrandBinding],
     grooms: &mut [StrandGroom],
     guides: &PreparedGuides,
     params: &ExpandParams,
@@ -84,10 +96,11 @@ pub fn settle_checked(
     let mut lanes = Lanes::new(n);
     let mut points = [[0.0f32; 4]; crate::expand::MAX_STRAND_POINTS];
     let mut report = SettleReport::default();
-    for ((root, bind), groom) in strands.roots.iter().zip(strands.bindings).zip(grooms) {
+    for ((root, bind), groom) in roots.iter().zip(bindings).zip(grooms) {
         let frame = Frame::at(mesh, root.face as usize, root.u, root.v);
-        // the root itself lies on the surface; every later point must be outside
-        let mut clear = |g: &StrandGroom| {
+        // the root itself lies on the surface; every later point must be
+        // outside. Gives that, and the tip.
+        let mut evaluate = |g: &StrandGroom| {
             strand(
                 &frame,
                 bind,
@@ -97,15 +110,25 @@ pub fn settle_checked(
                 &mut lanes,
                 &mut points[..n],
             );
-            points[1..n]
+            let clear = points[1..n]
                 .iter()
-                .all(|p| !body.contains(Vec3::new(p[0], p[1], p[2])))
+                .all(|p| !body.contains(Vec3::new(p[0], p[1], p[2])));
+            (
+                clear,
+                Vec3::new(points[n - 1][0], points[n - 1][1], points[n - 1][2]),
+            )
         };
-        let (settled, outcome) = settle_one(*groom, &mut clear);
+        let (clear, tip) = evaluate(groom);
+        if clear {
+            continue;
+        }
+        let tip = frame.to_local(tip);
+        let (settled, outcome) = settle_one(*groom, tip, &mut |g| evaluate(g).0);
         *groom = settled;
         let at_least = |o: Outcome| (outcome >= o) as u32;
-        report.lifted += at_least(Outcome::Lifted);
+        report.lifted += 1;
         report.unclumped += at_least(Outcome::Unclumped);
+        report.turned += at_least(Outcome::Turned);
         report.shortened += at_least(Outcome::Shortened);
         report.unresolved += at_least(Outcome::Unresolved);
     }
@@ -115,44 +138,75 @@ pub fn settle_checked(
 /// How far settling had to go for one strand, in order.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Outcome {
-    Clear,
     Lifted,
     Unclumped,
+    Turned,
     Shortened,
     Unresolved,
 }
 
-/// The first groom, in the order lift, lift without clump, shorten, that
-/// `clear` accepts, and how far it took.
+/// For a strand found inside: the first groom `clear` accepts, trying in order: lifts toward the
+/// normal (in the vertical plane of the local `tip`, up to the normal), the
+/// same without clump pull, rotations about 8 axes of the tangent plane up
+/// to a right angle (past the normal: in a crease the interpolated normal can
+/// graze the surface), and shortening at the full lift. Returns how far it took.
 fn settle_one(
     groom: StrandGroom,
+    tip: Vec3,
     clear: &mut impl FnMut(&StrandGroom) -> bool,
 ) -> (StrandGroom, Outcome) {
-    if clear(&groom) {
-        return (groom, Outcome::Clear);
-    }
     let step = FRAC_PI_2 / LIFT_STEPS as f32;
-    let with = |k: u32, clump: f32| StrandGroom {
-        lift: groom.lift + k as f32 * step,
+    let h = libm::sqrtf(tip.x * tip.x + tip.y * tip.y);
+    // the axis that turns the tip toward the normal, and the angle to reach it
+    let (toward, to_normal) = if h > 0.0 {
+        (Vec2::new(tip.y, -tip.x) / h, libm::atan2f(h, tip.z))
+    } else {
+        (Vec2::X, 0.0)
+    };
+    let with = |axis: Vec2, angle: f32, clump: f32| StrandGroom {
+        lift: (Vec2::from(groom.lift) + axis * angle).into(),
         clump,
         ..groom
     };
-    let passes = [
-        (groom.clump, 1, Outcome::Lifted),
-        (0.0, 0, Outcome::Unclumped),
-    ];
-    let tries = if groom.clump == 0.0 { 1 } else { 2 };
-    for &(clump, first, outcome) in &passes[..tries] {
-        for k in first..=LIFT_STEPS {
-            if clear(&with(k, clump)) {
-                // one step more where that stays clear, for a margin
-                let more = with(k + 1, clump);
-                let chosen = if clear(&more) { more } else { with(k, clump) };
-                return (chosen, outcome);
+    // the first clear angle of `axis` (up to `limit`), plus one step for a margin
+    let mut sweep = |axis: Vec2, limit: f32, clump: f32, from: u32| {
+        (from..=LIFT_STEPS)
+            .map(|k| (k as f32 * step).min(limit))
+            .find(|&a| clear(&with(axis, a, clump)))
+            .map(|a| {
+                let more = with(axis, a + step, clump);
+                if a + step <= limit && clear(&more) {
+                    more
+                } else {
+                    with(axis, a, clump)
+                }
+            })
+    };
+    if let Some(g) = sweep(toward, to_normal, groom.clump, 1) {
+        return (g, Outcome::Lifted);
+    }
+    if groom.clump != 0.0 {
+        if let Some(g) = sweep(toward, to_normal, 0.0, 0) {
+            return (g, Outcome::Unclumped);
+        }
+    }
+    let mut clear_turn = None;
+    'turn: for k in 1..=LIFT_STEPS {
+        for m in 0..AXES {
+            let phi = m as f32 * core::f32::consts::TAU / AXES as f32;
+            let (s, c) = libm::sincosf(phi);
+            let axis = Vec2::new(toward.x * c - toward.y * s, toward.x * s + toward.y * c);
+            let trial = with(axis, k as f32 * step, 0.0);
+            if clear(&trial) {
+                clear_turn = Some(trial);
+                break 'turn;
             }
         }
     }
-    let mut trial = with(LIFT_STEPS, 0.0);
+    if let Some(g) = clear_turn {
+        return (g, Outcome::Turned);
+    }
+    let mut trial = with(toward, to_normal, 0.0);
     for _ in 0..SHORTEN_STEPS {
         trial.length *= SHORTEN;
         if clear(&trial) {
@@ -161,7 +215,6 @@ fn settle_one(
     }
     (trial, Outcome::Unresolved)
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,7 +224,7 @@ mod tests {
     use crate::guides::{CvLayout, Guides};
     use crate::rng::{self, Purpose};
     use crate::testmesh::{roots, sphere};
-    use crate::{Root, Strided};
+    use crate::Strided;
 
     const CVS: usize = 8;
 
@@ -275,12 +328,16 @@ mod tests {
         );
 
         let mut settled = original.clone();
-        let all = Strands {
-            roots: &strands,
-            bindings: &bindings,
-            grooms: &original,
-        };
-        let report = settle(&mesh, &body, &all, &mut settled, &prepared, &expand_params).unwrap();
+        let report = settle(
+            &mesh,
+            &body,
+            &strands,
+            &bindings,
+            &mut settled,
+            &prepared,
+            &expand_params,
+        )
+        .unwrap();
         let out = curves(&settled);
         assert_eq!(deep(&out), 0, "{report:?}");
         assert_eq!(report.unresolved, 0);
@@ -300,53 +357,42 @@ mod tests {
             .count();
         assert_eq!(changed as u32, report.lifted);
         assert!(report.lifted as usize >= before);
-        assert!(settled.iter().all(|g| g.lift >= 0.0 && g.lift <= 1.7));
+        assert!(settled.iter().all(|g| Vec2::from(g.lift).length() <= 1.7));
 
         // settling again changes nothing, and ranges settle independently
         let mut again = settled.clone();
-        let all = Strands {
-            grooms: &settled,
-            ..all
-        };
-        let report = settle(&mesh, &body, &all, &mut again, &prepared, &expand_params).unwrap();
+        let report = settle(
+            &mesh,
+            &body,
+            &strands,
+            &bindings,
+            &mut again,
+            &prepared,
+            &expand_params,
+        )
+        .unwrap();
         assert_eq!((report, &again), (SettleReport::default(), &settled));
         let mut halves = original.clone();
-        let all = Strands {
-            grooms: &original,
-            ..all
-        };
         let mid = strands.len() / 3;
         let (a, b) = halves.split_at_mut(mid);
-        settle(
-            &mesh,
-            &body,
-            &all.range(0..mid),
-            a,
-            &prepared,
-            &expand_params,
-        )
-        .unwrap();
-        settle(
-            &mesh,
-            &body,
-            &all.range(mid..strands.len()),
-            b,
-            &prepared,
-            &expand_params,
-        )
-        .unwrap();
+        let p = (&prepared, &expand_params);
+        settle(&mesh, &body, &strands[..mid], &bindings[..mid], a, p.0, p.1).unwrap();
+        settle(&mesh, &body, &strands[mid..], &bindings[mid..], b, p.0, p.1).unwrap();
         assert_eq!(halves, settled);
 
         // bad grooms are refused before anything changes
         let mut bad = original.clone();
-        bad[7].lift = f32::NAN;
-        let snapshot = bad.clone();
-        let all = Strands {
-            grooms: &snapshot,
-            ..all
-        };
+        bad[7].lift = [f32::NAN, 0.0];
         assert!(matches!(
-            settle(&mesh, &body, &all, &mut bad, &prepared, &expand_params),
+            settle(
+                &mesh,
+                &body,
+                &strands,
+                &bindings,
+                &mut bad,
+                &prepared,
+                &expand_params
+            ),
             Err(Error::NonFinite {
                 what: "grooms",
                 index: 7

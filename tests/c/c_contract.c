@@ -1529,6 +1529,106 @@ static void *worker(void *arg) {
   return NULL;
 }
 
+/* Strands of `grooms` with a control point after the root deeper than 0.98
+ * inside the unit sphere (the mesh lies between radius ~0.99 and 1). */
+static size_t strands_inside(const PelageStrandGroom *grooms) {
+  const size_t n = g_in.strand_count, per = g_in.per;
+  float *pts = malloc(n * per * 16);
+  REQUIRE(pts);
+  EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, grooms, n,
+                                         &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes, pts, 16,
+                                         n * per, NULL, NULL));
+  size_t inside = 0;
+  for (size_t i = 0; i < n; ++i) {
+    int in = 0;
+    for (size_t j = 2; j < per; ++j) {
+      const float *q = &pts[4 * (i * per + j)];
+      in |= q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 0.98f * 0.98f;
+    }
+    inside += (size_t)in;
+  }
+  free(pts);
+  return inside;
+}
+
+static void test_settle(void) {
+  const size_t n = g_in.strand_count;
+  PelageExpandParams ep = g_in.expand_params;
+  size_t bytes = 0;
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep, NULL));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(NULL, g_in.guide_count, &ep, &bytes));
+  EXPECT(PELAGE_STATUS_OK, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep, &bytes));
+  CHECK(bytes > g_in.expand_arena_bytes);
+  unsigned char *arena = malloc(bytes);
+  PelageStrandGroom *work = malloc(n * sizeof *work), *tilted = malloc(n * sizeof *tilted),
+                    *settled = malloc(n * sizeof *settled);
+  REQUIRE(arena && work && tilted && settled);
+  /* tip every strand 2 radians about its tangent: below its tangent plane */
+  for (size_t i = 0; i < n; ++i) tilted[i] = g_in.grooms[i], tilted[i].lift[0] = 2.0f;
+  const size_t before = strands_inside(tilted);
+  CHECK(before > n / 2);
+  PelageSettleInfo info, again;
+  memcpy(settled, tilted, n * sizeof *work);
+  EXPECT(PELAGE_STATUS_OK, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, settled, n, &ep,
+                                         arena, bytes, &info));
+  CHECK(info.lifted >= before && info.unresolved == 0);
+  CHECK(strands_inside(settled) == 0);
+  /* the same grooms on any thread count */
+  for (uint32_t threads = 0; threads < 4; threads += 3) {
+    ep.thread_count = threads;
+    memcpy(work, tilted, n * sizeof *work);
+    EXPECT(PELAGE_STATUS_OK, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena,
+                                           bytes, &again));
+    CHECK(memcmp(work, settled, n * sizeof *work) == 0 && memcmp(&info, &again, sizeof info) == 0);
+  }
+  ep = g_in.expand_params;
+  /* settled grooms stay settled */
+  memcpy(work, settled, n * sizeof *work);
+  EXPECT(PELAGE_STATUS_OK, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena,
+                                         bytes, NULL));
+  CHECK(memcmp(work, settled, n * sizeof *work) == 0);
+
+  /* failures leave the grooms and the info untouched */
+#define SETTLE_FAILS(want, call)                                           \
+  do {                                                                     \
+    memcpy(work, tilted, n * sizeof *work);                                \
+    FILL(&info, sizeof info);                                              \
+    EXPECT(want, call);                                                    \
+    CHECK(memcmp(work, tilted, n * sizeof *work) == 0);                    \
+    CHECK(untouched(&info, sizeof info));                                  \
+  } while (0)
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
+               pelage_settle(NULL, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
+               pelage_settle(&g_in.mesh, NULL, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
+               pelage_settle(&g_in.mesh, &g_in.guides, NULL, g_in.bindings, work, n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
+               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, NULL, work, n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
+               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, NULL, n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
+               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, NULL, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
+                                                              work, n, &ep, arena, bytes / 2, &info));
+  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, NULL, 0, &info));
+  tilted[5].lift[1] = NAN;
+  SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work,
+                                                       n, &ep, arena, bytes, &info));
+  tilted[5].lift[1] = 3.0f; /* |lift| = sqrt(13) > pi */
+  SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
+                                                             work, n, &ep, arena, bytes, &info));
+  tilted[5].lift[1] = 0.0f;
+  ep.end_points = 9;
+  SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
+                                                             work, n, &ep, arena, bytes, &info));
+#undef SETTLE_FAILS
+  printf("settle: %zu of %zu tilted strands inside; lifted %u (unclumped %u, turned %u, shortened %u)\n", before, n,
+         again.lifted, again.unclumped, again.turned, again.shortened);
+  free(arena), free(work), free(tilted), free(settled);
+}
+
 static void test_threads(void) {
   const PelageMeshDesc mesh = sphere_desc(&g_sphere);
   size_t a, b;
@@ -1561,6 +1661,7 @@ int main(void) {
   test_interp_null_pointers();
   test_interp_capacity();
   test_interp_bad_input();
+  test_settle();
   interp_free();
   test_threads();
   free(g_arena), free(g_roots);

@@ -1,0 +1,113 @@
+//! Settling strands out of the body at rest.
+
+use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
+use crate::expand::core_params;
+use crate::threads::split_over_threads;
+use crate::{
+    PelageExpandParams, PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus,
+    PelageStrandBinding, PelageStrandGroom,
+};
+use pelage_core::arena::ArenaLayout;
+use pelage_core::bind::StrandBinding;
+use pelage_core::body::Body;
+use pelage_core::expand::{check_strands, PreparedGuides, Strands};
+use pelage_core::groom::StrandGroom;
+use pelage_core::settle::{settle_checked, SettleReport};
+use pelage_core::{Arena, Root};
+
+/// What pelage_settle changed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PelageSettleInfo {
+    /// Strands rotated toward their root normal (lift set).
+    pub lifted: u32,
+    /// Strands a lift alone did not free (their clump pull was dropped).
+    pub unclumped: u32,
+    /// Strands that were also turned about another axis, past the normal (a
+    /// crease where the root normal grazes the surface).
+    pub turned: u32,
+    /// Strands that also had to be shortened.
+    pub shortened: u32,
+    /// Strands still partly inside after every step.
+    pub unresolved: u32,
+}
+
+/// Arena bytes pelage_settle needs for `rest_mesh` (validated) and
+/// `guide_count` guides at `params->points_per_strand` points.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_settle_query(
+    rest_mesh: *const PelageMeshDesc,
+    guide_count: usize,
+    params: *const PelageExpandParams,
+    arena_bytes: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
+        let core = core_params(req(params, "params")?)?;
+        let out = req_mut(arena_bytes, "arena_bytes")?;
+        let mut layout = ArenaLayout::new();
+        PreparedGuides::layout(&mut layout, guide_count, core.points_per_strand);
+        *out = layout.bytes().saturating_add(Body::required_bytes(&mesh)?);
+        Ok(())
+    }
+}
+
+/// Settles strands out of the body at the rest pose, once per groom, after
+/// pelage_groom_evaluate: each strand is expanded on the rest mesh from the
+/// rest guides, and where a control point after the root lies inside the
+/// (closed) mesh, the strand is rotated about its root toward the normal and
+/// the angle stored in its groom's `lift`; strands a full lift does not free
+/// lose their clump pull, are turned about other axes, then shortened. pelage_expand applies `lift` in the
+/// strand's own frame at every frame. `grooms` is updated in place; it is
+/// validated with everything else first and left untouched on failure.
+/// Work is split over `params->thread_count` threads; the result does not
+/// depend on it.
+///
+/// Thread safety: reentrant; concurrent calls need distinct arenas and grooms.
+#[no_mangle]
+pub extern "C" fn pelage_settle(
+    rest_mesh: *const PelageMeshDesc,
+    rest_guides: *const PelageGuidesDesc,
+    strands: *const PelageRoot,
+    bindings: *const PelageStrandBinding,
+    grooms: *mut PelageStrandGroom,
+    strand_count: usize,
+    params: *const PelageExpandParams,
+    arena: *mut std::ffi::c_void,
+    arena_bytes: usize,
+    info: *mut PelageSettleInfo,
+) -> PelageStatus {
+    ffi_boundary! {
+        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
+        let guides = req(rest_guides, "rest_guides")?.view()?;
+        let p = req(params, "params")?;
+        let core = core_params(p)?;
+        let roots: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
+        let bindings: &[StrandBinding] = bytemuck::cast_slice(slice(bindings, strand_count, "bindings")?);
+        let grooms: &mut [StrandGroom] = bytemuck::cast_slice_mut(slice_mut(grooms, strand_count, "grooms")?);
+        let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        let mut arena = Arena::new(arena);
+        let body = Body::new(&mesh, &mut arena)?;
+        let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
+        check_strands(&mesh, &Strands { roots, bindings, grooms: &*grooms }, &prepared, &core)?;
+        let reports = split_over_threads(strand_count, p.thread_count, grooms, 1, |range, part| {
+            settle_checked(&mesh, &body, &roots[range.clone()], &bindings[range], part, &prepared, &core)
+        })?;
+        let mut total = SettleReport::default();
+        for r in reports {
+            total.merge(r);
+        }
+        if let Some(info) = opt_mut(info) {
+            *info = PelageSettleInfo {
+                lifted: total.lifted,
+                unclumped: total.unclumped,
+                turned: total.turned,
+                shortened: total.shortened,
+                unresolved: total.unresolved,
+            };
+        }
+        Ok(())
+    }
+}

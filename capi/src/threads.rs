@@ -1,0 +1,77 @@
+//! Splitting per-strand work over std threads (the core only takes ranges).
+
+use crate::status::Failure;
+use crate::PelageStatus;
+use std::ops::Range;
+
+/// Most threads `thread_count` may ask for beyond the machine's cores.
+const MAX_THREADS: usize = 64;
+
+/// Threads to use for a `thread_count` parameter: 0 means all cores; more
+/// threads than cores never helps, and the cap keeps a huge "as many as
+/// possible" value from spawning one thread per strand.
+fn thread_total(thread_count: u32) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match thread_count {
+        0 => cores,
+        n => (n as usize).min(cores.max(MAX_THREADS)),
+    }
+}
+
+/// Runs `work` on contiguous ranges of `0..n`, each with its own part of
+/// `out` (`per` elements per strand; the last part takes the rest), on
+/// scoped threads, and returns the results in range order. One range runs on
+/// the calling thread, so a single thread spawns nothing.
+pub(crate) fn split_over_threads<T: Send, R: Send>(
+    n: usize,
+    thread_count: u32,
+    out: &mut [T],
+    per: usize,
+    work: impl Fn(Range<usize>, &mut [T]) -> R + Sync,
+) -> Result<Vec<R>, Failure> {
+    let threads = thread_total(thread_count).clamp(1, n.max(1));
+    if threads == 1 {
+        return Ok(vec![work(0..n, out)]);
+    }
+    std::thread::scope(|scope| {
+        let mut rest = out;
+        let mut handles = vec![];
+        let mut last = None;
+        for t in 0..threads {
+            let range = t * n / threads..(t + 1) * n / threads;
+            let take = if t + 1 == threads {
+                rest.len()
+            } else {
+                range.len() * per
+            };
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
+            rest = tail;
+            let work = &work;
+            if t + 1 == threads {
+                last = Some(work(range, mine));
+            } else {
+                match std::thread::Builder::new().spawn_scoped(scope, move || work(range, mine)) {
+                    Ok(h) => handles.push(h),
+                    // the scope still joins the threads already running
+                    Err(e) => {
+                        return Err(Failure::new(
+                            PelageStatus::Panic,
+                            format!(
+                            "could not start a worker thread ({e}); outputs may be partly written"
+                        ),
+                        ))
+                    }
+                }
+            }
+        }
+        let mut results = Vec::with_capacity(threads);
+        for h in handles {
+            results.push(
+                h.join()
+                    .map_err(|_| Failure::new(PelageStatus::Panic, "a worker thread panicked"))?,
+            );
+        }
+        results.extend(last);
+        Ok(results)
+    })
+}
