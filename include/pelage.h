@@ -249,8 +249,8 @@ typedef struct PelageStrandGroom {
   float kink_amplitude;
   // Kink frequency.
   float kink_frequency;
-  // Kink phase (radians).
-  float kink_phase;
+  // Kink phase as the unit vector (cos, sin) of the angle.
+  float kink_phase[2];
   // Clump pull.
   float clump;
   // Rotation of the strand about its root: a rotation vector in the root

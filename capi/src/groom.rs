@@ -45,8 +45,8 @@ pub struct PelageStrandGroom {
     pub kink_amplitude: f32,
     /// Kink frequency.
     pub kink_frequency: f32,
-    /// Kink phase (radians).
-    pub kink_phase: f32,
+    /// Kink phase as the unit vector (cos, sin) of the angle.
+    pub kink_phase: [f32; 2],
     /// Clump pull.
     pub clump: f32,
     /// Rotation of the strand about its root: a rotation vector in the root

@@ -272,7 +272,7 @@ pub fn check_strands(
         }
     }
     for (i, g) in grooms[..roots.len()].iter().enumerate() {
-        let values = bytemuck::cast_ref::<StrandGroom, [f32; 10]>(g);
+        let values: &[f32] = bytemuck::cast_slice(core::slice::from_ref(g));
         if !values.iter().all(|v| v.is_finite()) {
             return Err(Error::NonFinite {
                 what: "grooms",
@@ -386,7 +386,10 @@ pub(crate) struct Lanes {
     t: [f32; MAX_STRAND_POINTS],
     local: [[f32; MAX_STRAND_POINTS]; 3],
     world: [[f32; MAX_STRAND_POINTS]; 3],
-    kink: [[f32; MAX_STRAND_POINTS]; 2],
+    /// The kink wave without phase for `wave_frequency` (bits; NaN when
+    /// none yet): neighbouring strands share a frequency, so it is reused.
+    wave: [[f32; MAX_STRAND_POINTS]; 2],
+    wave_frequency: u32,
 }
 
 impl Lanes {
@@ -400,12 +403,14 @@ impl Lanes {
             t,
             local: [[0.0; MAX_STRAND_POINTS]; 3],
             world: [[0.0; MAX_STRAND_POINTS]; 3],
-            kink: [[0.0; MAX_STRAND_POINTS]; 2],
+            wave: [[0.0; MAX_STRAND_POINTS]; 2],
+            wave_frequency: f32::NAN.to_bits(),
         }
     }
 }
 
 /// Writes the `points_per_strand` points of one strand into `out`.
+#[inline]
 pub(crate) fn strand(
     frame: &Frame,
     bind: &StrandBinding,
@@ -415,8 +420,33 @@ pub(crate) fn strand(
     lanes: &mut Lanes,
     out: &mut [[f32; 4]],
 ) {
+    // the common counts get loops of known length (unrolled, vectorized
+    // whole); the same operations in the same order, so the same bits
+    match params.points_per_strand {
+        8 => strand_n::<8>(frame, bind, groom, guides, params, lanes, out),
+        16 => strand_n::<16>(frame, bind, groom, guides, params, lanes, out),
+        32 => strand_n::<32>(frame, bind, groom, guides, params, lanes, out),
+        _ => strand_n::<0>(frame, bind, groom, guides, params, lanes, out),
+    }
+}
+
+/// [`strand`] for `N` points, or for `params.points_per_strand` when `N` is 0.
+#[inline(always)]
+fn strand_n<const N: usize>(
+    frame: &Frame,
+    bind: &StrandBinding,
+    groom: &StrandGroom,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    lanes: &mut Lanes,
+    out: &mut [[f32; 4]],
+) {
     // checked by ExpandParams::check; the min lets the compiler drop bounds checks
-    let n = params.points_per_strand.min(MAX_STRAND_POINTS);
+    let n = if N == 0 {
+        params.points_per_strand.min(MAX_STRAND_POINTS)
+    } else {
+        N
+    };
     let t = &lanes.t[..n];
     let [ax, ay, az] = &mut lanes.local;
     let (ax, ay, az) = (&mut ax[..n], &mut ay[..n], &mut az[..n]);
@@ -480,13 +510,21 @@ pub(crate) fn strand(
     }
     let kink = groom.kink_amplitude * length;
     if kink != 0.0 {
-        let [ks, kc] = &mut lanes.kink;
-        kink_wave(groom, n, &mut ks[..n], &mut kc[..n]);
+        if lanes.wave_frequency != groom.kink_frequency.to_bits() {
+            let [ws, wc] = &mut lanes.wave;
+            kink_wave(groom.kink_frequency, n, &mut ws[..n], &mut wc[..n]);
+            lanes.wave_frequency = groom.kink_frequency.to_bits();
+        }
+        let [cp, sp] = groom.kink_phase;
+        let [ws, wc] = &lanes.wave;
+        let (ws, wc) = (&ws[..n], &wc[..n]);
         for j in 0..n {
+            // sin and cos of (phase + j delta)
+            let (ks, kc) = (sp * wc[j] + cp * ws[j], cp * wc[j] - sp * ws[j]);
             let k = kink * t[j];
-            px[j] += (tt.x * ks[j] + b.x * kc[j]) * k;
-            py[j] += (tt.y * ks[j] + b.y * kc[j]) * k;
-            pz[j] += (tt.z * ks[j] + b.z * kc[j]) * k;
+            px[j] += (tt.x * ks + b.x * kc) * k;
+            py[j] += (tt.y * ks + b.y * kc) * k;
+            pz[j] += (tt.z * ks + b.z * kc) * k;
         }
     }
     let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
@@ -512,18 +550,18 @@ fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
     }
 }
 
-/// sin and cos of the kink phase at each of `n` points, by rotation
-/// recurrences: four interleaved chains, so the serial dependency is a
-/// quarter as long as one chain's.
-fn kink_wave(groom: &StrandGroom, n: usize, sin: &mut [f32], cos: &mut [f32]) {
+/// sin and cos of `j * delta` for the `n` points of a kink wave of
+/// `frequency` waves per strand, by rotation recurrences: four interleaved
+/// chains, so the serial dependency is a quarter as long as one chain's.
+/// A pure function of `frequency` and `n`.
+fn kink_wave(frequency: f32, n: usize, sin: &mut [f32], cos: &mut [f32]) {
     const CHAINS: usize = 4;
-    let delta = core::f32::consts::TAU * groom.kink_frequency / (n - 1) as f32;
+    let delta = core::f32::consts::TAU * frequency / (n - 1) as f32;
     let (s1, c1) = libm::sincosf(delta);
     // the rotation by 4 delta by two double-angle steps, not another sincos
     let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
     let (s4, c4) = (2.0 * s2 * c2, c2 * c2 - s2 * s2);
-    let (mut s, mut c) = ([0.0f32; CHAINS], [0.0f32; CHAINS]);
-    (s[0], c[0]) = libm::sincosf(groom.kink_phase);
+    let (mut s, mut c) = ([0.0f32; CHAINS], [1.0f32; CHAINS]);
     for i in 1..CHAINS {
         (s[i], c[i]) = (s[i - 1] * c1 + c[i - 1] * s1, c[i - 1] * c1 - s[i - 1] * s1);
     }

@@ -53,8 +53,9 @@ pub struct StrandGroom {
     pub kink_amplitude: f32,
     /// Kink waves along the strand.
     pub kink_frequency: f32,
-    /// Kink phase in radians, random per strand id.
-    pub kink_phase: f32,
+    /// Kink phase, random per strand id, as the unit vector (cos, sin) of
+    /// the angle (expansion needs no trigonometry per strand).
+    pub kink_phase: [f32; 2],
     /// Clump pull at the tip.
     pub clump: f32,
     /// Rotation of the whole strand about its root, as a rotation vector in
@@ -103,8 +104,12 @@ impl GroomMaps<'_> {
                 bend: at(&self.bend),
                 kink_amplitude: at(&self.kink_amplitude),
                 kink_frequency: at(&self.kink_frequency),
-                kink_phase: rng::unit(seed, r.id as u64, Purpose::KinkPhase, 0)
-                    * core::f32::consts::TAU,
+                kink_phase: {
+                    let angle = rng::unit(seed, r.id as u64, Purpose::KinkPhase, 0)
+                        * core::f32::consts::TAU;
+                    let (sin, cos) = libm::sincosf(angle);
+                    [cos, sin]
+                },
                 clump: at(&self.clump).clamp(0.0, 1.0),
                 lift: [0.0; 2],
             };
