@@ -2,7 +2,7 @@
 
 use crate::buffers::{bytes_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
-use crate::threads::split_over_threads;
+use crate::threads::{check_over_threads, split_over_threads};
 use crate::{
     PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus, PelageStrandBinding,
     PelageStrandGroom,
@@ -154,7 +154,11 @@ pub extern "C" fn pelage_expand(
         let mut arena = Arena::new(arena);
         let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
         let all = Strands { roots: strands, bindings, grooms };
-        expand::check_inputs(&mesh, &all, &prepared, &core, out.len(), point_stride)?;
+        expand::check_frame(&mesh, &prepared, &core)?;
+        expand::check_output(strand_count, &core, out.len(), point_stride)?;
+        check_over_threads(strand_count, p.thread_count, |range| {
+            expand::check_strands(&mesh, &all.range(range), &prepared)
+        })?;
         split_over_threads(strand_count, p.thread_count, out, per * point_stride, |range, bytes| {
             expand::expand_checked(&mesh, &all.range(range), &prepared, &core, bytes, point_stride);
         })?;

@@ -2,7 +2,7 @@
 
 use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
 use crate::expand::core_params;
-use crate::threads::split_over_threads;
+use crate::threads::{check_over_threads, split_over_threads};
 use crate::{
     PelageExpandParams, PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus,
     PelageStrandBinding, PelageStrandGroom,
@@ -10,7 +10,7 @@ use crate::{
 use pelage_core::arena::ArenaLayout;
 use pelage_core::bind::StrandBinding;
 use pelage_core::body::Body;
-use pelage_core::expand::{check_strands, PreparedGuides, Strands};
+use pelage_core::expand::{check_frame, check_strands, PreparedGuides, Strands};
 use pelage_core::groom::StrandGroom;
 use pelage_core::settle::{settle_checked, SettleReport};
 use pelage_core::{Arena, Root};
@@ -91,7 +91,9 @@ pub extern "C" fn pelage_settle(
         let mut arena = Arena::new(arena);
         let body = Body::new(&mesh, &mut arena)?;
         let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
-        check_strands(&mesh, &Strands { roots, bindings, grooms: &*grooms }, &prepared, &core)?;
+        check_frame(&mesh, &prepared, &core)?;
+        let all = Strands { roots, bindings, grooms: &*grooms };
+        check_over_threads(strand_count, p.thread_count, |range| check_strands(&mesh, &all.range(range), &prepared))?;
         let reports = split_over_threads(strand_count, p.thread_count, grooms, 1, |range, part| {
             settle_checked(&mesh, &body, &roots[range.clone()], &bindings[range], part, &prepared, &core)
         })?;

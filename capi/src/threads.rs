@@ -2,6 +2,7 @@
 
 use crate::status::Failure;
 use crate::PelageStatus;
+use pelage_core::Error;
 use std::ops::Range;
 
 /// Most threads `thread_count` may ask for beyond the machine's cores.
@@ -74,4 +75,19 @@ pub(crate) fn split_over_threads<T: Send, R: Send>(
         results.extend(last);
         Ok(results)
     })
+}
+
+/// Runs `check` on the ranges [`split_over_threads`] would use, in parallel,
+/// and returns the error of the first failing range (so the message does
+/// not depend on timing), with indices into the whole input.
+pub(crate) fn check_over_threads(
+    n: usize,
+    thread_count: u32,
+    check: impl Fn(Range<usize>) -> Result<(), Error> + Sync,
+) -> Result<(), Failure> {
+    let results = split_over_threads(n, thread_count, &mut [0u8; 0], 0, |range, _| {
+        let start = range.start;
+        check(range).map_err(|e| e.shifted(start))
+    })?;
+    Ok(results.into_iter().collect::<Result<(), Error>>()?)
 }

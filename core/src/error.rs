@@ -47,6 +47,31 @@ pub enum Error {
     },
 }
 
+impl Error {
+    /// The same error with its element index moved by `by`: a check run on
+    /// the range starting at `by` reports indices into the whole input.
+    pub fn shifted(self, by: usize) -> Error {
+        match self {
+            Error::NonFinite { what, index } => Error::NonFinite {
+                what,
+                index: index + by,
+            },
+            Error::OutOfRange {
+                what,
+                index,
+                value,
+                bound,
+            } => Error::OutOfRange {
+                what,
+                index: index + by,
+                value,
+                bound,
+            },
+            other => other,
+        }
+    }
+}
+
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {

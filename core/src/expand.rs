@@ -183,9 +183,10 @@ impl<'a> Strands<'a> {
     }
 }
 
-/// Validates everything [`expand`] reads, for an output of `out_len` bytes;
-/// a threaded host calls it once before splitting, so that no chunk writes
-/// when another would fail.
+/// Validates everything [`expand`] reads, for an output of `out_len` bytes:
+/// [`check_frame`], [`check_output`] and [`check_strands`]. A threaded host
+/// runs these before splitting (the strand checks may themselves run per
+/// range, in parallel), so that no range writes when another would fail.
 pub fn check_inputs(
     mesh: &Mesh,
     strands: &Strands,
@@ -194,14 +195,41 @@ pub fn check_inputs(
     out_len: usize,
     stride: usize,
 ) -> Result<(), Error> {
+    check_frame(mesh, guides, params)?;
+    check_output(strands.len(), params, out_len, stride)?;
+    check_strands(mesh, strands, guides)
+}
+
+/// Validates the parameters and the mesh, and that `guides` were prepared
+/// for the point count.
+pub fn check_frame(
+    mesh: &Mesh,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+) -> Result<(), Error> {
     params.check()?;
+    if params.points_per_strand != guides.points {
+        return Err(Error::InvalidArgument(
+            "guides were prepared for another point count",
+        ));
+    }
+    mesh.validate()?;
+    Ok(())
+}
+
+/// Checks that `out_len` bytes hold the curves of `count` strands at `stride`.
+pub fn check_output(
+    count: usize,
+    params: &ExpandParams,
+    out_len: usize,
+    stride: usize,
+) -> Result<(), Error> {
     if stride < 16 {
         return Err(Error::BadStride {
             what: "curve points",
         });
     }
-    let needed = strands
-        .len()
+    let needed = count
         .checked_mul(params.output_points())
         .and_then(|total| total.checked_sub(1))
         .map_or(Some(0), |last| {
@@ -214,23 +242,12 @@ pub fn check_inputs(
             available: out_len,
         });
     }
-    check_strands(mesh, strands, guides, params)
+    Ok(())
 }
 
-/// Validates the strands, their bindings and grooms against `mesh` and
-/// `guides` (what [`check_inputs`] checks besides the output buffer).
-pub fn check_strands(
-    mesh: &Mesh,
-    strands: &Strands,
-    guides: &PreparedGuides,
-    params: &ExpandParams,
-) -> Result<(), Error> {
-    params.check()?;
-    if params.points_per_strand != guides.points {
-        return Err(Error::InvalidArgument(
-            "guides were prepared for another point count",
-        ));
-    }
+/// Validates the strands, their bindings and grooms against a mesh already
+/// checked by [`check_frame`] and the prepared `guides`.
+pub fn check_strands(mesh: &Mesh, strands: &Strands, guides: &PreparedGuides) -> Result<(), Error> {
     let Strands {
         roots,
         bindings,
@@ -241,7 +258,6 @@ pub fn check_strands(
             "bindings and grooms must cover every strand",
         ));
     }
-    mesh.validate()?;
     crate::root::check_roots(mesh, roots, "strand roots")?;
     let bound = guides.guides;
     for (i, b) in bindings[..roots.len()].iter().enumerate() {
@@ -284,7 +300,7 @@ pub fn check_strands(
                 "a groom has a negative radius or length",
             ));
         }
-        if Vec2::from(g.lift).length() > core::f32::consts::PI {
+        if Vec2::from(g.lift).length_squared() > core::f32::consts::PI * core::f32::consts::PI {
             return Err(Error::InvalidArgument(
                 "a groom's lift turns by more than pi",
             ));

@@ -13,7 +13,9 @@
 
 use crate::bind::StrandBinding;
 use crate::body::Body;
-use crate::expand::{check_strands, strand, ExpandParams, Lanes, PreparedGuides, Strands};
+use crate::expand::{
+    check_frame, check_strands, strand, ExpandParams, Lanes, PreparedGuides, Strands,
+};
 use crate::frame::Frame;
 use crate::groom::StrandGroom;
 use crate::{Error, Mesh, Root};
@@ -75,13 +77,15 @@ pub fn settle(
         bindings,
         grooms: &*grooms,
     };
-    check_strands(mesh, &strands, guides, params)?;
+    check_frame(mesh, guides, params)?;
+    check_strands(mesh, &strands, guides)?;
     Ok(settle_checked(
         mesh, body, roots, bindings, grooms, guides, params,
     ))
 }
 
 /// [`settle`] for inputs already checked with
+/// [`check_frame`](crate::expand::check_frame) and
 /// [`check_strands`](crate::expand::check_strands).
 pub fn settle_checked(
     mesh: &Mesh,

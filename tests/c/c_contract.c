@@ -1616,6 +1616,16 @@ static void test_settle(void) {
   tilted[5].lift[1] = NAN;
   SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work,
                                                        n, &ep, arena, bytes, &info));
+  /* split over threads, the error still names the element in the whole array */
+  ep.thread_count = 3;
+  tilted[5].lift[1] = 0.0f, tilted[n - 2].kink_phase[0] = INFINITY;
+  SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work,
+                                                       n, &ep, arena, bytes, &info));
+  char want[64];
+  snprintf(want, sizeof want, "grooms at element %zu", n - 2);
+  CHECK(strstr(pelage_last_error(), want) != NULL);
+  tilted[n - 2] = g_in.grooms[n - 2], tilted[n - 2].lift[0] = 2.0f;
+  ep.thread_count = 1;
   tilted[5].lift[1] = 3.0f; /* |lift| = sqrt(13) > pi */
   SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
                                                              work, n, &ep, arena, bytes, &info));
