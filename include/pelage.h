@@ -20,7 +20,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 1
+#define PELAGE_VERSION_MINOR 2
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0

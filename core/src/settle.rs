@@ -9,7 +9,9 @@
 //! the angle as the groom's `lift`. Since `lift` is applied in the strand's
 //! own frame, the fix follows the body at every frame at no cost to strands
 //! that need none. Strands that a full lift does not free lose their clump
-//! pull, then length; any left inside are counted, never hidden.
+//! pull, are turned about other axes of the tangent plane (past the normal,
+//! for creases where the interpolated normal grazes the surface), and last
+//! are shortened; any left inside are counted, never hidden.
 
 use crate::bind::StrandBinding;
 use crate::body::Body;
