@@ -154,7 +154,7 @@ pub extern "C" fn pelage_expand(
         let mut arena = Arena::new(arena);
         let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
         let all = Strands { roots: strands, bindings, grooms };
-        expand::check_frame(&mesh, &prepared, &core)?;
+        expand::check_frame(&prepared, &core)?;
         expand::check_output(strand_count, &core, out.len(), point_stride)?;
         check_over_threads(strand_count, p.thread_count, |range| {
             expand::check_strands(&mesh, &all.range(range), &prepared)

@@ -91,7 +91,7 @@ pub extern "C" fn pelage_settle(
         let mut arena = Arena::new(arena);
         let body = Body::new(&mesh, &mut arena)?;
         let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
-        check_frame(&mesh, &prepared, &core)?;
+        check_frame(&prepared, &core)?;
         let all = Strands { roots, bindings, grooms: &*grooms };
         check_over_threads(strand_count, p.thread_count, |range| check_strands(&mesh, &all.range(range), &prepared))?;
         let reports = split_over_threads(strand_count, p.thread_count, grooms, 1, |range, part| {

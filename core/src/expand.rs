@@ -184,7 +184,8 @@ impl<'a> Strands<'a> {
 }
 
 /// Validates everything [`expand`] reads, for an output of `out_len` bytes:
-/// [`check_frame`], [`check_output`] and [`check_strands`]. A threaded host
+/// the mesh, [`check_frame`], [`check_output`] and [`check_strands`]
+/// ([`PreparedGuides::new`] has validated its mesh already). A threaded host
 /// runs these before splitting (the strand checks may themselves run per
 /// range, in parallel), so that no range writes when another would fail.
 pub fn check_inputs(
@@ -195,25 +196,21 @@ pub fn check_inputs(
     out_len: usize,
     stride: usize,
 ) -> Result<(), Error> {
-    check_frame(mesh, guides, params)?;
+    mesh.validate()?;
+    check_frame(guides, params)?;
     check_output(strands.len(), params, out_len, stride)?;
     check_strands(mesh, strands, guides)
 }
 
-/// Validates the parameters and the mesh, and that `guides` were prepared
-/// for the point count.
-pub fn check_frame(
-    mesh: &Mesh,
-    guides: &PreparedGuides,
-    params: &ExpandParams,
-) -> Result<(), Error> {
+/// Validates the parameters, and that `guides` were prepared for the point
+/// count.
+pub fn check_frame(guides: &PreparedGuides, params: &ExpandParams) -> Result<(), Error> {
     params.check()?;
     if params.points_per_strand != guides.points {
         return Err(Error::InvalidArgument(
             "guides were prepared for another point count",
         ));
     }
-    mesh.validate()?;
     Ok(())
 }
 
@@ -246,7 +243,8 @@ pub fn check_output(
 }
 
 /// Validates the strands, their bindings and grooms against a mesh already
-/// checked by [`check_frame`] and the prepared `guides`.
+/// validated (by [`Mesh::validate`] or [`PreparedGuides::new`]) and the
+/// prepared `guides`.
 pub fn check_strands(mesh: &Mesh, strands: &Strands, guides: &PreparedGuides) -> Result<(), Error> {
     let Strands {
         roots,

@@ -79,7 +79,8 @@ pub fn settle(
         bindings,
         grooms: &*grooms,
     };
-    check_frame(mesh, guides, params)?;
+    mesh.validate()?;
+    check_frame(guides, params)?;
     check_strands(mesh, &strands, guides)?;
     Ok(settle_checked(
         mesh, body, roots, bindings, grooms, guides, params,
@@ -87,7 +88,7 @@ pub fn settle(
 }
 
 /// [`settle`] for inputs already checked with
-/// [`check_frame`](crate::expand::check_frame) and
+/// [`Mesh::validate`], [`check_frame`](crate::expand::check_frame) and
 /// [`check_strands`](crate::expand::check_strands).
 pub fn settle_checked(
     mesh: &Mesh,
@@ -196,20 +197,18 @@ fn settle_one(
             return (g, Outcome::Unclumped);
         }
     }
-    let mut clear_turn = None;
-    'turn: for k in 1..=LIFT_STEPS {
-        for m in 0..AXES {
-            let phi = m as f32 * core::f32::consts::TAU / AXES as f32;
-            let (s, c) = libm::sincosf(phi);
-            let axis = Vec2::new(toward.x * c - toward.y * s, toward.x * s + toward.y * c);
-            let trial = with(axis, k as f32 * step, 0.0);
-            if clear(&trial) {
-                clear_turn = Some(trial);
-                break 'turn;
-            }
-        }
-    }
-    if let Some(g) = clear_turn {
+    let axes: [Vec2; AXES as usize] = core::array::from_fn(|m| {
+        let (s, c) = libm::sincosf(m as f32 * core::f32::consts::TAU / AXES as f32);
+        Vec2::new(toward.x * c - toward.y * s, toward.x * s + toward.y * c)
+    });
+    let with = &with;
+    let turned = (1..=LIFT_STEPS)
+        .flat_map(|k| {
+            axes.iter()
+                .map(move |&axis| with(axis, k as f32 * step, 0.0))
+        })
+        .find(|g| clear(g));
+    if let Some(g) = turned {
         return (g, Outcome::Turned);
     }
     let mut trial = with(toward, to_normal, 0.0);

@@ -332,9 +332,10 @@ int main(int argc, char** argv) try {
               "expand %.3f s (%.2f M hairs/s, %zu points per curve, all cores)\n",
               fur.bind_s, fur.info.orphans, n, double(fur.info.mean_guide_length), double(fur.info.mean_spacing),
               fur.groom_s, fur.expand_s, double(n) / fur.expand_s * 1e-6, per);
-  std::printf("settle %.2f s (all cores): %u hairs lifted toward their normal, %u of them unclumped, %u turned past the normal, %u shortened, "
-              "%u unresolved\n",
-              fur.settle_s, fur.settled.lifted, fur.settled.unclumped, fur.settled.turned, fur.settled.shortened, fur.settled.unresolved);
+  std::printf("settle %.2f s (all cores): %u hairs lifted toward their normal, %u of them unclumped, "
+              "%u turned past the normal, %u shortened, %u unresolved\n",
+              fur.settle_s, fur.settled.lifted, fur.settled.unclumped, fur.settled.turned, fur.settled.shortened,
+              fur.settled.unresolved);
   std::printf("groom: defaults (width %.4f -> %.4f) + kink 0.03 x 3, clump 0.25; expand: 16 points, pinned\n",
               double(pelage_groom_maps_defaults().root_width.constant),
               double(pelage_groom_maps_defaults().tip_width.constant));
