@@ -553,6 +553,10 @@ fn strand_n<const N: usize>(
 /// follows the body and does not depend on the pose.
 fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
     let angle = libm::sqrtf(w[0] * w[0] + w[1] * w[1]);
+    // a vector too small to square turns nothing (and has no axis)
+    if angle == 0.0 {
+        return;
+    }
     let (kx, ky) = (w[0] / angle, w[1] / angle);
     let (s, c) = libm::sincosf(angle);
     for j in 0..x.len() {
@@ -722,6 +726,24 @@ mod tests {
         assert!(one
             .iter()
             .all(|p| p.iter().all(|c| c.is_finite()) && p[3] >= 0.0));
+    }
+
+    #[test]
+    fn a_lift_too_small_to_square_turns_nothing() {
+        let s = Scene::plane(100, 400);
+        let b = s.bind(&BindParams::default());
+        let plain = plain_grooms(s.strands.len());
+        let tiny: Vec<StrandGroom> = plain
+            .iter()
+            .map(|g| StrandGroom {
+                lift: [1e-25, -1e-30],
+                ..*g
+            })
+            .collect();
+        assert_eq!(
+            s.expand(&b, &plain, &raw(CVS), 1),
+            s.expand(&b, &tiny, &raw(CVS), 1)
+        );
     }
 
     #[test]
