@@ -13,6 +13,8 @@ use crate::guides::Guides;
 use crate::{Error, Mesh, Root};
 use glam::{Vec2, Vec3};
 
+/// Strands whose root frames are computed together.
+const FRAME_BLOCK: usize = 32;
 /// Most control points per strand.
 pub const MAX_STRAND_POINTS: usize = 64;
 
@@ -347,19 +349,28 @@ pub fn expand_checked(
     let shift = (params.end_points == EndPoints::Pinned) as usize;
     let mut lanes = Lanes::new(n);
     let mut basis: Option<(u32, FaceBasis)> = None;
+    // frames are computed a block ahead: each is a chain of square roots and
+    // divisions, independent of the others, so a block of them overlaps
+    // where one per strand would stall every strand
+    let mut frames = [Frame::default(); FRAME_BLOCK];
     let mut fill = |s: usize, curve: &mut [[f32; 4]]| {
-        let root = &roots[s];
-        let face = match basis {
-            Some((f, b)) if f == root.face => b,
-            _ => {
-                let b = FaceBasis::new(mesh, root.face as usize);
-                basis = Some((root.face, b));
-                b
+        let slot = s % FRAME_BLOCK;
+        if slot == 0 {
+            let end = roots.len().min(s + FRAME_BLOCK);
+            for (frame, root) in frames.iter_mut().zip(&roots[s..end]) {
+                let face = match basis {
+                    Some((f, b)) if f == root.face => b,
+                    _ => {
+                        let b = FaceBasis::new(mesh, root.face as usize);
+                        basis = Some((root.face, b));
+                        b
+                    }
+                };
+                *frame = face.frame(root.u, root.v);
             }
-        };
-        let frame = face.frame(root.u, root.v);
+        }
         strand(
-            &frame,
+            &frames[slot],
             &bindings[s],
             &grooms[s],
             guides,

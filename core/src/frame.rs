@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3};
 ///
 /// Because the tangent comes from the triangle's own geometry, the frame
 /// follows the deforming mesh without swimming or flipping.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Frame {
     /// Root position.
     pub origin: Vec3,
