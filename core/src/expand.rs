@@ -246,7 +246,7 @@ pub fn check_output(
 
 /// Validates the strands, their bindings and grooms against a mesh already
 /// validated (by [`Mesh::validate`] or [`PreparedGuides::new`]) and the
-/// prepared `guides`.
+/// prepared `guides`. The first faulty strand is reported.
 pub fn check_strands(mesh: &Mesh, strands: &Strands, guides: &PreparedGuides) -> Result<(), Error> {
     let Strands {
         roots,
@@ -258,53 +258,98 @@ pub fn check_strands(mesh: &Mesh, strands: &Strands, guides: &PreparedGuides) ->
             "bindings and grooms must cover every strand",
         ));
     }
-    crate::root::check_roots(mesh, roots, "strand roots")?;
-    let bound = guides.guides;
-    for (i, b) in bindings[..roots.len()].iter().enumerate() {
-        let count = b.count as usize;
-        if count > crate::bind::MAX_NEIGHBOURS {
-            return Err(Error::OutOfRange {
-                what: "binding counts",
-                index: i,
-                value: count,
-                bound: crate::bind::MAX_NEIGHBOURS + 1,
-            });
-        }
-        let bad_guide = b.guides[..count].iter().find(|&&g| g as usize >= bound);
-        let bad_clump = (b.clump != NO_GUIDE && b.clump as usize >= bound).then_some(&b.clump);
-        if let Some(&value) = bad_guide.or(bad_clump) {
-            return Err(Error::OutOfRange {
-                what: "bindings",
-                index: i,
-                value: value as usize,
-                bound,
-            });
-        }
-        if !b.weights[..count].iter().all(|w| w.is_finite()) {
-            return Err(Error::NonFinite {
-                what: "binding weights",
-                index: i,
-            });
+    let (faces, bound) = (mesh.triangle_count(), guides.guides);
+    // this runs every frame over every strand: a branch-free screen passes
+    // the valid ones, and the detailed checks run only on a strand it
+    // rejects, to name the fault
+    for (i, ((r, b), g)) in roots.iter().zip(bindings).zip(grooms).enumerate() {
+        if !strand_is_valid(faces, bound, r, b, g) {
+            check_strand(mesh, bound, r, b, g).map_err(|e| e.shifted(i))?;
         }
     }
-    for (i, g) in grooms[..roots.len()].iter().enumerate() {
-        let values: &[f32] = bytemuck::cast_slice(core::slice::from_ref(g));
-        if !values.iter().all(|v| v.is_finite()) {
-            return Err(Error::NonFinite {
-                what: "grooms",
-                index: i,
-            });
-        }
-        if g.root_radius < 0.0 || g.tip_radius < 0.0 || g.length < 0.0 {
-            return Err(Error::InvalidArgument(
-                "a groom has a negative radius or length",
-            ));
-        }
-        if Vec2::from(g.lift).length_squared() > core::f32::consts::PI * core::f32::consts::PI {
-            return Err(Error::InvalidArgument(
-                "a groom's lift turns by more than pi",
-            ));
-        }
+    Ok(())
+}
+
+/// Exactly the conditions [`check_strand`] tests, without a branch.
+#[inline]
+fn strand_is_valid(
+    faces: usize,
+    guides: usize,
+    r: &Root,
+    b: &StrandBinding,
+    g: &StrandGroom,
+) -> bool {
+    // comparisons are false for NaN, and an infinite coordinate fails the sum
+    let e = crate::root::BARYCENTRIC_SLACK;
+    let root = ((r.face as usize) < faces) & (r.u >= -e) & (r.v >= -e) & (r.u + r.v <= 1.0 + e);
+    let count = b.count as usize;
+    let mut binding = count <= crate::bind::MAX_NEIGHBOURS;
+    for k in 0..crate::bind::MAX_NEIGHBOURS {
+        let fine = ((b.guides[k] as usize) < guides) & b.weights[k].is_finite();
+        binding &= (k >= count) | fine;
+    }
+    binding &= (b.clump == NO_GUIDE) | ((b.clump as usize) < guides);
+    let values: &[f32] = bytemuck::cast_slice(core::slice::from_ref(g));
+    let finite = values.iter().fold(true, |all, v| all & v.is_finite());
+    let pi2 = core::f32::consts::PI * core::f32::consts::PI;
+    let groom = finite
+        & (g.root_radius >= 0.0)
+        & (g.tip_radius >= 0.0)
+        & (g.length >= 0.0)
+        & (Vec2::from(g.lift).length_squared() <= pi2);
+    root & binding & groom
+}
+
+/// Checks one strand, naming the first fault (element index 0).
+fn check_strand(
+    mesh: &Mesh,
+    bound: usize,
+    r: &Root,
+    b: &StrandBinding,
+    g: &StrandGroom,
+) -> Result<(), Error> {
+    crate::root::check_roots(mesh, core::slice::from_ref(r), "strand roots")?;
+    let count = b.count as usize;
+    if count > crate::bind::MAX_NEIGHBOURS {
+        return Err(Error::OutOfRange {
+            what: "binding counts",
+            index: 0,
+            value: count,
+            bound: crate::bind::MAX_NEIGHBOURS + 1,
+        });
+    }
+    let bad_guide = b.guides[..count].iter().find(|&&g| g as usize >= bound);
+    let bad_clump = (b.clump != NO_GUIDE && b.clump as usize >= bound).then_some(&b.clump);
+    if let Some(&value) = bad_guide.or(bad_clump) {
+        return Err(Error::OutOfRange {
+            what: "bindings",
+            index: 0,
+            value: value as usize,
+            bound,
+        });
+    }
+    if !b.weights[..count].iter().all(|w| w.is_finite()) {
+        return Err(Error::NonFinite {
+            what: "binding weights",
+            index: 0,
+        });
+    }
+    let values: &[f32] = bytemuck::cast_slice(core::slice::from_ref(g));
+    if !values.iter().all(|v| v.is_finite()) {
+        return Err(Error::NonFinite {
+            what: "grooms",
+            index: 0,
+        });
+    }
+    if g.root_radius < 0.0 || g.tip_radius < 0.0 || g.length < 0.0 {
+        return Err(Error::InvalidArgument(
+            "a groom has a negative radius or length",
+        ));
+    }
+    if Vec2::from(g.lift).length_squared() > core::f32::consts::PI * core::f32::consts::PI {
+        return Err(Error::InvalidArgument(
+            "a groom's lift turns by more than pi",
+        ));
     }
     Ok(())
 }
@@ -857,6 +902,50 @@ mod tests {
         );
         // and the change is bounded by a constant times the step (0.8 / steps)
         assert!(fine < 20.0 * 0.8 / 8000.0, "change {fine} per step");
+    }
+
+    fn special() -> impl Strategy<Value = f32> {
+        prop::sample::select(vec![
+            0.0,
+            0.3,
+            0.9,
+            -1e-3,
+            -1e-5,
+            1.0,
+            4.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ])
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+        #[test]
+        fn the_strand_screen_agrees_with_the_detailed_checks(
+            changes in prop::collection::vec((0usize..32, special(), 0u32..12), 0..3),
+        ) {
+            let m = crate::testmesh::graded_plane(2, 1.0);
+            let mesh = m.mesh();
+            // a valid strand, then up to two fields changed
+            let mut r = Root { face: 1, u: 0.2, v: 0.3, id: 0, rank: 0 };
+            let mut b = StrandBinding { guides: [0, 1, 2, 0, 0, 0, 0, 0], weights: [0.3; 8], count: 3, clump: 0 };
+            let mut g = StrandGroom { length: 1.0, root_radius: 0.01, tip_radius: 0.001, ..StrandGroom::default() };
+            for &(field, x, i) in &changes {
+                match field {
+                    0 => r.face = i,
+                    1 => r.u = x,
+                    2 => r.v = x,
+                    3 => b.count = i,
+                    4..=11 => b.guides[field - 4] = i,
+                    12..=19 => b.weights[field - 12] = x,
+                    20 => b.clump = if i > 9 { NO_GUIDE } else { i },
+                    _ => bytemuck::cast_slice_mut::<StrandGroom, f32>(core::slice::from_mut(&mut g))[field - 21] = x,
+                }
+            }
+            let screen = strand_is_valid(mesh.triangle_count(), 6, &r, &b, &g);
+            prop_assert_eq!(screen, check_strand(&mesh, 6, &r, &b, &g).is_ok());
+        }
     }
 
     proptest! {

@@ -26,7 +26,7 @@ const _: () = assert!(core::mem::size_of::<Root>() == 20);
 
 /// Slack on the barycentric range a root may have (stamped roots sit exactly
 /// inside; hosts may round).
-const BARYCENTRIC_SLACK: f32 = 1e-4;
+pub(crate) const BARYCENTRIC_SLACK: f32 = 1e-4;
 
 /// Checks that every root is on an existing face, inside it.
 pub fn check_roots(
