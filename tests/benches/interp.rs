@@ -7,9 +7,10 @@
 
 use pelage::*;
 use pelage_core::bind::{self, BindParams, StrandBinding};
+use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
 use pelage_core::groom::{GroomMaps, StrandGroom};
 use pelage_core::guides::{CvLayout, Guides};
-use pelage_core::{Arena, Root, ScalarMap, Strided};
+use pelage_core::{Arena, ArenaLayout, Mesh, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
     combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots, ExpandCall,
@@ -149,5 +150,51 @@ fn main() {
         );
     }
     println!("ratio = expand time / time to write the same bytes with the same threads (the bandwidth floor)");
+    stages(&mesh, &guides, &hairs, &bindings, &grooms, &mut out);
     println!("paper: 2 frames/s with full interpolation (979,526 hairs)");
+}
+
+/// Where one thread's frame goes, through the core: preparing the posed
+/// guides, validating the strands (every frame, so that nothing is written
+/// on bad input), and the expansion kernel itself.
+fn stages(
+    mesh: &Mesh,
+    guides: &Guides,
+    hairs: &[Root],
+    bindings: &[StrandBinding],
+    grooms: &[StrandGroom],
+    out: &mut [[f32; 4]],
+) {
+    let params = ExpandParams {
+        points_per_strand: CVS,
+        end_points: EndPoints::Pinned,
+        orphan_length: 0.0,
+    };
+    let mut layout = ArenaLayout::new();
+    PreparedGuides::layout(&mut layout, guides.len(), CVS);
+    let mut arena = vec![0u8; layout.bytes()];
+    let t_prepare = time(7, || {
+        black_box(PreparedGuides::new(mesh, guides, CVS, &mut Arena::new(&mut arena)).unwrap());
+    });
+    let prepared = PreparedGuides::new(mesh, guides, CVS, &mut Arena::new(&mut arena)).unwrap();
+    let strands = Strands {
+        roots: hairs,
+        bindings,
+        grooms,
+    };
+    let t_check = time(7, || {
+        expand::check_strands(mesh, &strands, &prepared).unwrap();
+    });
+    let bytes: &mut [u8] = bytemuck::cast_slice_mut(out);
+    let t_kernel = time(7, || {
+        expand::expand_checked(mesh, &strands, &prepared, &params, bytes, 16);
+        black_box(&bytes);
+    });
+    println!(
+        "1 thread, core stages: prepare guides {:.1} ms, check strands {:.1} ms, expand kernel {:.1} ms ({:.0} ns per hair)",
+        t_prepare * 1e3,
+        t_check * 1e3,
+        t_kernel * 1e3,
+        t_kernel * 1e9 / hairs.len() as f64
+    );
 }
