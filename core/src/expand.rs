@@ -394,9 +394,9 @@ pub fn expand_checked(
     let shift = (params.end_points == EndPoints::Pinned) as usize;
     let mut lanes = Lanes::new(n);
     let mut basis: Option<(u32, FaceBasis)> = None;
-    // frames are computed a block ahead: each is a chain of square roots and
-    // divisions, independent of the others, so a block of them overlaps
-    // where one per strand would stall every strand
+    // frames are computed a block ahead (strands are filled in order): each
+    // is a chain of square roots and divisions, independent of the others,
+    // so a block of them overlaps where one per strand would stall each strand
     let mut frames = [Frame::default(); FRAME_BLOCK];
     let mut fill = |s: usize, curve: &mut [[f32; 4]]| {
         let slot = s % FRAME_BLOCK;
