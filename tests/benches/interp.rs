@@ -150,7 +150,7 @@ fn main() {
         );
     }
     println!("ratio = expand time / time to write the same bytes with the same threads (the bandwidth floor)");
-    stages(&mesh, &guides, &hairs, &bindings, &grooms, &mut out);
+    stages(&mesh, &guides, &hairs, &bindings, &grooms, &ep, &mut out);
     println!("paper: 2 frames/s with full interpolation (979,526 hairs)");
 }
 
@@ -163,12 +163,15 @@ fn stages(
     hairs: &[Root],
     bindings: &[StrandBinding],
     grooms: &[StrandGroom],
+    ep: &PelageExpandParams,
     out: &mut [[f32; 4]],
 ) {
+    // the same work as the C API rows above
+    assert_eq!(ep.end_points, PelageEndPoints::Pinned as u32);
     let params = ExpandParams {
-        points_per_strand: CVS,
+        points_per_strand: ep.points_per_strand as usize,
         end_points: EndPoints::Pinned,
-        orphan_length: 0.0,
+        orphan_length: ep.orphan_length,
     };
     let mut layout = ArenaLayout::new();
     PreparedGuides::layout(&mut layout, guides.len(), CVS);
