@@ -7,14 +7,12 @@
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::bind::{StrandBinding, NO_GUIDE};
-use crate::frame::{FaceBasis, Frame};
+use crate::frame::{self, FaceBasis, Frame, FRAME_LANES};
 use crate::groom::StrandGroom;
 use crate::guides::Guides;
 use crate::{Error, Mesh, Root};
 use glam::{Vec2, Vec3};
 
-/// Strands whose root frames are computed together.
-const FRAME_BLOCK: usize = 32;
 /// Most control points per strand.
 pub const MAX_STRAND_POINTS: usize = 64;
 
@@ -390,29 +388,15 @@ pub fn expand_checked(
         grooms,
     } = *strands;
     let per = params.output_points();
-    let n = params.points_per_strand;
-    let shift = (params.end_points == EndPoints::Pinned) as usize;
-    let mut lanes = Lanes::new(n);
+    let mut lanes = Lanes::new(params.points_per_strand);
     let mut basis: Option<(u32, FaceBasis)> = None;
-    // frames are computed a block ahead (strands are filled in order): each
-    // is a chain of square roots and divisions, independent of the others,
-    // so a block of them overlaps where one per strand would stall each strand
-    let mut frames = [Frame::default(); FRAME_BLOCK];
+    // frames are computed a block ahead (strands are filled in order), so
+    // their square-root chains overlap (see `frame::frames`)
+    let mut frames = [Frame::default(); FRAME_LANES];
     let mut fill = |s: usize, curve: &mut [[f32; 4]]| {
-        let slot = s % FRAME_BLOCK;
+        let slot = s % FRAME_LANES;
         if slot == 0 {
-            let end = roots.len().min(s + FRAME_BLOCK);
-            for (frame, root) in frames.iter_mut().zip(&roots[s..end]) {
-                let face = match basis {
-                    Some((f, b)) if f == root.face => b,
-                    _ => {
-                        let b = FaceBasis::new(mesh, root.face as usize);
-                        basis = Some((root.face, b));
-                        b
-                    }
-                };
-                *frame = face.frame(root.u, root.v);
-            }
+            frame::frames(mesh, &roots[s..], &mut basis, &mut frames);
         }
         strand(
             &frames[slot],
@@ -421,12 +405,8 @@ pub fn expand_checked(
             guides,
             params,
             &mut lanes,
-            &mut curve[shift..shift + n],
+            curve,
         );
-        if shift == 1 {
-            curve[0] = curve[1];
-            curve[n + 1] = curve[n];
-        }
     };
     // packed float4 output is written in place
     if stride == 16 {
@@ -479,7 +459,9 @@ impl Lanes {
     }
 }
 
-/// Writes the `points_per_strand` points of one strand into `out`.
+/// Writes one strand into `out`: its `points_per_strand` points, and with
+/// pinned ends the first and last again around them
+/// ([`ExpandParams::output_points`] in all).
 #[inline]
 pub(crate) fn strand(
     frame: &Frame,
@@ -529,8 +511,15 @@ fn strand_n<const N: usize>(
     } else {
         let first = bind.guides[0] as usize * 3 * n;
         let (g, w) = (&guides.local[first..first + 3 * n], bind.weights[0]);
-        for j in 0..n {
-            (ax[j], ay[j], az[j]) = (g[j] * w, g[n + j] * w, g[2 * n + j] * w);
+        // lane by lane: written as one loop over the three, this compiled to
+        // scalar stores that the vector loads after them could not forward
+        for (a, g) in [&mut *ax, &mut *ay, &mut *az]
+            .into_iter()
+            .zip(g.chunks_exact(n))
+        {
+            for (a, g) in a.iter_mut().zip(g) {
+                *a = g * w;
+            }
         }
         for k in 1..bind.count as usize {
             let w = bind.weights[k];
@@ -598,8 +587,16 @@ fn strand_n<const N: usize>(
         }
     }
     let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
-    for (j, p) in out[..n].iter_mut().enumerate() {
+    let pinned = params.end_points == EndPoints::Pinned;
+    let shift = pinned as usize;
+    for (j, p) in out[shift..shift + n].iter_mut().enumerate() {
         *p = [px[j], py[j], pz[j], r0 + dr * t[j]];
+    }
+    // the repeated ends from registers: reading back points just stored
+    // element by element would stall on store forwarding
+    if pinned {
+        out[0] = [px[0], py[0], pz[0], r0 + dr * t[0]];
+        out[n + 1] = [px[n - 1], py[n - 1], pz[n - 1], r0 + dr * t[n - 1]];
     }
 }
 

@@ -16,7 +16,7 @@
 use crate::bind::StrandBinding;
 use crate::body::Body;
 use crate::expand::{
-    check_frame, check_strands, strand, ExpandParams, Lanes, PreparedGuides, Strands,
+    check_frame, check_strands, strand, EndPoints, ExpandParams, Lanes, PreparedGuides, Strands,
 };
 use crate::frame::Frame;
 use crate::groom::StrandGroom;
@@ -100,6 +100,11 @@ pub fn settle_checked(
     params: &ExpandParams,
 ) -> SettleReport {
     let n = params.points_per_strand;
+    // settling looks at the strand's own points, not the repeated ends
+    let params = &ExpandParams {
+        end_points: EndPoints::Raw,
+        ..*params
+    };
     let mut lanes = Lanes::new(n);
     let mut points = [[0.0f32; 4]; crate::expand::MAX_STRAND_POINTS];
     let mut report = SettleReport::default();
