@@ -435,7 +435,6 @@ pub(crate) struct Lanes {
     /// Parameter of each point along the strand, j / (n - 1).
     t: [f32; MAX_STRAND_POINTS],
     local: [[f32; MAX_STRAND_POINTS]; 3],
-    world: [[f32; MAX_STRAND_POINTS]; 3],
     /// The kink wave without phase for `wave_frequency` (bits; NaN when
     /// none yet): neighbouring strands share a frequency, so it is reused.
     wave: [[f32; MAX_STRAND_POINTS]; 2],
@@ -452,7 +451,6 @@ impl Lanes {
         Lanes {
             t,
             local: [[0.0; MAX_STRAND_POINTS]; 3],
-            world: [[0.0; MAX_STRAND_POINTS]; 3],
             wave: [[0.0; MAX_STRAND_POINTS]; 2],
             wave_frequency: f32::NAN.to_bits(),
         }
@@ -535,68 +533,118 @@ fn strand_n<const N: usize>(
     let scale = groom.length;
     let length = Vec3::new(ax[n - 1], ay[n - 1], az[n - 1]).length() * scale;
     let bend = groom.bend * length;
-    for j in 0..n {
-        ax[j] = ax[j] * scale + bend * t[j] * t[j];
-        ay[j] *= scale;
-        az[j] *= scale;
-    }
+    let mut shape = [scale, bend];
     if groom.lift != [0.0; 2] {
+        // the lift turns the scaled, bent strand, so it is shaped first
+        for j in 0..n {
+            ax[j] = ax[j] * scale + bend * t[j] * t[j];
+            ay[j] *= scale;
+            az[j] *= scale;
+        }
         lift(groom.lift, ax, ay, az);
-    }
-    let (o, tt, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
-    let [px, py, pz] = &mut lanes.world;
-    let (px, py, pz) = (&mut px[..n], &mut py[..n], &mut pz[..n]);
-    for j in 0..n {
-        let (lx, ly, lz) = (ax[j], ay[j], az[j]);
-        px[j] = o.x + tt.x * lx + b.x * ly + nn.x * lz;
-        py[j] = o.y + tt.y * lx + b.y * ly + nn.y * lz;
-        pz[j] = o.z + tt.z * lx + b.z * ly + nn.z * lz;
+        shape = [1.0, 0.0];
     }
     let clump = if bind.clump == NO_GUIDE {
         0.0
     } else {
         groom.clump
     };
-    if clump != 0.0 {
-        let base = bind.clump as usize * 3 * n;
-        let c = &guides.world[base..base + 3 * n];
-        for j in 0..n {
-            let pull = clump * t[j];
-            px[j] += (c[j] - px[j]) * pull;
-            py[j] += (c[n + j] - py[j]) * pull;
-            pz[j] += (c[2 * n + j] - pz[j]) * pull;
-        }
-    }
     let kink = groom.kink_amplitude * length;
-    if kink != 0.0 {
-        if lanes.wave_frequency != groom.kink_frequency.to_bits() {
+    let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
+    let look = Look {
+        shape,
+        clump,
+        kink,
+        phase: groom.kink_phase,
+        radius: [r0, dr],
+    };
+    let pinned = params.end_points == EndPoints::Pinned;
+    let shift = pinned as usize;
+    let local = [&*ax, &*ay, &*az];
+    let dst = &mut out[shift..shift + n];
+    if clump == 0.0 && kink == 0.0 {
+        place::<false>(frame, t, local, &NO_CLUMP, &lanes.wave, &look, dst);
+    } else {
+        if kink != 0.0 && lanes.wave_frequency != groom.kink_frequency.to_bits() {
             let [ws, wc] = &mut lanes.wave;
             kink_wave(groom.kink_frequency, n, &mut ws[..n], &mut wc[..n]);
             lanes.wave_frequency = groom.kink_frequency.to_bits();
         }
-        let [cp, sp] = groom.kink_phase;
-        let [ws, wc] = &lanes.wave;
-        let (ws, wc) = (&ws[..n], &wc[..n]);
-        for j in 0..n {
+        let centre = match bind.clump {
+            NO_GUIDE => &NO_CLUMP[..3 * n],
+            g => &guides.world[g as usize * 3 * n..(g as usize + 1) * 3 * n],
+        };
+        place::<true>(frame, t, local, centre, &lanes.wave, &look, dst);
+    }
+    // the output was stored point by point (16 bytes), so these loads
+    // forward from the stores
+    if pinned {
+        out[0] = out[1];
+        out[n + 1] = out[n];
+    }
+}
+
+/// Stand-in clump centre for a strand without one (its pull is 0).
+static NO_CLUMP: [f32; 3 * MAX_STRAND_POINTS] = [0.0; 3 * MAX_STRAND_POINTS];
+
+/// One strand's look, from its groom values and its length.
+struct Look {
+    /// Length scale, and bend offset at the tip (both applied to local points).
+    shape: [f32; 2],
+    /// Pull toward the clump centre at the tip.
+    clump: f32,
+    /// Kink amplitude at the tip.
+    kink: f32,
+    /// Cosine and sine of the kink phase.
+    phase: [f32; 2],
+    /// Root radius, and tip minus root radius.
+    radius: [f32; 2],
+}
+
+/// Places the local points `a` in the world through `frame`, pulls them
+/// toward the clump centre `c` and adds the kink wave `wave` (when
+/// `CLUMP_KINK`), and writes the points with their radii to `out`.
+///
+/// One pass per point with everything in registers: separate passes
+/// stored and reloaded every lane between steps. A zero pull or kink
+/// changes nothing, so one loop serves a strand with either.
+#[inline(always)]
+fn place<const CLUMP_KINK: bool>(
+    frame: &Frame,
+    t: &[f32],
+    a: [&[f32]; 3],
+    c: &[f32],
+    wave: &[[f32; MAX_STRAND_POINTS]; 2],
+    look: &Look,
+    out: &mut [[f32; 4]],
+) {
+    let n = out.len();
+    let (t, [ax, ay, az]) = (&t[..n], a.map(|a| &a[..n]));
+    let (cx, cy, cz) = (&c[..n], &c[n..2 * n], &c[2 * n..3 * n]);
+    let (ws, wc) = (&wave[0][..n], &wave[1][..n]);
+    let (o, tt, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
+    let [scale, bend] = look.shape;
+    let [cp, sp] = look.phase;
+    let [r0, dr] = look.radius;
+    for j in 0..n {
+        let lx = ax[j] * scale + bend * t[j] * t[j];
+        let (ly, lz) = (ay[j] * scale, az[j] * scale);
+        let mut x = o.x + tt.x * lx + b.x * ly + nn.x * lz;
+        let mut y = o.y + tt.y * lx + b.y * ly + nn.y * lz;
+        let mut z = o.z + tt.z * lx + b.z * ly + nn.z * lz;
+        if CLUMP_KINK {
+            let pull = look.clump * t[j];
+            x += (cx[j] - x) * pull;
+            y += (cy[j] - y) * pull;
+            z += (cz[j] - z) * pull;
             // sin and cos of (phase + j delta)
             let (ks, kc) = (sp * wc[j] + cp * ws[j], cp * wc[j] - sp * ws[j]);
-            let k = kink * t[j];
-            px[j] += (tt.x * ks + b.x * kc) * k;
-            py[j] += (tt.y * ks + b.y * kc) * k;
-            pz[j] += (tt.z * ks + b.z * kc) * k;
+            let k = look.kink * t[j];
+            x += (tt.x * ks + b.x * kc) * k;
+            y += (tt.y * ks + b.y * kc) * k;
+            z += (tt.z * ks + b.z * kc) * k;
         }
-    }
-    let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
-    let pinned = params.end_points == EndPoints::Pinned;
-    let shift = pinned as usize;
-    for (j, p) in out[shift..shift + n].iter_mut().enumerate() {
-        *p = [px[j], py[j], pz[j], r0 + dr * t[j]];
-    }
-    // the repeated ends from registers: reading back points just stored
-    // element by element would stall on store forwarding
-    if pinned {
-        out[0] = [px[0], py[0], pz[0], r0 + dr * t[0]];
-        out[n + 1] = [px[n - 1], py[n - 1], pz[n - 1], r0 + dr * t[n - 1]];
+        out[j] = [x, y, z, r0 + dr * t[j]];
     }
 }
 
