@@ -11,7 +11,7 @@ use pelage_core::arena::ArenaLayout;
 use pelage_core::bind::StrandBinding;
 use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
 use pelage_core::groom::StrandGroom;
-use pelage_core::{Arena, Root};
+use pelage_core::{Arena, Mesh, Root};
 
 /// End-point convention of the output curves.
 #[repr(C)]
@@ -160,7 +160,7 @@ pub extern "C" fn pelage_expand(
             expand::check_strands(&mesh, &all.range(range), &prepared)
         })?;
         split_over_threads(strand_count, p.thread_count, out, per * point_stride, |range, bytes| {
-            expand::expand_checked(&mesh, &all.range(range), &prepared, &core, bytes, point_stride);
+            expand_range(&mesh, &all.range(range), &prepared, &core, bytes, point_stride);
         })?;
         counts.fill(per as u32);
         for (id, s) in ids.iter_mut().zip(strands) {
@@ -168,6 +168,25 @@ pub extern "C" fn pelage_expand(
         }
         Ok(())
     }
+}
+
+/// `expand_checked` in its AVX2 build where the CPU has AVX2: the same bits
+/// either way (see `expand_checked_avx2`), the AVX2 build faster.
+fn expand_range(
+    mesh: &Mesh,
+    strands: &Strands,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+    stride: usize,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, the one requirement of the AVX2 build.
+        unsafe { expand::expand_checked_avx2(mesh, strands, guides, params, out, stride) };
+        return;
+    }
+    expand::expand_checked(mesh, strands, guides, params, out, stride);
 }
 
 fn float4_out<'a>(

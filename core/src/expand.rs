@@ -382,50 +382,101 @@ pub fn expand_checked(
     out: &mut [u8],
     stride: usize,
 ) {
-    let Strands {
-        roots,
-        bindings,
-        grooms,
-    } = *strands;
+    expand_kernel(mesh, strands, guides, params, out, stride);
+}
+
+/// [`expand_checked`] compiled for AVX2: the same operations in the same
+/// order (no fused multiply-add), so the same bits, in wider registers.
+///
+/// # Safety
+/// The CPU must have AVX2: a host checks first (for example with
+/// `is_x86_feature_detected!("avx2")`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub fn expand_checked_avx2(
+    mesh: &Mesh,
+    strands: &Strands,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+    stride: usize,
+) {
+    expand_kernel(mesh, strands, guides, params, out, stride);
+}
+
+/// The body of [`expand_checked`], inlined whole into each entry so that the
+/// AVX2 entry compiles every per-strand step for AVX2.
+#[inline(always)]
+fn expand_kernel(
+    mesh: &Mesh,
+    strands: &Strands,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+    stride: usize,
+) {
     let per = params.output_points();
-    let mut lanes = Lanes::new(params.points_per_strand);
-    let mut basis: Option<(u32, FaceBasis)> = None;
-    // frames are computed a block ahead (strands are filled in order), so
-    // their square-root chains overlap (see `frame::frames`)
-    let mut frames = [Frame::default(); FRAME_LANES];
-    let mut fill = |s: usize, curve: &mut [[f32; 4]]| {
-        let slot = s % FRAME_LANES;
-        if slot == 0 {
-            frame::frames(mesh, &roots[s..], &mut basis, &mut frames);
-        }
-        strand(
-            &frames[slot],
-            &bindings[s],
-            &grooms[s],
-            guides,
-            params,
-            &mut lanes,
-            curve,
-        );
+    let mut filler = Filler {
+        mesh,
+        strands,
+        guides,
+        params,
+        lanes: Lanes::new(params.points_per_strand),
+        basis: None,
+        frames: [Frame::default(); FRAME_LANES],
     };
+    let n = strands.len();
     // packed float4 output is written in place
     if stride == 16 {
-        if let Ok(all) =
-            bytemuck::try_cast_slice_mut::<u8, [f32; 4]>(&mut out[..roots.len() * per * 16])
-        {
+        if let Ok(all) = bytemuck::try_cast_slice_mut::<u8, [f32; 4]>(&mut out[..n * per * 16]) {
             for (s, curve) in all.chunks_exact_mut(per).enumerate() {
-                fill(s, curve);
+                filler.fill(s, curve);
             }
             return;
         }
     }
     let mut buffer = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
-    for s in 0..roots.len() {
-        fill(s, &mut buffer[..per]);
+    for s in 0..n {
+        filler.fill(s, &mut buffer[..per]);
         let region = &mut out[s * per * stride..];
         for (j, p) in buffer[..per].iter().enumerate() {
             region[j * stride..j * stride + 16].copy_from_slice(bytemuck::bytes_of(p));
         }
+    }
+}
+
+/// What [`expand_kernel`] carries from strand to strand.
+struct Filler<'r, 'a> {
+    mesh: &'r Mesh<'a>,
+    strands: &'r Strands<'a>,
+    guides: &'r PreparedGuides<'a>,
+    params: &'r ExpandParams,
+    lanes: Lanes,
+    basis: Option<(u32, FaceBasis)>,
+    /// Root frames of the current block of strands.
+    frames: [Frame; FRAME_LANES],
+}
+
+impl Filler<'_, '_> {
+    /// Writes strand `s` to `curve`. Strands are filled in order: the
+    /// frames of a block are computed at its first strand, so that their
+    /// square-root chains overlap (see `frame::frames`).
+    #[inline(always)]
+    fn fill(&mut self, s: usize, curve: &mut [[f32; 4]]) {
+        let slot = s % FRAME_LANES;
+        if slot == 0 {
+            let roots = &self.strands.roots[s..];
+            frame::frames(self.mesh, roots, &mut self.basis, &mut self.frames);
+        }
+        strand(
+            &self.frames[slot],
+            &self.strands.bindings[s],
+            &self.strands.grooms[s],
+            self.guides,
+            self.params,
+            &mut self.lanes,
+            curve,
+        );
     }
 }
 
@@ -460,7 +511,7 @@ impl Lanes {
 /// Writes one strand into `out`: its `points_per_strand` points, and with
 /// pinned ends the first and last again around them
 /// ([`ExpandParams::output_points`] in all).
-#[inline]
+#[inline(always)]
 pub(crate) fn strand(
     frame: &Frame,
     bind: &StrandBinding,

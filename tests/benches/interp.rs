@@ -190,14 +190,39 @@ fn stages(
     });
     let bytes: &mut [u8] = bytemuck::cast_slice_mut(out);
     let t_kernel = time(7, || {
-        expand::expand_checked(mesh, &strands, &prepared, &params, bytes, 16);
+        kernel(mesh, &strands, &prepared, &params, bytes);
         black_box(&bytes);
     });
     println!(
-        "1 thread, core stages: prepare guides {:.1} ms, check strands {:.1} ms, expand kernel {:.1} ms ({:.0} ns per hair)",
+        "1 thread, core stages: prepare guides {:.1} ms, check strands {:.1} ms, expand kernel{} {:.1} ms ({:.0} ns per hair)",
         t_prepare * 1e3,
         t_check * 1e3,
+        if avx2() { " (AVX2)" } else { "" },
         t_kernel * 1e3,
         t_kernel * 1e9 / hairs.len() as f64
     );
+}
+
+fn avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::is_x86_feature_detected!("avx2");
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
+
+/// The expansion kernel the C API runs: its AVX2 build where the CPU has it.
+fn kernel(
+    mesh: &Mesh,
+    strands: &Strands,
+    prepared: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if avx2() {
+        // SAFETY: the CPU has AVX2.
+        unsafe { expand::expand_checked_avx2(mesh, strands, prepared, params, out, 16) };
+        return;
+    }
+    expand::expand_checked(mesh, strands, prepared, params, out, 16);
 }

@@ -121,6 +121,89 @@ fn identical_bits_for_1_2_and_7_threads_and_chunks() {
         .all(|p| p.iter().all(|c| c.is_finite()) && p[3] >= 0.0));
 }
 
+/// The AVX2 build of the expansion kernel (what the C API runs where the CPU
+/// has it) gives the same bits as the baseline build, for every branch of
+/// the kernel: fixed and generic point counts, both end conventions, packed
+/// and strided output, orphans, and strands with and without lift, kink and
+/// clump.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn avx2_kernel_gives_the_baseline_bits() {
+    use pelage_core::bind::StrandBinding;
+    use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
+    use pelage_core::groom::StrandGroom;
+    use pelage_core::guides::{CvLayout, Guides};
+    use pelage_core::{Arena, ArenaLayout, Strided};
+    if !std::is_x86_feature_detected!("avx2") {
+        eprintln!("no AVX2 on this CPU: nothing to compare");
+        return;
+    }
+    let m = default_creature();
+    let g = groom(&m, 1500, 20_000, &styled());
+    let mesh = mesh_view(&m);
+    let mut bindings: Vec<StrandBinding> = bytemuck::cast_slice(&g.bindings).to_vec();
+    let mut grooms: Vec<StrandGroom> = bytemuck::cast_slice(&g.grooms).to_vec();
+    // every seventh strand an orphan, and the others a mix of looks
+    for (i, (b, gr)) in bindings.iter_mut().zip(&mut grooms).enumerate() {
+        match i % 7 {
+            0 => gr.lift = [0.3, -0.2],
+            1 => gr.kink_amplitude = 0.0,
+            2 => gr.clump = 0.0,
+            3 => (gr.kink_amplitude, gr.clump) = (0.0, 0.0),
+            4 => {
+                *b = StrandBinding {
+                    clump: pelage_core::bind::NO_GUIDE,
+                    ..StrandBinding::default()
+                }
+            }
+            _ => {}
+        }
+    }
+    let guides = Guides {
+        roots: &g.guide_roots,
+        points: Strided::from_slice(&g.guide_points),
+        layout: CvLayout::Fixed(CVS),
+    };
+    let strands = Strands {
+        roots: &g.strands,
+        bindings: &bindings,
+        grooms: &grooms,
+    };
+    for points in [16, 8, 32, 11] {
+        let mut layout = ArenaLayout::new();
+        PreparedGuides::layout(&mut layout, guides.len(), points);
+        let mut arena = vec![0u8; layout.bytes()];
+        let prepared =
+            PreparedGuides::new(&mesh, &guides, points, &mut Arena::new(&mut arena)).unwrap();
+        for end_points in [EndPoints::Raw, EndPoints::Pinned] {
+            let params = ExpandParams {
+                points_per_strand: points,
+                end_points,
+                orphan_length: 0.05,
+            };
+            expand::check_inputs(&mesh, &strands, &prepared, &params, usize::MAX, 16).unwrap();
+            for stride in [16, 20] {
+                let bytes = strands.len() * params.output_points() * stride;
+                let (mut base, mut wide) = (vec![0u8; bytes], vec![1u8; bytes]);
+                expand::expand_checked(&mesh, &strands, &prepared, &params, &mut base, stride);
+                // SAFETY: the CPU has AVX2 (checked above).
+                unsafe {
+                    expand::expand_checked_avx2(
+                        &mesh, &strands, &prepared, &params, &mut wide, stride,
+                    )
+                };
+                let pad = |v: &[u8]| -> Vec<u8> {
+                    v.chunks(stride).flat_map(|p| p[..16].to_vec()).collect()
+                };
+                assert!(
+                    pad(&base) == pad(&wide),
+                    "{points} points, {end_points:?}, stride {stride}"
+                );
+            }
+        }
+    }
+}
+
 /// Nearest intersection of the ray origin + t dir (t in 0..max_t) with the
 /// mesh: (t, face).
 fn first_hit(m: &CreatureMesh, origin: Vec3, dir: Vec3, max_t: f32) -> Option<(f32, usize)> {
