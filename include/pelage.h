@@ -92,6 +92,9 @@ typedef enum PelageRegionKind {
   PELAGE_REGION_KIND_TEXTURE_U8 = 2,
 } PelageRegionKind;
 
+// The opaque object a `PelageGroom` points to.
+typedef struct PelageGroomTy PelageGroomTy;
+
 // Parting regions: a strand only uses guides of its own region id.
 typedef struct PelageRegionMap {
   // Storage kind: a PelageRegionKind value.
@@ -296,6 +299,12 @@ typedef struct PelageGroomMaps {
   uint64_t seed;
 } PelageGroomMaps;
 
+// A groom: render strands (roots, bindings, groom values) copied and
+// checked once by `pelage_groom_new`, so that `pelage_groom_expand` checks
+// per frame only the mesh, the posed guides and the outputs. Created by
+// `pelage_groom_new`, released by `pelage_groom_free`; immutable between.
+typedef struct PelageGroomTy *PelageGroom;
+
 // What pelage_settle changed.
 typedef struct PelageSettleInfo {
   // Strands rotated toward their root normal (lift set).
@@ -435,6 +444,36 @@ struct PelageGroomMaps pelage_groom_maps_defaults(void);
 //
 // Thread safety: reentrant; concurrent calls need distinct outputs.
 enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const struct PelageGroomMaps *maps, const struct PelageRoot *roots, size_t root_count, struct PelageStrandGroom *grooms, size_t grooms_capacity);
+
+// Creates a groom from `strand_count` render strands: parallel arrays of
+// roots, bindings (from `pelage_bind`) and groom values (from
+// `pelage_groom_evaluate` or the host). The records are checked (faces,
+// barycentrics, guide indices, weights, groom values) and copied: the host
+// may free or change its arrays afterwards. On success `*out_groom` is the
+// new groom; on failure it is left untouched.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_groom_new(const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, const struct PelageStrandGroom *grooms, size_t strand_count, PelageGroom *out_groom);
+
+// Releases a groom. NULL is accepted and does nothing.
+//
+// Thread safety: no other call may use `groom` during or after this one.
+void pelage_groom_free(PelageGroom groom);
+
+// Writes the number of strands in `groom` to `*strand_count`.
+//
+// Thread safety: may be called from any thread while `groom` is alive.
+enum PelageStatus pelage_groom_strand_count(PelageGroom groom, size_t *strand_count);
+
+// `pelage_expand` for the strands `first .. first + count` of `groom`:
+// the same outputs and bits, without reading every strand record again
+// to check it (the records were checked by `pelage_groom_new`; only that
+// they fit this frame's mesh and guides is checked). The range is how a
+// render procedural expands patch by patch.
+//
+// Thread safety: concurrent calls on the same groom are safe with distinct
+// arenas and outputs.
+enum PelageStatus pelage_groom_expand(PelageGroom groom, const struct PelageMeshDesc *mesh, const struct PelageGuidesDesc *guides, size_t first, size_t count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, void *points, size_t point_stride, size_t point_capacity, uint32_t *curve_counts, uint32_t *curve_ids);
 
 // Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 // positions into `positions` (float3, `position_stride` bytes apart) and, if

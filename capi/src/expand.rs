@@ -9,7 +9,7 @@ use crate::{
 };
 use pelage_core::arena::ArenaLayout;
 use pelage_core::bind::StrandBinding;
-use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
+use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, StrandBounds, Strands};
 use pelage_core::groom::StrandGroom;
 use pelage_core::{Arena, Mesh, Root};
 
@@ -129,45 +129,96 @@ pub extern "C" fn pelage_expand(
     curve_ids: *mut u32,
 ) -> PelageStatus {
     ffi_boundary! {
-        let mesh = req(mesh, "mesh")?.view()?;
-        let guides = req(guides, "guides")?.view()?;
-        let p = req(params, "params")?;
-        let core = core_params(p)?;
         let strands: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
         let bindings: &[StrandBinding] = bytemuck::cast_slice(slice(bindings, strand_count, "bindings")?);
         let grooms: &[StrandGroom] = bytemuck::cast_slice(slice(grooms, strand_count, "grooms")?);
-        let per = core.output_points();
-        let needed = strand_count.checked_mul(per).ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "strand_count overflows"))?;
-        if point_capacity < needed {
-            return Err(Failure::new(
-                PelageStatus::CapacityExceeded,
-                format!("points: {needed} needed, {point_capacity} available"),
-            ));
-        }
-        if point_stride < 16 {
-            return Err(Failure::new(PelageStatus::InvalidArgument, format!("point_stride {point_stride} is below 16")));
-        }
-        let out = float4_out(points, point_stride, needed)?;
-        let counts = slice_mut(curve_counts, if curve_counts.is_null() { 0 } else { strand_count }, "curve_counts")?;
-        let ids = slice_mut(curve_ids, if curve_ids.is_null() { 0 } else { strand_count }, "curve_ids")?;
-        let arena = bytes_mut(arena, arena_bytes, "arena")?;
-        let mut arena = Arena::new(arena);
-        let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
         let all = Strands { roots: strands, bindings, grooms };
-        expand::check_frame(&prepared, &core)?;
-        expand::check_output(strand_count, &core, out.len(), point_stride)?;
-        check_over_threads(strand_count, p.thread_count, |range| {
-            expand::check_strands(&mesh, &all.range(range), &prepared)
-        })?;
-        split_over_threads(strand_count, p.thread_count, out, per * point_stride, |range, bytes| {
-            expand_range(&mesh, &all.range(range), &prepared, &core, bytes, point_stride);
-        })?;
-        counts.fill(per as u32);
-        for (id, s) in ids.iter_mut().zip(strands) {
-            *id = s.id;
-        }
-        Ok(())
+        let out = Curves { points, point_stride, point_capacity, curve_counts, curve_ids };
+        run(mesh, guides, all, None, params, arena, arena_bytes, out)
     }
+}
+
+/// Where [`run`] writes curves (see `pelage_expand`).
+pub(crate) struct Curves {
+    pub points: *mut std::ffi::c_void,
+    pub point_stride: usize,
+    pub point_capacity: usize,
+    pub curve_counts: *mut u32,
+    pub curve_ids: *mut u32,
+}
+
+/// Expands `all` into `out`, checking every input first: all the strand
+/// records, or, with the `bounds` of records checked before, only that
+/// they fit the mesh and guides.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run(
+    mesh: *const PelageMeshDesc,
+    guides: *const PelageGuidesDesc,
+    all: Strands,
+    bounds: Option<&StrandBounds>,
+    params: *const PelageExpandParams,
+    arena: *mut std::ffi::c_void,
+    arena_bytes: usize,
+    out: Curves,
+) -> Result<(), Failure> {
+    let mesh = req(mesh, "mesh")?.view()?;
+    let guides = req(guides, "guides")?.view()?;
+    let p = req(params, "params")?;
+    let core = core_params(p)?;
+    let strand_count = all.len();
+    let per = core.output_points();
+    let needed = strand_count
+        .checked_mul(per)
+        .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "strand_count overflows"))?;
+    if out.point_capacity < needed {
+        return Err(Failure::new(
+            PelageStatus::CapacityExceeded,
+            format!("points: {needed} needed, {} available", out.point_capacity),
+        ));
+    }
+    let point_stride = out.point_stride;
+    if point_stride < 16 {
+        return Err(Failure::new(
+            PelageStatus::InvalidArgument,
+            format!("point_stride {point_stride} is below 16"),
+        ));
+    }
+    let points = float4_out(out.points, point_stride, needed)?;
+    let optional = |p: *mut u32| if p.is_null() { 0 } else { strand_count };
+    let counts = slice_mut(out.curve_counts, optional(out.curve_counts), "curve_counts")?;
+    let ids = slice_mut(out.curve_ids, optional(out.curve_ids), "curve_ids")?;
+    let arena = bytes_mut(arena, arena_bytes, "arena")?;
+    let mut arena = Arena::new(arena);
+    let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
+    expand::check_frame(&prepared, &core)?;
+    expand::check_output(strand_count, &core, points.len(), point_stride)?;
+    match bounds {
+        Some(bounds) => bounds.check(&mesh, &prepared)?,
+        None => check_over_threads(strand_count, p.thread_count, |range| {
+            expand::check_strands(&mesh, &all.range(range), &prepared)
+        })?,
+    }
+    split_over_threads(
+        strand_count,
+        p.thread_count,
+        points,
+        per * point_stride,
+        |range, bytes| {
+            expand_range(
+                &mesh,
+                &all.range(range),
+                &prepared,
+                &core,
+                bytes,
+                point_stride,
+            );
+        },
+    )?;
+    counts.fill(per as u32);
+    for (id, s) in ids.iter_mut().zip(all.roots) {
+        *id = s.id;
+    }
+    Ok(())
 }
 
 /// `expand_checked` in its AVX2 build where the CPU has AVX2: the same bits

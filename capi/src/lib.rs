@@ -11,6 +11,7 @@ mod bind;
 mod buffers;
 mod expand;
 mod groom;
+mod groom_handle;
 mod guides;
 mod map;
 mod mesh;
@@ -30,6 +31,10 @@ pub use expand::{
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,
+};
+pub use groom_handle::{
+    pelage_groom_expand, pelage_groom_free, pelage_groom_new, pelage_groom_strand_count,
+    PelageGroom, PelageGroomTy,
 };
 pub use guides::PelageGuidesDesc;
 pub use map::{PelageMap, PelageMapKind};

@@ -246,6 +246,11 @@ pub fn check_output(
 /// validated (by [`Mesh::validate`] or [`PreparedGuides::new`]) and the
 /// prepared `guides`. The first faulty strand is reported.
 pub fn check_strands(mesh: &Mesh, strands: &Strands, guides: &PreparedGuides) -> Result<(), Error> {
+    check_strands_within(strands, mesh.triangle_count(), guides.guides)
+}
+
+/// [`check_strands`] against `faces` triangles and `guides` guides.
+fn check_strands_within(strands: &Strands, faces: usize, guides: usize) -> Result<(), Error> {
     let Strands {
         roots,
         bindings,
@@ -256,16 +261,81 @@ pub fn check_strands(mesh: &Mesh, strands: &Strands, guides: &PreparedGuides) ->
             "bindings and grooms must cover every strand",
         ));
     }
-    let (faces, bound) = (mesh.triangle_count(), guides.guides);
     // this runs every frame over every strand: a branch-free screen passes
     // the valid ones, and the detailed checks run only on a strand it
     // rejects, to name the fault
     for (i, ((r, b), g)) in roots.iter().zip(bindings).zip(grooms).enumerate() {
-        if !strand_is_valid(faces, bound, r, b, g) {
-            check_strand(mesh, bound, r, b, g).map_err(|e| e.shifted(i))?;
+        if !strand_is_valid(faces, guides, r, b, g) {
+            check_strand(faces, guides, r, b, g).map_err(|e| e.shifted(i))?;
         }
     }
     Ok(())
+}
+
+/// The smallest mesh and guide set that strand records checked by
+/// [`StrandBounds::new`] fit: all that is left to check per frame.
+///
+/// A host that keeps a groom's strands across frames checks the records
+/// once, then each frame checks only these two counts (O(1)) before
+/// [`expand_checked`], instead of reading every record again with
+/// [`check_strands`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StrandBounds {
+    /// Largest root face + 1 (0 without strands), and a strand on it.
+    faces: (usize, usize),
+    /// Largest guide index a binding uses + 1 (0 when none), and a strand using it.
+    guides: (usize, usize),
+}
+
+impl StrandBounds {
+    /// Checks everything about `strands` that does not depend on the mesh
+    /// or the guides (what [`check_strands`] checks, short of face and
+    /// guide counts), and finds the counts they need.
+    pub fn new(strands: &Strands) -> Result<Self, Error> {
+        // every index a u32 holds is some mesh's face; NO_GUIDE is no guide
+        check_strands_within(strands, u32::MAX as usize, NO_GUIDE as usize)?;
+        let mut bounds = StrandBounds::default();
+        for (i, (r, b)) in strands.roots.iter().zip(strands.bindings).enumerate() {
+            if r.face as usize >= bounds.faces.0 {
+                bounds.faces = (r.face as usize + 1, i);
+            }
+            let clump = (b.clump != NO_GUIDE).then_some(&b.clump);
+            for &g in b.guides[..b.count as usize].iter().chain(clump) {
+                if g as usize >= bounds.guides.0 {
+                    bounds.guides = (g as usize + 1, i);
+                }
+            }
+        }
+        Ok(bounds)
+    }
+
+    /// Checks that the strands fit `mesh` and `guides`: with [`check_frame`]
+    /// and [`check_output`], what [`check_inputs`] checks.
+    pub fn check(&self, mesh: &Mesh, guides: &PreparedGuides) -> Result<(), Error> {
+        self.fits(mesh.triangle_count(), guides.len())
+    }
+
+    /// [`StrandBounds::check`] against `faces` triangles and `guides` guides.
+    fn fits(&self, faces: usize, guides: usize) -> Result<(), Error> {
+        let ((needed, face_strand), (used, guide_strand)) = (self.faces, self.guides);
+        if needed > faces {
+            return Err(Error::OutOfRange {
+                what: "strand roots",
+                index: face_strand,
+                value: needed - 1,
+                bound: faces,
+            });
+        }
+        if used > guides {
+            return Err(Error::OutOfRange {
+                what: "bindings",
+                index: guide_strand,
+                value: used - 1,
+                bound: guides,
+            });
+        }
+        Ok(())
+    }
 }
 
 /// Exactly the conditions [`check_strand`] tests, without a branch.
@@ -300,13 +370,13 @@ fn strand_is_valid(
 
 /// Checks one strand, naming the first fault (element index 0).
 fn check_strand(
-    mesh: &Mesh,
+    faces: usize,
     bound: usize,
     r: &Root,
     b: &StrandBinding,
     g: &StrandGroom,
 ) -> Result<(), Error> {
-    crate::root::check_roots(mesh, core::slice::from_ref(r), "strand roots")?;
+    crate::root::check_root(faces, r, "strand roots")?;
     let count = b.count as usize;
     if count > crate::bind::MAX_NEIGHBOURS {
         return Err(Error::OutOfRange {
@@ -1039,8 +1109,14 @@ mod tests {
                     _ => bytemuck::cast_slice_mut::<StrandGroom, f32>(core::slice::from_mut(&mut g))[field - 21] = x,
                 }
             }
-            let screen = strand_is_valid(mesh.triangle_count(), 6, &r, &b, &g);
-            prop_assert_eq!(screen, check_strand(&mesh, 6, &r, &b, &g).is_ok());
+            let faces = mesh.triangle_count();
+            let screen = strand_is_valid(faces, 6, &r, &b, &g);
+            let detailed = check_strand(faces, 6, &r, &b, &g).is_ok();
+            prop_assert_eq!(screen, detailed);
+            // records checked once, then only the counts: the same verdict
+            let strands = Strands { roots: &[r], bindings: &[b], grooms: &[g] };
+            let split = StrandBounds::new(&strands).and_then(|bounds| bounds.fits(faces, 6));
+            prop_assert_eq!(split.is_ok(), detailed);
         }
     }
 

@@ -34,24 +34,31 @@ pub fn check_roots(
     roots: &[Root],
     what: &'static str,
 ) -> Result<(), crate::Error> {
+    let faces = mesh.triangle_count();
     for (i, r) in roots.iter().enumerate() {
-        if r.face as usize >= mesh.triangle_count() {
-            return Err(crate::Error::OutOfRange {
-                what,
-                index: i,
-                value: r.face as usize,
-                bound: mesh.triangle_count(),
-            });
-        }
-        if !(r.u.is_finite() && r.v.is_finite()) {
-            return Err(crate::Error::NonFinite { what, index: i });
-        }
-        let e = BARYCENTRIC_SLACK;
-        if r.u < -e || r.v < -e || r.u + r.v > 1.0 + e {
-            return Err(crate::Error::InvalidArgument(
-                "a root's barycentric coordinates lie outside its triangle",
-            ));
-        }
+        check_root(faces, r, what).map_err(|e| e.shifted(i))?;
+    }
+    Ok(())
+}
+
+/// Checks that `r` is on one of `faces` faces, inside it (element index 0).
+pub(crate) fn check_root(faces: usize, r: &Root, what: &'static str) -> Result<(), crate::Error> {
+    if r.face as usize >= faces {
+        return Err(crate::Error::OutOfRange {
+            what,
+            index: 0,
+            value: r.face as usize,
+            bound: faces,
+        });
+    }
+    if !(r.u.is_finite() && r.v.is_finite()) {
+        return Err(crate::Error::NonFinite { what, index: 0 });
+    }
+    let e = BARYCENTRIC_SLACK;
+    if r.u < -e || r.v < -e || r.u + r.v > 1.0 + e {
+        return Err(crate::Error::InvalidArgument(
+            "a root's barycentric coordinates lie outside its triangle",
+        ));
     }
     Ok(())
 }

@@ -1509,6 +1509,102 @@ static void test_interp_bad_input(void) {
   scratch_free();
 }
 
+/* The groom handle: records checked and copied once, then expanded per frame with the same bits as
+   pelage_expand; every failure leaves the outputs (and *out_groom) untouched. */
+#define GROOM_EXPAND(groom, mesh, guides, first, count, params, points, capacity)                                 \
+  pelage_groom_expand(groom, mesh, guides, first, count, params, g_in.expand_arena, g_in.expand_arena_bytes, points, \
+                      16, capacity, g_in.counts_out, g_in.ids_out)
+static void test_groom_handle(void) {
+  const size_t n = g_in.strand_count, per = g_in.per;
+  PelageStrandGroom *grooms = malloc(n * sizeof *grooms);
+  PelageStrandBinding *bindings = malloc(n * sizeof *bindings);
+  REQUIRE(grooms && bindings);
+  memcpy(grooms, g_in.grooms, n * sizeof *grooms);
+  memcpy(bindings, g_in.bindings, n * sizeof *bindings);
+  PelageGroom groom = NULL, canary = (PelageGroom)&g_in;
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_new(g_in.strands, bindings, grooms, n, &groom));
+  REQUIRE(groom != NULL);
+  /* a copy: the host's arrays may change afterwards */
+  memset(grooms, 0xff, n * sizeof *grooms);
+  size_t count = 0;
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_strand_count(groom, &count));
+  CHECK(count == n);
+  const unsigned threads[3] = {1, 2, 7};
+  for (int t = 0; t < 3; ++t) {
+    PelageExpandParams p = g_in.expand_params;
+    p.thread_count = threads[t];
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, &p, g_in.points_out, n * per));
+    CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) == 0);
+  }
+  /* patch by patch: each range gives its slice of the whole */
+  const size_t cuts[4] = {0, n / 5, n / 2 + 3, n};
+  for (int c = 0; c < 3; ++c) {
+    const size_t first = cuts[c], k = cuts[c + 1] - cuts[c];
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK,
+           GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, first, k, &g_in.expand_params, g_in.points_out, k * per));
+    CHECK(memcmp(g_in.points_out, g_in.points + 4 * per * first, k * per * 16) == 0);
+    CHECK(g_in.ids_out[0] == g_in.strands[first].id && g_in.counts_out[0] == per);
+  }
+  EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, n, 0, &g_in.expand_params, NULL, 0));
+
+  /* failures */
+  FAILS(PELAGE_STATUS_NULL_PARAMETER,
+        GROOM_EXPAND(NULL, &g_in.mesh, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER,
+        GROOM_EXPAND(groom, NULL, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER,
+        GROOM_EXPAND(groom, &g_in.mesh, NULL, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER,
+        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, NULL, g_in.points_out, n * per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER,
+        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, &g_in.expand_params, NULL, n * per));
+  FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 1, n, &g_in.expand_params, g_in.points_out, n * per));
+  FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, SIZE_MAX, 2, &g_in.expand_params, g_in.points_out, n * per));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per - 1));
+  /* a mesh with fewer triangles than a root's face, fewer guides than a binding uses */
+  PelageMeshDesc small = g_in.mesh;
+  small.triangle_count = 1;
+  FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+        GROOM_EXPAND(groom, &small, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+  PelageGuidesDesc fewer = g_in.guides;
+  fewer.guide_count = 2, fewer.point_count = 2 * (size_t)fewer.points_per_guide;
+  FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+        GROOM_EXPAND(groom, &g_in.mesh, &fewer, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+  size_t count_out = 77;
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_strand_count(NULL, &count_out));
+  CHECK(count_out == 77);
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_strand_count(groom, NULL));
+
+  /* bad records are refused when the groom is made, *out_groom untouched */
+  memcpy(grooms, g_in.grooms, n * sizeof *grooms);
+  PelageGroom out = canary;
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(NULL, bindings, grooms, n, &out));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(g_in.strands, NULL, grooms, n, &out));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(g_in.strands, bindings, NULL, n, &out));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(g_in.strands, bindings, grooms, n, NULL));
+  grooms[n / 2].kink_amplitude = NAN;
+  EXPECT(PELAGE_STATUS_NON_FINITE, pelage_groom_new(g_in.strands, bindings, grooms, n, &out));
+  grooms[n / 2] = g_in.grooms[n / 2];
+  bindings[n / 3].count = 99;
+  EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_groom_new(g_in.strands, bindings, grooms, n, &out));
+  bindings[n / 3] = g_in.bindings[n / 3];
+  CHECK(out == canary);
+  /* an empty groom */
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_new(NULL, NULL, NULL, 0, &out));
+  CHECK(out != canary && out != NULL);
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_strand_count(out, &count));
+  CHECK(count == 0);
+  pelage_groom_free(out);
+  pelage_groom_free(groom);
+  pelage_groom_free(NULL);
+  free(grooms), free(bindings);
+}
+
 static void interp_free(void) {
   free(g_in.guide_roots), free(g_in.strands), free(g_in.guide_points), free(g_in.bind_arena), free(g_in.bindings);
   free(g_in.grooms), free(g_in.expand_arena), free(g_in.points), free(g_in.bind_out), free(g_in.groom_out);
@@ -1671,6 +1767,7 @@ int main(void) {
   test_interp_null_pointers();
   test_interp_capacity();
   test_interp_bad_input();
+  test_groom_handle();
   test_settle();
   interp_free();
   test_threads();
