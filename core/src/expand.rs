@@ -95,7 +95,7 @@ impl<'a> PreparedGuides<'a> {
                 "points_per_strand must be in 2..=64",
             ));
         }
-        mesh.validate()?;
+        mesh.check()?;
         guides.validate(mesh)?;
         let n = points_per_strand;
         let local = arena.alloc::<f32>(guides.len() * n * 3)?;
@@ -196,7 +196,7 @@ pub fn check_inputs(
     out_len: usize,
     stride: usize,
 ) -> Result<(), Error> {
-    mesh.validate()?;
+    mesh.check()?;
     check_frame(guides, params)?;
     check_output(strands.len(), params, out_len, stride)?;
     check_strands(mesh, strands, guides)

@@ -51,6 +51,47 @@ impl<'a> Mesh<'a> {
     /// Out-of-range indices and non-finite values are errors; degenerate
     /// triangles are counted and later skipped.
     pub fn validate(&self) -> Result<MeshReport, Error> {
+        self.check()?;
+        let mut report = MeshReport::default();
+        for f in 0..self.triangle_count() {
+            if self.is_degenerate(f) {
+                report.degenerate_triangles += 1;
+            } else {
+                report.area += self.area(f) as f64;
+            }
+        }
+        Ok(report)
+    }
+
+    /// The checks of [`Mesh::validate`] without its report: what a stage
+    /// that runs every frame on a deformed mesh needs.
+    pub fn check(&self) -> Result<(), Error> {
+        // a branch-free screen over every value; the detailed checks run
+        // only when it fails, to name the fault
+        fn finite<const N: usize>(s: Strided<[f32; N]>) -> bool
+        where
+            [f32; N]: bytemuck::Pod,
+        {
+            s.iter()
+                .fold(true, |ok, p| p.iter().fold(ok, |ok, c| ok & c.is_finite()))
+        }
+        let nv = self.positions.len();
+        let counts =
+            self.uvs.is_none_or(|t| t.len() == nv) & self.normals.is_none_or(|n| n.len() == nv);
+        let values =
+            finite(self.positions) & self.uvs.is_none_or(finite) & self.normals.is_none_or(finite);
+        let top = self
+            .triangles
+            .iter()
+            .fold(0, |top, t| top.max(t[0]).max(t[1]).max(t[2]));
+        if counts & values & ((top as usize) < nv || self.triangles.is_empty()) {
+            return Ok(());
+        }
+        self.check_detailed()
+    }
+
+    /// [`Mesh::check`], naming the first fault.
+    fn check_detailed(&self) -> Result<(), Error> {
         let nv = self.positions.len();
         for (i, p) in self.positions.iter().enumerate() {
             if !p.iter().all(|c| c.is_finite()) {
@@ -87,7 +128,6 @@ impl<'a> Mesh<'a> {
                 });
             }
         }
-        let mut report = MeshReport::default();
         for (f, tri) in self.triangles.iter().enumerate() {
             for &k in &tri {
                 if k as usize >= nv {
@@ -99,13 +139,8 @@ impl<'a> Mesh<'a> {
                     });
                 }
             }
-            if self.is_degenerate(f) {
-                report.degenerate_triangles += 1;
-            } else {
-                report.area += self.area(f) as f64;
-            }
         }
-        Ok(report)
+        Ok(())
     }
 
     /// The three corner positions of `face`.
@@ -223,6 +258,41 @@ mod tests {
             mesh.validate(),
             Err(Error::NonFinite { index: 0, .. })
         ));
+    }
+
+    #[test]
+    fn the_quick_check_names_each_fault_as_validate_does() {
+        let tris = [[0u32, 1, 2], [1, 3, 2]];
+        let inf_uv = [[0.0, 0.0], [1.0, 0.0], [0.0, f32::INFINITY], [1.0, 1.0]];
+        let mut nan_normal = [[0.0f32, 0.0, 1.0]; 4];
+        nan_normal[3] = [f32::NAN; 3];
+        let few_uvs = [[0.0f32, 0.0]; 3];
+        let far = [[0u32, 1, 2], [1, 9, 2]];
+        let base = Mesh::new(Strided::from_slice(&P), Strided::from_slice(&tris));
+        let cases = [
+            base,
+            Mesh {
+                uvs: Some(Strided::from_slice(&inf_uv)),
+                ..base
+            },
+            Mesh {
+                normals: Some(Strided::from_slice(&nan_normal)),
+                ..base
+            },
+            Mesh {
+                uvs: Some(Strided::from_slice(&few_uvs)),
+                ..base
+            },
+            Mesh {
+                triangles: Strided::from_slice(&far),
+                ..base
+            },
+            Mesh::new(Strided::from_slice(&[]), Strided::from_slice(&[])),
+        ];
+        for (i, mesh) in cases.iter().enumerate() {
+            assert_eq!(mesh.check(), mesh.validate().map(|_| ()), "case {i}");
+            assert_eq!(mesh.check().is_ok(), i == 0 || i == 5, "case {i}");
+        }
     }
 
     #[test]
