@@ -485,6 +485,26 @@ fn expand_kernel(
     out: &mut [u8],
     stride: usize,
 ) {
+    // the common counts get loops of known length (see `strand`), chosen
+    // once per call rather than per strand
+    match params.points_per_strand {
+        8 => fill_all::<8>(mesh, strands, guides, params, out, stride),
+        16 => fill_all::<16>(mesh, strands, guides, params, out, stride),
+        32 => fill_all::<32>(mesh, strands, guides, params, out, stride),
+        _ => fill_all::<0>(mesh, strands, guides, params, out, stride),
+    }
+}
+
+/// [`expand_kernel`] for `N` points per strand (0: any).
+#[inline(always)]
+fn fill_all<const N: usize>(
+    mesh: &Mesh,
+    strands: &Strands,
+    guides: &PreparedGuides,
+    params: &ExpandParams,
+    out: &mut [u8],
+    stride: usize,
+) {
     let per = params.output_points();
     let mut filler = Filler {
         mesh,
@@ -500,14 +520,14 @@ fn expand_kernel(
     if stride == 16 {
         if let Ok(all) = bytemuck::try_cast_slice_mut::<u8, [f32; 4]>(&mut out[..n * per * 16]) {
             for (s, curve) in all.chunks_exact_mut(per).enumerate() {
-                filler.fill(s, curve);
+                filler.fill::<N>(s, curve);
             }
             return;
         }
     }
     let mut buffer = [[0.0f32; 4]; MAX_STRAND_POINTS + 2];
     for s in 0..n {
-        filler.fill(s, &mut buffer[..per]);
+        filler.fill::<N>(s, &mut buffer[..per]);
         let region = &mut out[s * per * stride..];
         for (j, p) in buffer[..per].iter().enumerate() {
             region[j * stride..j * stride + 16].copy_from_slice(bytemuck::bytes_of(p));
@@ -532,13 +552,13 @@ impl Filler<'_, '_> {
     /// frames of a block are computed at its first strand, so that their
     /// square-root chains overlap (see `frame::frames`).
     #[inline(always)]
-    fn fill(&mut self, s: usize, curve: &mut [[f32; 4]]) {
+    fn fill<const N: usize>(&mut self, s: usize, curve: &mut [[f32; 4]]) {
         let slot = s % FRAME_LANES;
         if slot == 0 {
             let roots = &self.strands.roots[s..];
             frame::frames(self.mesh, roots, &mut self.basis, &mut self.frames);
         }
-        strand(
+        strand_n::<N>(
             &self.frames[slot],
             &self.strands.bindings[s],
             &self.strands.grooms[s],
@@ -555,7 +575,7 @@ impl Filler<'_, '_> {
 pub(crate) struct Lanes {
     /// Parameter of each point along the strand, j / (n - 1).
     t: [f32; MAX_STRAND_POINTS],
-    local: [[f32; MAX_STRAND_POINTS]; 3],
+    local: [f32; 3 * MAX_STRAND_POINTS],
     /// The kink wave without phase for `wave_frequency` (bits; NaN when
     /// none yet): neighbouring strands share a frequency, so it is reused.
     wave: [[f32; MAX_STRAND_POINTS]; 2],
@@ -571,7 +591,7 @@ impl Lanes {
         }
         Lanes {
             t,
-            local: [[0.0; MAX_STRAND_POINTS]; 3],
+            local: [0.0; 3 * MAX_STRAND_POINTS],
             wave: [[0.0; MAX_STRAND_POINTS]; 2],
             wave_frequency: f32::NAN.to_bits(),
         }
@@ -619,38 +639,31 @@ fn strand_n<const N: usize>(
         N
     };
     let t = &lanes.t[..n];
-    let [ax, ay, az] = &mut lanes.local;
-    let (ax, ay, az) = (&mut ax[..n], &mut ay[..n], &mut az[..n]);
+    // x lanes, then y, then z, as a prepared guide stores its points: the
+    // weighted sum is one flat loop over both
+    let local = &mut lanes.local[..3 * n];
     if bind.count == 0 {
-        ax.fill(0.0);
-        ay.fill(0.0);
-        for (z, tj) in az.iter_mut().zip(t) {
+        local[..2 * n].fill(0.0);
+        for (z, tj) in local[2 * n..].iter_mut().zip(t) {
             *z = params.orphan_length * tj;
         }
     } else {
         let first = bind.guides[0] as usize * 3 * n;
         let (g, w) = (&guides.local[first..first + 3 * n], bind.weights[0]);
-        // lane by lane: written as one loop over the three, this compiled to
-        // scalar stores that the vector loads after them could not forward
-        for (a, g) in [&mut *ax, &mut *ay, &mut *az]
-            .into_iter()
-            .zip(g.chunks_exact(n))
-        {
-            for (a, g) in a.iter_mut().zip(g) {
-                *a = g * w;
-            }
+        for (a, g) in local.iter_mut().zip(g) {
+            *a = g * w;
         }
         for k in 1..bind.count as usize {
             let w = bind.weights[k];
             let base = bind.guides[k] as usize * 3 * n;
             let g = &guides.local[base..base + 3 * n];
-            for j in 0..n {
-                ax[j] += g[j] * w;
-                ay[j] += g[n + j] * w;
-                az[j] += g[2 * n + j] * w;
+            for (a, g) in local.iter_mut().zip(g) {
+                *a += g * w;
             }
         }
     }
+    let (ax, rest) = local.split_at_mut(n);
+    let (ay, az) = rest.split_at_mut(n);
     let scale = groom.length;
     let length = Vec3::new(ax[n - 1], ay[n - 1], az[n - 1]).length() * scale;
     let bend = groom.bend * length;
