@@ -337,6 +337,19 @@ void Expander::expand(const Mesh& mesh, const PelageGuidesDesc& guides, const Pe
         "pelage_expand");
 }
 
+Groom::Groom(const PelageRoot* strands, const PelageStrandBinding* bindings, const PelageStrandGroom* grooms,
+             size_t count) {
+  check(pelage_groom_new(strands, bindings, grooms, count, &groom_), "pelage_groom_new");
+}
+
+void Expander::expand(const Mesh& mesh, const PelageGuidesDesc& guides, const Groom& groom, size_t first,
+                      size_t count, float* points, size_t capacity) {
+  const PelageMeshDesc desc = mesh.desc();
+  check(pelage_groom_expand(groom.get(), &desc, &guides, first, count, &params_, arena_.data(), arena_.size(), points,
+                            4 * sizeof(float), capacity, nullptr, nullptr),
+        "pelage_groom_expand");
+}
+
 std::vector<uint32_t> segment_indices(size_t curves, size_t per_curve) {
   std::vector<uint32_t> indices(curves * (per_curve >= 3 ? per_curve - 3 : 0));
   check(pelage_curves_segment_indices(curves, per_curve, indices.data(), indices.size()),

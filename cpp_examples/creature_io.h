@@ -149,6 +149,21 @@ PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, c
                         const PelageStrandBinding* bindings, PelageStrandGroom* grooms, size_t count,
                         const PelageExpandParams& params);
 
+// A groom's strands checked and copied once (pelage_groom_new), released
+// with pelage_groom_free. Throws on bad records.
+class Groom {
+ public:
+  Groom(const PelageRoot* strands, const PelageStrandBinding* bindings, const PelageStrandGroom* grooms,
+        size_t count);
+  ~Groom() { pelage_groom_free(groom_); }
+  Groom(const Groom&) = delete;
+  Groom& operator=(const Groom&) = delete;
+  PelageGroom get() const { return groom_; }
+
+ private:
+  PelageGroom groom_ = nullptr;
+};
+
 // pelage_expand with an arena sized once (per groom) and reused every frame.
 class Expander {
  public:
@@ -161,6 +176,10 @@ class Expander {
   void expand(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageRoot* strands,
               const PelageStrandBinding* bindings, const PelageStrandGroom* grooms, size_t count, float* points,
               size_t capacity, uint32_t* curve_counts = nullptr, uint32_t* curve_ids = nullptr);
+  // The same for the strands first..first + count of `groom`
+  // (pelage_groom_expand: the records are not checked again).
+  void expand(const Mesh& mesh, const PelageGuidesDesc& guides, const Groom& groom, size_t first, size_t count,
+              float* points, size_t capacity);
 
  private:
   PelageExpandParams params_;

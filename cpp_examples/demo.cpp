@@ -225,6 +225,9 @@ int main(int argc, char** argv) try {
   std::snprintf(note, sizeof note, "%u hairs lifted out of the body (%u turned, %u shortened, %u unresolved)",
                 settled.lifted, settled.turned, settled.shortened, settled.unresolved);
   rows.push_back({"settle", clock.seconds(), note});
+  clock = {};
+  const creature::Groom fur(roots.data(), bindings.data(), grooms.data(), n);  // checked once, kept for every frame
+  rows.push_back({"handle", clock.seconds(), "strand records checked and copied once (pelage_groom_new)"});
 
   // 7. Embree geometry sharing our buffers: every hair for the camera; the
   // segments of the hairs with rank < N/2 (same vertex buffer) for shadows.
@@ -252,7 +255,7 @@ int main(int argc, char** argv) try {
   std::vector<double> frame_s;
   for (int f = 0; f < opt.frames; ++f) {
     clock = {};
-    expander.expand(mesh, guides, roots.data(), bindings.data(), grooms.data(), n, points.data(), per * n);
+    expander.expand(mesh, guides, fur, 0, n, points.data(), per * n);
     frame_s.push_back(clock.seconds());
   }
   std::sort(frame_s.begin(), frame_s.end());
