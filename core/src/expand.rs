@@ -601,7 +601,7 @@ impl Lanes {
 /// Writes one strand into `out`: its `points_per_strand` points, and with
 /// pinned ends the first and last again around them
 /// ([`ExpandParams::output_points`] in all).
-#[inline(always)]
+#[inline]
 pub(crate) fn strand(
     frame: &Frame,
     bind: &StrandBinding,
