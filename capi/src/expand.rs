@@ -9,7 +9,9 @@ use crate::{
 };
 use pelage_core::arena::ArenaLayout;
 use pelage_core::bind::StrandBinding;
-use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, StrandBounds, Strands};
+use pelage_core::expand::{
+    self, EndPoints, ExpandParams, GuideSlots, PreparedGuides, StrandBounds, Strands,
+};
 use pelage_core::groom::StrandGroom;
 use pelage_core::{Arena, Mesh, Root};
 
@@ -189,7 +191,16 @@ pub(crate) fn run(
     let ids = slice_mut(out.curve_ids, optional(out.curve_ids), "curve_ids")?;
     let arena = bytes_mut(arena, arena_bytes, "arena")?;
     let mut arena = Arena::new(arena);
-    let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
+    let slots = GuideSlots::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
+    let filler = slots.filler;
+    split_over_threads(
+        guides.len(),
+        p.thread_count,
+        &mut *slots.data,
+        filler.floats_per_guide(),
+        |range, part| filler.fill(range.start, part),
+    )?;
+    let prepared = slots.finish();
     expand::check_frame(&prepared, &core)?;
     expand::check_output(strand_count, &core, points.len(), point_stride)?;
     match bounds {

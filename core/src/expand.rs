@@ -66,12 +66,13 @@ impl ExpandParams {
 /// Posed guides resampled to the strand point count, in their own root
 /// frames (local) and in world space, for one frame.
 ///
-/// Each guide is stored as its n x, then n y, then n z coordinates, so the
-/// per-strand loops run over contiguous lanes and vectorize (element-wise
-/// only: the bits are the same as a scalar loop's on every target).
+/// Each guide is stored as its n local x, then n y, then n z coordinates,
+/// then the same for its world points, so the per-strand loops run over
+/// contiguous lanes and vectorize (element-wise only: the bits are the same
+/// as a scalar loop's on every target), and a strand's clump centre (one of
+/// its guides) sits beside that guide's local points.
 pub struct PreparedGuides<'a> {
-    local: &'a [f32],
-    world: &'a [f32],
+    data: &'a [f32],
     points: usize,
     guides: usize,
 }
@@ -79,8 +80,8 @@ pub struct PreparedGuides<'a> {
 impl<'a> PreparedGuides<'a> {
     /// Adds the arena bytes [`PreparedGuides::new`] needs.
     pub fn layout(layout: &mut ArenaLayout, guides: usize, points_per_strand: usize) {
-        let n = guides.saturating_mul(points_per_strand).saturating_mul(3);
-        layout.add::<f32>(n).add::<f32>(n);
+        let n = guides.saturating_mul(points_per_strand).saturating_mul(6);
+        layout.add::<f32>(n);
     }
 
     /// Validates the deformed mesh and posed guides and prepares them.
@@ -90,36 +91,12 @@ impl<'a> PreparedGuides<'a> {
         points_per_strand: usize,
         arena: &mut Arena<'a>,
     ) -> Result<Self, Error> {
-        if !(2..=MAX_STRAND_POINTS).contains(&points_per_strand) {
-            return Err(Error::InvalidArgument(
-                "points_per_strand must be in 2..=64",
-            ));
-        }
-        mesh.check()?;
-        guides.validate(mesh)?;
-        let n = points_per_strand;
-        let local = arena.alloc::<f32>(guides.len() * n * 3)?;
-        let world = arena.alloc::<f32>(guides.len() * n * 3)?;
-        let step = 1.0 / (n - 1) as f32;
-        for (g, r) in guides.roots.iter().enumerate() {
-            let frame = Frame::at(mesh, r.face as usize, r.u, r.v);
-            let (_, count) = guides.span(g);
-            for j in 0..n {
-                let p = if count == n {
-                    guides.point(g, j)
-                } else {
-                    guides.sample(g, j as f32 * step)
-                };
-                let l = frame.to_local(p);
-                let base = g * 3 * n + j;
-                (local[base], local[base + n], local[base + 2 * n]) = (l.x, l.y, l.z);
-                (world[base], world[base + n], world[base + 2 * n]) = (p.x, p.y, p.z);
-            }
-        }
+        let slots = GuideSlots::new(mesh, guides, points_per_strand, arena)?;
+        let GuideSlots { filler, data } = slots;
+        filler.fill(0, data);
         Ok(PreparedGuides {
-            local,
-            world,
-            points: n,
+            data,
+            points: points_per_strand,
             guides: guides.len(),
         })
     }
@@ -141,12 +118,109 @@ impl<'a> PreparedGuides<'a> {
 
     /// Point `j` of guide `g` in the guide's root frame.
     pub fn local_point(&self, g: usize, j: usize) -> Vec3 {
-        let base = g * 3 * self.points + j;
-        Vec3::new(
-            self.local[base],
-            self.local[base + self.points],
-            self.local[base + 2 * self.points],
-        )
+        let l = self.local(g);
+        Vec3::new(l[j], l[self.points + j], l[2 * self.points + j])
+    }
+
+    /// Guide `g`'s local x, y and z lanes.
+    #[inline(always)]
+    fn local(&self, g: usize) -> &[f32] {
+        let n = self.points;
+        &self.data[g * 6 * n..g * 6 * n + 3 * n]
+    }
+
+    /// Guide `g`'s world x, y and z lanes.
+    #[inline(always)]
+    fn world(&self, g: usize) -> &[f32] {
+        let n = self.points;
+        &self.data[g * 6 * n + 3 * n..(g + 1) * 6 * n]
+    }
+}
+
+/// [`PreparedGuides::new`] in two steps, for a host that fills the guides
+/// in parallel: `new` validates and allocates, the host has
+/// [`GuideFiller::fill`] fill every guide through disjoint parts of `data`,
+/// then [`GuideSlots::finish`] gives the prepared guides (the same bits as
+/// `PreparedGuides::new`, for any split).
+pub struct GuideSlots<'r, 'a> {
+    /// Fills ranges of guides.
+    pub filler: GuideFiller<'r>,
+    /// [`GuideFiller::floats_per_guide`] floats per guide, guide after guide.
+    pub data: &'a mut [f32],
+}
+
+impl<'r, 'a> GuideSlots<'r, 'a> {
+    /// Validates the deformed mesh and posed guides and allocates their slots.
+    pub fn new(
+        mesh: &'r Mesh<'r>,
+        guides: &'r Guides<'r>,
+        points_per_strand: usize,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        if !(2..=MAX_STRAND_POINTS).contains(&points_per_strand) {
+            return Err(Error::InvalidArgument(
+                "points_per_strand must be in 2..=64",
+            ));
+        }
+        mesh.check()?;
+        guides.validate(mesh)?;
+        let data = arena.alloc::<f32>(guides.len() * points_per_strand * 6)?;
+        Ok(GuideSlots {
+            filler: GuideFiller {
+                mesh,
+                guides,
+                points: points_per_strand,
+            },
+            data,
+        })
+    }
+
+    /// The prepared guides, once every guide is filled.
+    pub fn finish(self) -> PreparedGuides<'a> {
+        PreparedGuides {
+            data: self.data,
+            points: self.filler.points,
+            guides: self.filler.guides.len(),
+        }
+    }
+}
+
+/// Fills the slots of a range of guides (see [`GuideSlots`]).
+#[derive(Clone, Copy)]
+pub struct GuideFiller<'r> {
+    mesh: &'r Mesh<'r>,
+    guides: &'r Guides<'r>,
+    points: usize,
+}
+
+impl GuideFiller<'_> {
+    /// Floats each guide takes.
+    pub fn floats_per_guide(&self) -> usize {
+        6 * self.points
+    }
+
+    /// Fills the guides `first ..` that `part` holds (its length over
+    /// [`GuideFiller::floats_per_guide`]).
+    pub fn fill(&self, first: usize, part: &mut [f32]) {
+        let n = self.points;
+        let step = 1.0 / (n - 1) as f32;
+        for (i, slot) in part.chunks_exact_mut(6 * n).enumerate() {
+            let g = first + i;
+            let r = &self.guides.roots[g];
+            let frame = Frame::at(self.mesh, r.face as usize, r.u, r.v);
+            let (_, count) = self.guides.span(g);
+            let (local, world) = slot.split_at_mut(3 * n);
+            for j in 0..n {
+                let p = if count == n {
+                    self.guides.point(g, j)
+                } else {
+                    self.guides.sample(g, j as f32 * step)
+                };
+                let l = frame.to_local(p);
+                (local[j], local[n + j], local[2 * n + j]) = (l.x, l.y, l.z);
+                (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+            }
+        }
     }
 }
 
@@ -648,15 +722,16 @@ fn strand_n<const N: usize>(
             *z = params.orphan_length * tj;
         }
     } else {
-        let first = bind.guides[0] as usize * 3 * n;
-        let (g, w) = (&guides.local[first..first + 3 * n], bind.weights[0]);
+        let (g, w) = (
+            &guides.local(bind.guides[0] as usize)[..3 * n],
+            bind.weights[0],
+        );
         for (a, g) in local.iter_mut().zip(g) {
             *a = g * w;
         }
         for k in 1..bind.count as usize {
             let w = bind.weights[k];
-            let base = bind.guides[k] as usize * 3 * n;
-            let g = &guides.local[base..base + 3 * n];
+            let g = &guides.local(bind.guides[k] as usize)[..3 * n];
             for (a, g) in local.iter_mut().zip(g) {
                 *a += g * w;
             }
@@ -706,7 +781,7 @@ fn strand_n<const N: usize>(
         }
         let centre = match bind.clump {
             NO_GUIDE => &NO_CLUMP[..3 * n],
-            g => &guides.world[g as usize * 3 * n..(g as usize + 1) * 3 * n],
+            g => &guides.world(g as usize)[..3 * n],
         };
         place::<true>(frame, t, local, centre, &lanes.wave, &look, dst);
     }
