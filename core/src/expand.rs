@@ -92,13 +92,8 @@ impl<'a> PreparedGuides<'a> {
         arena: &mut Arena<'a>,
     ) -> Result<Self, Error> {
         let slots = GuideSlots::new(mesh, guides, points_per_strand, arena)?;
-        let GuideSlots { filler, data } = slots;
-        filler.fill(0, data);
-        Ok(PreparedGuides {
-            data,
-            points: points_per_strand,
-            guides: guides.len(),
-        })
+        slots.filler.fill(0, slots.data);
+        Ok(slots.finish())
     }
 
     /// Number of guides.
