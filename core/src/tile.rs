@@ -76,15 +76,17 @@ impl<'a> Tile<'a> {
         self.points.len() as f32 / (SIDE * SIDE)
     }
 
-    /// Points of unit cell (x, y), each with its LOD level; x, y < [`TILE_SIDE`].
+    /// Points of the `len` unit cells (x, y) to (x + len - 1, y) of one row,
+    /// and their LOD levels: cells are stored row by row, so a run of cells
+    /// is one slice. `x + len <= TILE_SIDE`, `y < TILE_SIDE`.
     #[inline]
-    pub fn cell(&self, x: usize, y: usize) -> impl Iterator<Item = ([f32; 2], u8)> + '_ {
+    pub fn run(&self, x: usize, y: usize, len: usize) -> (&[[f32; 2]], &[u8]) {
         let c = y * TILE_SIDE + x;
-        let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-        self.points[s..e]
-            .iter()
-            .copied()
-            .zip(self.levels[s..e].iter().copied())
+        let (s, e) = (
+            self.cell_start[c] as usize,
+            self.cell_start[c + len] as usize,
+        );
+        (&self.points[s..e], &self.levels[s..e])
     }
 
     /// All points with their LOD levels.
