@@ -333,13 +333,18 @@ pub fn max_roots(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
 /// Upper bound on the candidates of any pass, for every radius the count
 /// correction can reach.
 fn candidates_bound(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
-    validate(mesh, params)?;
+    Ok(checked_bound(mesh, params)?.0)
+}
+
+/// [`candidates_bound`] and the number of degenerate triangles.
+fn checked_bound(mesh: &Mesh, params: &StampParams) -> Result<(usize, u32), Error> {
+    let degenerate = validate(mesh, params)?;
     let area = scaled_area(mesh, params);
     let r_min = if params.radius > 0.0 {
         params.radius
     } else {
         let Some(r) = first_radius(area, params.target_count, tile_density_lower_bound()) else {
-            return Ok(0);
+            return Ok((0, degenerate));
         };
         r * min_radius_factor(params.target_count, mesh.triangle_count())
     };
@@ -352,7 +357,7 @@ fn candidates_bound(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
             "radius too small for this mesh (over 2^30 candidates)",
         ));
     }
-    Ok(bound)
+    Ok((bound, degenerate))
 }
 
 /// The tile's density is not known before it is built, only bounded;
@@ -479,6 +484,16 @@ impl<'m, 'a> Stamper<'m, 'a> {
         arena: &mut Arena<'a>,
     ) -> Result<Option<Self>, Error> {
         let degenerate = validate(&mesh, params)?;
+        Self::build(mesh, params, degenerate, arena)
+    }
+
+    /// [`Stamper::new`] on inputs already validated.
+    fn build(
+        mesh: Mesh<'m>,
+        params: &StampParams,
+        degenerate: u32,
+        arena: &mut Arena<'a>,
+    ) -> Result<Option<Self>, Error> {
         let tile = Tile::build(params.seed, arena)?;
         let faces = arena.alloc::<Face>(mesh.triangle_count())?;
         let mut area = 0.0f64;
@@ -919,22 +934,23 @@ pub fn stamp(
     arena: &mut Arena,
     out: &mut [Root],
 ) -> Result<(usize, StampReport), Error> {
-    let need = required_bytes(&mesh, params)?;
+    // validated once; the bound holds for every radius the stamper reaches
+    let (bound, degenerate) = checked_bound(&mesh, params)?;
+    let need = bytes_for(mesh.triangle_count(), bound);
     if arena.remaining() < need {
         return Err(Error::CapacityExceeded {
             needed: need,
             available: arena.remaining(),
         });
     }
-    let Some(mut stamper) = Stamper::new(mesh, params, arena)? else {
+    let Some(mut stamper) = Stamper::build(mesh, params, degenerate, arena)? else {
         let report = StampReport {
-            degenerate_triangles: mesh.validate()?.degenerate_triangles as u32,
+            degenerate_triangles: degenerate,
             ..StampReport::default()
         };
         return Ok((0, report));
     };
     let faces = 0..mesh.triangle_count();
-    let bound = stamper.candidate_bound(faces.clone());
     let mut scratch = Scratch::new(arena, bound)?;
     let cands = arena.alloc::<Candidate>(bound)?;
     loop {
