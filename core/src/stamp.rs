@@ -11,9 +11,10 @@
 //!    tile of density `rho` points per `r^2`, a triangle of flattened area `A`
 //!    scaled by `s` receives `rho * A * s^2 / r^2` points on average, hence
 //!    `r = sqrt(rho * sum(A_i s_i^2) / N)`. The edge pass removes a
-//!    mesh-dependent share, so the radius is then corrected by the measured
-//!    count (`r *= sqrt(kept / N)`) until the count is within
-//!    [`COUNT_TOLERANCE`] of the target. (The paper's
+//!    mesh-dependent share, which a model fitted to the tile's measured loss
+//!    per edge length predicts for the first pass; the measured count then
+//!    corrects the radius until the count is within [`COUNT_TOLERANCE`] of
+//!    the target (dense stamps usually need no correction). (The paper's
 //!    `0.35 / (sqrt(N) * A_max_normalized)` is not dimensionally a length.)
 //! 3. **LOD.** Each tile point carries a nested level; the levels are
 //!    re-checked in 3D across triangles, coarse to fine, demoting points that
@@ -44,6 +45,7 @@ const GRID_CELL: f32 = 3.0;
 /// 10K to 3M roots (within 2% of the count at 30K roots and more). The model
 /// only picks the first radius; the measured count corrects the rest.
 const EDGE_LOSS: f32 = 0.30;
+/// See [`EDGE_LOSS`].
 const EDGE_LOSS_KNEE: f32 = 2.64;
 /// Fixed-point steps of the first radius.
 const PREDICTION_STEPS: u32 = 4;
@@ -411,7 +413,7 @@ fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
 /// the order they were inserted instead of the whole list.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Near {
+struct Near {
     position: [f32; 3],
     face: u32,
     edge_distance: f32,
@@ -436,7 +438,7 @@ pub struct Scratch<'a> {
     heads: &'a mut [u32],
     next: &'a mut [u32],
     level: &'a mut [u8],
-    /// Sort keys; during the LOD levels, two u32 lists (by tile level, assigned).
+    /// Sort keys; during the LOD levels, the u32 list of assigned records.
     keys: &'a mut [u64],
     /// Radix sort buffer; during the LOD levels, two u32 pending lists.
     spare: &'a mut [u64],
@@ -888,7 +890,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     b - 1
                 };
                 let c = near[m as usize];
-                // farther inside its triangle than this level's spacing
+                // a record farther inside its triangle than this level's
+                // spacing cannot clash
                 let clash = c.edge_distance < s
                     && grid.any_within(
                         Vec3::from(c.position),
