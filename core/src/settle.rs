@@ -88,8 +88,8 @@ pub fn settle(
 }
 
 /// [`settle`] for inputs already checked with
-/// [`Mesh::validate`], [`check_frame`](crate::expand::check_frame) and
-/// [`check_strands`](crate::expand::check_strands).
+/// [`Mesh::validate`], [`check_frame`] and
+/// [`check_strands`].
 pub fn settle_checked(
     mesh: &Mesh,
     body: &Body,
