@@ -28,6 +28,7 @@ rust-lint:
 	cargo fmt --all -- --check
 	cargo clippy --locked --workspace --all-targets --release -- -D warnings
 	cargo check --locked -p pelage-core --target $(EMBEDDED_TARGET)
+	RUSTDOCFLAGS="-D warnings" cargo doc --locked --workspace --no-deps
 
 rust-test:
 	cargo test --locked --workspace --release

@@ -182,7 +182,7 @@ typedef struct PelageRoot {
 // Guide g is rooted at `roots[g]` (face, u, v; id and rank unused). Its
 // control points are float3 `point_stride` bytes apart: with `offsets` NULL
 // every guide has `points_per_guide` points (the fast path); otherwise guide g
-// owns points offsets[g] .. offsets[g + 1] (guide_count + 1 entries).
+// owns points `offsets[g] .. offsets[g + 1]` (guide_count + 1 entries).
 // `point_count` is the total number of points.
 typedef struct PelageGuidesDesc {
   // Guide roots, `guide_count` entries.

@@ -12,7 +12,7 @@ use std::ffi::c_void;
 /// Guide g is rooted at `roots[g]` (face, u, v; id and rank unused). Its
 /// control points are float3 `point_stride` bytes apart: with `offsets` NULL
 /// every guide has `points_per_guide` points (the fast path); otherwise guide g
-/// owns points offsets[g] .. offsets[g + 1] (guide_count + 1 entries).
+/// owns points `offsets[g] .. offsets[g + 1]` (guide_count + 1 entries).
 /// `point_count` is the total number of points.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]

@@ -1,7 +1,7 @@
 //! pelage C API: a thin layer that validates host buffers, calls
 //! `pelage-core`, and maps errors to [`PelageStatus`] codes.
 //!
-//! Every exported function runs inside [`ffi_boundary!`], so a panic becomes
+//! Every exported function runs inside `ffi_boundary!`, so a panic becomes
 //! `PELAGE_STATUS_PANIC` instead of unwinding into the host.
 #![deny(missing_docs)]
 
