@@ -12,6 +12,16 @@ pub fn floor_i32(x: f32) -> i32 {
     i - ((i as f32) > x) as i32
 }
 
+/// Hash of an integer cell for a power-of-two bucket table. x enters
+/// linearly so the cells of one row of a query sit in neighbouring buckets
+/// (one cache line instead of three).
+#[inline]
+fn cell_hash(c: [i32; 3]) -> u32 {
+    (c[0] as u32)
+        .wrapping_add((c[1] as u32).wrapping_mul(0x9E37_79B1))
+        .wrapping_add((c[2] as u32).wrapping_mul(0x85EB_CA77))
+}
+
 /// Buckets of point indices keyed by integer cell, as singly linked lists
 /// threaded through a `next` array (one slot per point).
 ///
@@ -57,12 +67,7 @@ impl<'a> HashGrid<'a> {
 
     #[inline]
     fn bucket(&self, c: [i32; 3]) -> usize {
-        // x enters linearly so the cells of one row of a query sit in
-        // neighbouring buckets (one cache line instead of three)
-        let h = (c[0] as u32)
-            .wrapping_add((c[1] as u32).wrapping_mul(0x9E37_79B1))
-            .wrapping_add((c[2] as u32).wrapping_mul(0x85EB_CA77));
-        h as usize & (self.heads.len() - 1)
+        cell_hash(c) as usize & (self.heads.len() - 1)
     }
 
     /// Inserts point `index` at `p`.
@@ -94,5 +99,58 @@ impl<'a> HashGrid<'a> {
             }
         }
         false
+    }
+
+    /// The points inserted in the cells that overlap the box `[lo, hi]`
+    /// (points outside the box included: the caller filters).
+    pub fn in_box(&self, lo: Vec3, hi: Vec3) -> InBox<'_> {
+        let (lo, hi) = (self.cell_of(lo), self.cell_of(hi));
+        InBox {
+            heads: self.heads,
+            next: self.next,
+            lo,
+            hi,
+            at: lo,
+            node: EMPTY,
+        }
+    }
+}
+
+/// Iterator of [`HashGrid::in_box`].
+pub struct InBox<'g> {
+    heads: &'g [u32],
+    next: &'g [u32],
+    lo: [i32; 3],
+    hi: [i32; 3],
+    /// The next cell to enter.
+    at: [i32; 3],
+    node: u32,
+}
+
+impl Iterator for InBox<'_> {
+    type Item = u32;
+
+    #[inline]
+    fn next(&mut self) -> Option<u32> {
+        loop {
+            if self.node != EMPTY {
+                let i = self.node;
+                self.node = self.next[i as usize];
+                return Some(i);
+            }
+            if self.at[2] > self.hi[2] {
+                return None;
+            }
+            self.node = self.heads[cell_hash(self.at) as usize & (self.heads.len() - 1)];
+            self.at[0] += 1;
+            if self.at[0] > self.hi[0] {
+                self.at[0] = self.lo[0];
+                self.at[1] += 1;
+                if self.at[1] > self.hi[1] {
+                    self.at[1] = self.lo[1];
+                    self.at[2] += 1;
+                }
+            }
+        }
     }
 }
