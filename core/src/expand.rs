@@ -711,31 +711,38 @@ fn strand_n<const N: usize>(
     // x lanes, then y, then z, as a prepared guide stores its points: the
     // weighted sum is one flat loop over both
     let local = &mut lanes.local[..3 * n];
+    // the tip is summed again in scalars, in the same order (so to the same
+    // bits): read back from the vector sums, it would wait for their stores
+    let tip;
     if bind.count == 0 {
         local[..2 * n].fill(0.0);
         for (z, tj) in local[2 * n..].iter_mut().zip(t) {
             *z = params.orphan_length * tj;
         }
+        tip = Vec3::new(0.0, 0.0, local[3 * n - 1]);
     } else {
         let (g, w) = (
             &guides.local(bind.guides[0] as usize)[..3 * n],
             bind.weights[0],
         );
+        let mut sum = Vec3::new(g[n - 1], g[2 * n - 1], g[3 * n - 1]) * w;
         for (a, g) in local.iter_mut().zip(g) {
             *a = g * w;
         }
         for k in 1..bind.count as usize {
             let w = bind.weights[k];
             let g = &guides.local(bind.guides[k] as usize)[..3 * n];
+            sum += Vec3::new(g[n - 1], g[2 * n - 1], g[3 * n - 1]) * w;
             for (a, g) in local.iter_mut().zip(g) {
                 *a += g * w;
             }
         }
+        tip = sum;
     }
     let (ax, rest) = local.split_at_mut(n);
     let (ay, az) = rest.split_at_mut(n);
     let scale = groom.length;
-    let length = Vec3::new(ax[n - 1], ay[n - 1], az[n - 1]).length() * scale;
+    let length = tip.length() * scale;
     let bend = groom.bend * length;
     let mut shape = [scale, bend];
     if groom.lift != [0.0; 2] {
