@@ -1078,6 +1078,55 @@ mod tests {
         }
     }
 
+    #[test]
+    fn curves_follow_a_moving_body_without_swimming() {
+        // the character walks and turns: the mesh and the posed guides move
+        // rigidly; every curve must move with them, shape, kink, clump and
+        // lift included (frames come from the triangles, not from world axes)
+        let s = Scene::plane(60, 400);
+        let b = s.bind(&BindParams::default());
+        let grooms: Vec<StrandGroom> = (0..s.strands.len())
+            .map(|i| StrandGroom {
+                length: 0.8 + 0.001 * i as f32,
+                root_radius: 0.002,
+                tip_radius: 0.0005,
+                bend: 0.2,
+                kink_amplitude: 0.05,
+                kink_frequency: 3.0,
+                kink_phase: [libm::cosf(i as f32), libm::sinf(i as f32)],
+                clump: 0.3,
+                lift: [0.1 * libm::sinf(i as f32), 0.0],
+            })
+            .collect();
+        let params = ExpandParams {
+            end_points: EndPoints::Pinned,
+            ..raw(CVS)
+        };
+        let rest = s.expand(&b, &grooms, &params, 1);
+        let turn = glam::Quat::from_axis_angle(Vec3::new(1.0, 2.0, 0.5).normalize(), 2.3);
+        let walk = Vec3::new(3.0, -1.0, 0.5);
+        let moved = |p: &[f32; 3]| (turn * Vec3::from(*p) + walk).into();
+        let posed = Scene {
+            m: TestMesh {
+                p: s.m.p.iter().map(moved).collect(),
+                t: s.m.t.clone(),
+                uv: s.m.uv.clone(),
+            },
+            guide_roots: s.guide_roots.clone(),
+            guide_points: s.guide_points.iter().map(moved).collect(),
+            strands: s.strands.clone(),
+        };
+        let out = posed.expand(&b, &grooms, &params, 1);
+        let mut worst = 0.0f32;
+        for (a, o) in rest.iter().zip(&out) {
+            let expect = turn * Vec3::new(a[0], a[1], a[2]) + walk;
+            worst = worst.max(expect.distance(Vec3::new(o[0], o[1], o[2])));
+            assert_eq!(a[3], o[3], "radius");
+        }
+        // float rounding at coordinates of a few units, not a swim
+        assert!(worst < 2e-5, "curves moved {worst} away from the body");
+    }
+
     /// Roots along the segment y = 0.37 + 0.1 x, x in [0.1, 0.9], on the plane.
     fn path(mesh: &Mesh, steps: u32) -> Vec<Root> {
         (0..steps)
