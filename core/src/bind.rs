@@ -454,6 +454,54 @@ mod tests {
     }
 
     #[test]
+    fn neighbour_counts_spread_over_the_range_keyed_by_strand_id() {
+        let m = graded_plane(12, 1.0);
+        let mesh = m.mesh();
+        let g = roots(mesh, 400, 1);
+        let pts = straight_guides(&mesh, &g, 4, 0.05);
+        let strands = roots(mesh, 3000, 2);
+        let params = BindParams {
+            min_neighbours: 2,
+            max_neighbours: 6,
+            ..BindParams::default()
+        };
+        let (b, _) = run(&m, &g, &pts, &strands, &params).unwrap();
+        let mut histogram = [0usize; MAX_NEIGHBOURS + 1];
+        for bind in &b {
+            histogram[bind.count as usize] += 1;
+        }
+        // a count below the minimum only where fewer guides are in reach
+        // (the plane's border); every count of the range is well used
+        assert_eq!(histogram[7..].iter().sum::<usize>(), 0, "{histogram:?}");
+        assert!(
+            histogram[..2].iter().sum::<usize>() < b.len() / 20,
+            "{histogram:?}"
+        );
+        for count in 2..=6 {
+            assert!(histogram[count] > b.len() / 10, "{count}: {histogram:?}");
+        }
+        // keyed by the strand's id, not by its position in the call
+        let reversed: Vec<Root> = strands.iter().rev().copied().collect();
+        let (rb, _) = run(&m, &g, &pts, &reversed, &params).unwrap();
+        assert!(rb.iter().rev().eq(b.iter()));
+        let renamed: Vec<Root> = strands
+            .iter()
+            .map(|r| Root { id: r.id + 7, ..*r })
+            .collect();
+        let (nb, _) = run(&m, &g, &pts, &renamed, &params).unwrap();
+        let changed = b
+            .iter()
+            .zip(&nb)
+            .filter(|(a, n)| a.count != n.count)
+            .count();
+        assert!(
+            changed > b.len() / 2,
+            "{changed} of {} counts changed",
+            b.len()
+        );
+    }
+
+    #[test]
     fn partings_and_orphans() {
         let m = graded_plane(12, 1.0);
         let mesh = m.mesh();
