@@ -713,13 +713,12 @@ fn strand_n<const N: usize>(
     let local = &mut lanes.local[..3 * n];
     // the tip is summed again in scalars, in the same order (so to the same
     // bits): read back from the vector sums, it would wait for their stores
-    let tip;
-    if bind.count == 0 {
+    let tip = if bind.count == 0 {
         local[..2 * n].fill(0.0);
         for (z, tj) in local[2 * n..].iter_mut().zip(t) {
             *z = params.orphan_length * tj;
         }
-        tip = Vec3::new(0.0, 0.0, local[3 * n - 1]);
+        Vec3::new(0.0, 0.0, local[3 * n - 1])
     } else {
         let (g, w) = (
             &guides.local(bind.guides[0] as usize)[..3 * n],
@@ -737,8 +736,8 @@ fn strand_n<const N: usize>(
                 *a += g * w;
             }
         }
-        tip = sum;
-    }
+        sum
+    };
     let (ax, rest) = local.split_at_mut(n);
     let (ay, az) = rest.split_at_mut(n);
     let scale = groom.length;

@@ -450,7 +450,7 @@ impl Near {
 
     /// The record of candidate `index` if it lies within the disk radius of
     /// its triangle's boundary (only those can clash in the edge pass).
-    fn near_edge(index: usize, c: &Candidate) -> Option<Self> {
+    fn near_edge((index, c): (usize, &Candidate)) -> Option<Self> {
         (c.edge_distance < 1.0).then(|| Near::new(c, index))
     }
 }
@@ -843,7 +843,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
         status.fill(UNDECIDED);
         let mut grid = HashGrid::new(scratch.heads, scratch.next, GRID_CELL * self.radius);
         let near = &mut *scratch.near;
-        let near_edge = |(j, c): (usize, &Candidate)| Near::near_edge(j, c);
         let (mut j, mut inserted) = (0, 0);
         while j < n {
             let f = cands[j].face;
@@ -851,7 +850,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 .iter()
                 .position(|c| c.face != f)
                 .map_or(n, |e| j + e);
-            let group = (j..end).zip(&cands[j..end]).filter_map(near_edge);
+            let group = (j..end).zip(&cands[j..end]).filter_map(Near::near_edge);
             let gathered = &mut scratch.gathered;
             self.mark_clashes(&grid, near, group.clone(), 1.0, status, gathered);
             for q in group {
