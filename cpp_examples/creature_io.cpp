@@ -322,9 +322,9 @@ PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, c
   return info;
 }
 
-Expander::Expander(size_t guide_count, const PelageExpandParams& params) : params_(params) {
+Expander::Expander(size_t guide_count, size_t vertex_count, const PelageExpandParams& params) : params_(params) {
   size_t arena_bytes = 0;
-  check(pelage_expand_query(guide_count, &params_, &arena_bytes, &per_curve_), "pelage_expand_query");
+  check(pelage_expand_query(guide_count, vertex_count, &params_, &arena_bytes, &per_curve_), "pelage_expand_query");
   arena_.resize(arena_bytes);
 }
 

@@ -167,7 +167,8 @@ class Groom {
 // pelage_expand with an arena sized once (per groom) and reused every frame.
 class Expander {
  public:
-  Expander(size_t guide_count, const PelageExpandParams& params);
+  // For `guide_count` guides on meshes of `vertex_count` vertices.
+  Expander(size_t guide_count, size_t vertex_count, const PelageExpandParams& params);
   // float4 points written per curve (points_per_strand, + 2 when pinned).
   size_t points_per_curve() const { return per_curve_; }
   const PelageExpandParams& params() const { return params_; }

@@ -231,7 +231,7 @@ int main(int argc, char** argv) try {
 
   // 7. Embree geometry sharing our buffers: every hair for the camera; the
   // segments of the hairs with rank < N/2 (same vertex buffer) for shadows.
-  creature::Expander expander(guide_roots.size(), ep);
+  creature::Expander expander(guide_roots.size(), mesh.vertex_count(), ep);
   const size_t per = expander.points_per_curve(), segments = per - 3;
   std::vector<float> points(4 * per * n);  // the vertex buffer Embree reads
   const std::vector<uint32_t> indices = creature::segment_indices(n, per);

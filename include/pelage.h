@@ -20,7 +20,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 2
+#define PELAGE_VERSION_MINOR 3
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
@@ -407,11 +407,13 @@ enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const stru
 // Thread safety: may be called from any thread at any time.
 struct PelageExpandParams pelage_expand_params_defaults(void);
 
-// Sizes an expansion: arena bytes for `guide_count` guides and the control
-// points written per curve (points_per_strand, + 2 when pinned).
+// Sizes an expansion: arena bytes for `guide_count` guides on a mesh of
+// `vertex_count` vertices (the frame's vertex tangents live in the arena),
+// and the control points written per curve (points_per_strand, + 2 when
+// pinned).
 //
 // Thread safety: may be called from any thread at any time.
-enum PelageStatus pelage_expand_query(size_t guide_count, const struct PelageExpandParams *params, size_t *arena_bytes, size_t *points_per_curve);
+enum PelageStatus pelage_expand_query(size_t guide_count, size_t vertex_count, const struct PelageExpandParams *params, size_t *arena_bytes, size_t *points_per_curve);
 
 // Expands `strand_count` render curves for one frame from posed guides on
 // the deformed mesh. `strands`, `bindings` and `grooms` are parallel arrays

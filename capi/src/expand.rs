@@ -78,13 +78,16 @@ pub(crate) fn core_params(p: &PelageExpandParams) -> Result<ExpandParams, Failur
     Ok(params)
 }
 
-/// Sizes an expansion: arena bytes for `guide_count` guides and the control
-/// points written per curve (points_per_strand, + 2 when pinned).
+/// Sizes an expansion: arena bytes for `guide_count` guides on a mesh of
+/// `vertex_count` vertices (the frame's vertex tangents live in the arena),
+/// and the control points written per curve (points_per_strand, + 2 when
+/// pinned).
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
 pub extern "C" fn pelage_expand_query(
     guide_count: usize,
+    vertex_count: usize,
     params: *const PelageExpandParams,
     arena_bytes: *mut usize,
     points_per_curve: *mut usize,
@@ -95,7 +98,7 @@ pub extern "C" fn pelage_expand_query(
         let per = req_mut(points_per_curve, "points_per_curve")?;
         let core = core_params(p)?;
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, guide_count, core.points_per_strand);
+        PreparedGuides::layout(&mut layout, vertex_count, guide_count, core.points_per_strand);
         *bytes = layout.bytes();
         *per = core.output_points();
         Ok(())

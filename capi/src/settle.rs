@@ -48,7 +48,7 @@ pub extern "C" fn pelage_settle_query(
         let core = core_params(req(params, "params")?)?;
         let out = req_mut(arena_bytes, "arena_bytes")?;
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, guide_count, core.points_per_strand);
+        PreparedGuides::layout(&mut layout, mesh.positions.len(), guide_count, core.points_per_strand);
         *out = layout.bytes().saturating_add(Body::required_bytes(&mesh)?);
         Ok(())
     }

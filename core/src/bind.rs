@@ -7,7 +7,9 @@
 //! randomized neighbour count picks how many to keep; weights are inverse
 //! distance, faded so each goes continuously to zero as its guide leaves the
 //! set: `w_i = (d_next - d_i) / d_i`, with `d_next` the distance of the first
-//! guide not kept (or the search radius).
+//! guide not kept (or the search radius). The normal and wrap tests fade in
+//! too: a guide near either cutoff counts as farther away, so on a curved
+//! skin a guide leaves the set by sliding past `d_next`, never by a jump.
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::grid::HashGrid;
@@ -21,7 +23,8 @@ use glam::Vec3;
 pub const MAX_NEIGHBOURS: usize = 8;
 /// Marks a strand without eligible guides in [`StrandBinding::clump`].
 pub const NO_GUIDE: u32 = u32::MAX;
-/// Guides counted when measuring the local guide spacing.
+/// The local guide spacing at a strand is its distance to this many-th
+/// nearest eligible guide.
 const SPACING_RANK: usize = 3;
 /// Local spacing never exceeds this multiple of the mean spacing (bounds the search).
 const MAX_SPACING_RATIO: f32 = 3.0;
@@ -41,14 +44,20 @@ pub struct BindParams<'a> {
     /// exceeds this. 0 is the paper's rule (exclude guides facing away); the
     /// default 0.25 also keeps strands on the rim of a thin part from taking
     /// guides that are nearly perpendicular, i.e. from the other face.
+    /// Within 0.25 above the cutoff a guide's distance is stretched (its
+    /// weight fades to zero at the cutoff).
     pub min_normal_dot: f32,
-    /// Search radius in units of the local guide spacing (distance from the
-    /// strand's nearest guide to that guide's third nearest guide).
+    /// Search radius in units of the local guide spacing: the distance from
+    /// the strand to its third nearest eligible guide (at most 3 mean
+    /// spacings). It moves continuously with the strand's root, so it never
+    /// cuts a guide off with a jump.
     pub search_factor: f32,
     /// A guide is also excluded when either root lies below the other's
     /// tangent plane by more than this times their distance: the surface
     /// between them wraps around a rim (an ear's edge, a fingertip), so the
     /// guide grows on the far side even though its normal is not reversed.
+    /// Above half this slope a guide's distance is stretched (its weight
+    /// fades to zero at the cutoff).
     pub max_wrap_slope: f32,
     /// Optional parting regions (per vertex or an id texture); a strand
     /// only uses guides of its own region.
@@ -95,14 +104,14 @@ pub struct BindReport {
     pub mean_spacing: f32,
 }
 
-/// Guide roots in a spatial grid, with their normals, regions and local spacing.
+/// Guide roots in a spatial grid, with their normals and regions.
 pub struct GuideIndex<'a> {
     position: &'a [[f32; 3]],
     normal: &'a [[f32; 3]],
     region: &'a [u32],
-    spacing: &'a [f32],
     grid: HashGrid<'a>,
-    cell: f32,
+    /// The first search radius: the largest local spacing.
+    reach: f32,
     report: BindReport,
 }
 
@@ -134,6 +143,33 @@ fn check(params: &BindParams, mesh: &Mesh) -> Result<(), Error> {
 
 fn region_of(mesh: &Mesh, regions: Option<RegionMap>, r: &Root) -> u32 {
     regions.map_or(0, |map| map.region(mesh, r))
+}
+
+/// Width of the fade below [`BindParams::min_normal_dot`]'s cutoff, in
+/// units of the normals' dot product.
+const NORMAL_FADE: f32 = 0.25;
+/// Width of the fade below [`BindParams::max_wrap_slope`]'s cutoff, as a
+/// fraction of it.
+const WRAP_FADE: f32 = 0.5;
+
+/// How open the eligibility gates are for a guide at offset `d` (`d2` its
+/// squared length) with root normal `gn`, from a strand with normal `n`: 1
+/// well inside both, falling linearly to 0 at the normal and wrap cutoffs
+/// and 0 beyond. A guide's distance is divided by it, so a guide nearing a
+/// cutoff slides continuously out of the neighbour set (its weight reaches
+/// zero where it leaves) instead of dropping out with a jump.
+fn gate(d: Vec3, d2: f32, n: Vec3, gn: Vec3, params: &BindParams) -> f32 {
+    let facing = (gn.dot(n) - params.min_normal_dot) / NORMAL_FADE;
+    // how far each root lies below the other's tangent plane, per unit of
+    // their distance; a strand on a guide's root is level with it
+    let dist = libm::sqrtf(d2);
+    let below = if dist > 0.0 {
+        (-d.dot(n)).max(d.dot(gn)) / dist
+    } else {
+        0.0
+    };
+    let level = (1.0 - below / params.max_wrap_slope) / WRAP_FADE;
+    facing.clamp(0.0, 1.0) * level.clamp(0.0, 1.0)
 }
 
 /// Up to N nearest (distance^2, guide) pairs, sorted.
@@ -176,7 +212,6 @@ impl<'a> GuideIndex<'a> {
             .add::<[f32; 3]>(guides)
             .add::<[f32; 3]>(guides)
             .add::<u32>(guides)
-            .add::<f32>(guides)
             .add::<u32>(HashGrid::buckets_for(guides))
             .add::<u32>(guides);
     }
@@ -195,7 +230,6 @@ impl<'a> GuideIndex<'a> {
         let position = arena.alloc::<[f32; 3]>(n)?;
         let normal = arena.alloc::<[f32; 3]>(n)?;
         let region = arena.alloc::<u32>(n)?;
-        let spacing = arena.alloc::<f32>(n)?;
         let heads = arena.alloc::<u32>(HashGrid::buckets_for(n))?;
         let next = arena.alloc::<u32>(n)?;
         let mean_spacing = libm::sqrt(area / n as f64) as f32;
@@ -210,31 +244,12 @@ impl<'a> GuideIndex<'a> {
             total_length += guides.length(g) as f64;
             grid.insert(g as u32, p);
         }
-        for g in 0..n {
-            let mut near = Nearest::<{ SPACING_RANK + 1 }>::new();
-            let (p, nrm) = (Vec3::from(position[g]), Vec3::from(normal[g]));
-            grid.any_within(p, cell, |o| {
-                if Vec3::from(normal[o as usize]).dot(nrm) > params.min_normal_dot
-                    && region[o as usize] == region[g]
-                {
-                    near.push(p.distance_squared(Vec3::from(position[o as usize])), o);
-                }
-                false
-            });
-            // items[0] is the guide itself
-            spacing[g] = if near.len > SPACING_RANK {
-                libm::sqrtf(near.items[SPACING_RANK].0).min(MAX_SPACING_RATIO * mean_spacing)
-            } else {
-                MAX_SPACING_RATIO * mean_spacing
-            };
-        }
         Ok(GuideIndex {
             position,
             normal,
             region,
-            spacing,
             grid,
-            cell,
+            reach: MAX_SPACING_RATIO * mean_spacing,
             report: BindReport {
                 orphans: 0,
                 mean_guide_length: (total_length / n as f64) as f32,
@@ -289,9 +304,10 @@ impl<'a> GuideIndex<'a> {
                     return false;
                 }
                 let gn = Vec3::from(self.normal[gi]);
-                if gn.dot(n) > params.min_normal_dot {
-                    let depth = params.max_wrap_slope * libm::sqrtf(d2);
-                    if d.dot(n) > -depth && d.dot(gn) < depth {
+                let open = gate(d, d2, n, gn, params);
+                if open > 0.0 {
+                    let d2 = d2 / (open * open);
+                    if d2 < radius * radius {
                         near.push(d2, g);
                     }
                 }
@@ -299,7 +315,7 @@ impl<'a> GuideIndex<'a> {
             });
             near
         };
-        let mut near = gather(self.cell);
+        let mut near = gather(self.reach);
         let orphan = StrandBinding {
             clump: crate::bind::NO_GUIDE,
             ..StrandBinding::default()
@@ -307,8 +323,13 @@ impl<'a> GuideIndex<'a> {
         if near.len == 0 {
             return orphan;
         }
-        let radius = params.search_factor * self.spacing[near.items[0].1 as usize];
-        if radius > self.cell {
+        // a guide missing from the gather lies beyond `reach`, the cap
+        let spacing = match near.len {
+            len if len >= SPACING_RANK => libm::sqrtf(near.items[SPACING_RANK - 1].0),
+            _ => self.reach,
+        };
+        let radius = params.search_factor * spacing.min(self.reach);
+        if radius > self.reach {
             near = gather(radius);
         }
         let within = near.items[..near.len]
@@ -401,7 +422,12 @@ mod tests {
         t.extend(top.t.iter().map(|f| [f[0] + n, f[2] + n, f[1] + n]));
         let mut uv = top.uv.clone();
         uv.extend(top.uv.iter());
-        TestMesh { p, t, uv }
+        TestMesh {
+            p,
+            t,
+            uv,
+            n: vec![],
+        }
     }
 
     fn run(

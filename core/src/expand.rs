@@ -64,7 +64,8 @@ impl ExpandParams {
 }
 
 /// Posed guides resampled to the strand point count, in their own root
-/// frames (local) and in world space, for one frame.
+/// frames (local) and in world space, and the deformed mesh's vertex
+/// tangents (see [`frame::vertex_tangents`]), for one frame.
 ///
 /// Each guide is stored as its n local x, then n y, then n z coordinates,
 /// then the same for its world points, so the per-strand loops run over
@@ -73,13 +74,21 @@ impl ExpandParams {
 /// its guides) sits beside that guide's local points.
 pub struct PreparedGuides<'a> {
     data: &'a [f32],
+    tangents: &'a [[f32; 3]],
     points: usize,
     guides: usize,
 }
 
 impl<'a> PreparedGuides<'a> {
-    /// Adds the arena bytes [`PreparedGuides::new`] needs.
-    pub fn layout(layout: &mut ArenaLayout, guides: usize, points_per_strand: usize) {
+    /// Adds the arena bytes [`PreparedGuides::new`] needs for a mesh of
+    /// `vertices` vertices.
+    pub fn layout(
+        layout: &mut ArenaLayout,
+        vertices: usize,
+        guides: usize,
+        points_per_strand: usize,
+    ) {
+        layout.add::<[f32; 3]>(vertices);
         let n = guides.saturating_mul(points_per_strand).saturating_mul(6);
         layout.add::<f32>(n);
     }
@@ -109,6 +118,12 @@ impl<'a> PreparedGuides<'a> {
     /// Points per guide.
     pub fn points(&self) -> usize {
         self.points
+    }
+
+    /// The frame expansion gives a root at barycentric (u, v) on `face` of
+    /// this frame's mesh.
+    pub fn frame(&self, mesh: &Mesh, face: usize, u: f32, v: f32) -> Frame {
+        Frame::at(mesh, self.tangents, face, u, v)
     }
 
     /// Point `j` of guide `g` in the guide's root frame.
@@ -142,10 +157,12 @@ pub struct GuideSlots<'r, 'a> {
     pub filler: GuideFiller<'r>,
     /// [`GuideFiller::floats_per_guide`] floats per guide, guide after guide.
     pub data: &'a mut [f32],
+    tangents: &'a [[f32; 3]],
 }
 
-impl<'r, 'a> GuideSlots<'r, 'a> {
-    /// Validates the deformed mesh and posed guides and allocates their slots.
+impl<'r, 'a: 'r> GuideSlots<'r, 'a> {
+    /// Validates the deformed mesh and posed guides, computes the mesh's
+    /// vertex tangents and allocates the guides' slots.
     pub fn new(
         mesh: &'r Mesh<'r>,
         guides: &'r Guides<'r>,
@@ -159,14 +176,19 @@ impl<'r, 'a> GuideSlots<'r, 'a> {
         }
         mesh.check()?;
         guides.validate(mesh)?;
+        let tangents = arena.alloc::<[f32; 3]>(mesh.positions.len())?;
         let data = arena.alloc::<f32>(guides.len() * points_per_strand * 6)?;
+        frame::vertex_tangents(mesh, tangents);
+        let tangents = &*tangents;
         Ok(GuideSlots {
             filler: GuideFiller {
                 mesh,
+                tangents,
                 guides,
                 points: points_per_strand,
             },
             data,
+            tangents,
         })
     }
 
@@ -174,6 +196,7 @@ impl<'r, 'a> GuideSlots<'r, 'a> {
     pub fn finish(self) -> PreparedGuides<'a> {
         PreparedGuides {
             data: self.data,
+            tangents: self.tangents,
             points: self.filler.points,
             guides: self.filler.guides.len(),
         }
@@ -184,6 +207,7 @@ impl<'r, 'a> GuideSlots<'r, 'a> {
 #[derive(Clone, Copy)]
 pub struct GuideFiller<'r> {
     mesh: &'r Mesh<'r>,
+    tangents: &'r [[f32; 3]],
     guides: &'r Guides<'r>,
     points: usize,
 }
@@ -202,7 +226,7 @@ impl GuideFiller<'_> {
         for (i, slot) in part.chunks_exact_mut(6 * n).enumerate() {
             let g = first + i;
             let r = &self.guides.roots[g];
-            let frame = Frame::at(self.mesh, r.face as usize, r.u, r.v);
+            let frame = Frame::at(self.mesh, self.tangents, r.face as usize, r.u, r.v);
             let (_, count) = self.guides.span(g);
             let (local, world) = slot.split_at_mut(3 * n);
             for j in 0..n {
@@ -625,7 +649,14 @@ impl Filler<'_, '_> {
         let slot = s % FRAME_LANES;
         if slot == 0 {
             let roots = &self.strands.roots[s..];
-            frame::frames(self.mesh, roots, &mut self.basis, &mut self.frames);
+            let tangents = self.guides.tangents;
+            frame::frames(
+                self.mesh,
+                tangents,
+                roots,
+                &mut self.basis,
+                &mut self.frames,
+            );
         }
         strand_n::<N>(
             &self.frames[slot],
@@ -909,7 +940,7 @@ mod tests {
     use crate::bind::{bind, BindParams};
     use crate::groom::GroomMaps;
     use crate::guides::CvLayout;
-    use crate::testmesh::{graded_plane, roots, straight_guides, TestMesh};
+    use crate::testmesh::{bumpy_plane, graded_plane, roots, straight_guides, TestMesh};
     use crate::Strided;
     use proptest::prelude::*;
 
@@ -924,7 +955,10 @@ mod tests {
 
     impl Scene {
         fn plane(guides: u32, strands: u32) -> Scene {
-            let m = graded_plane(16, 1.0);
+            Scene::on(graded_plane(16, 1.0), guides, strands)
+        }
+
+        fn on(m: TestMesh, guides: u32, strands: u32) -> Scene {
             let guide_roots = roots(m.mesh(), guides, 5);
             let guide_points = straight_guides(&m.mesh(), &guide_roots, CVS, 0.1);
             let strands = roots(m.mesh(), strands, 9);
@@ -970,6 +1004,7 @@ mod tests {
             let mut layout = ArenaLayout::new();
             PreparedGuides::layout(
                 &mut layout,
+                self.m.p.len(),
                 self.guide_roots.len(),
                 params.points_per_strand,
             );
@@ -1108,8 +1143,7 @@ mod tests {
         let posed = Scene {
             m: TestMesh {
                 p: s.m.p.iter().map(moved).collect(),
-                t: s.m.t.clone(),
-                uv: s.m.uv.clone(),
+                ..s.m.clone()
             },
             guide_roots: s.guide_roots.clone(),
             guide_points: s.guide_points.iter().map(moved).collect(),
@@ -1163,11 +1197,7 @@ mod tests {
     fn largest_step_change(s: &Scene, steps: u32) -> f32 {
         let strands = path(&s.m.mesh(), steps);
         let scene = Scene {
-            m: TestMesh {
-                p: s.m.p.clone(),
-                t: s.m.t.clone(),
-                uv: s.m.uv.clone(),
-            },
+            m: s.m.clone(),
             guide_roots: s.guide_roots.clone(),
             guide_points: s.guide_points.clone(),
             strands,
@@ -1205,6 +1235,22 @@ mod tests {
             "largest change {coarse} at 1000 steps, {fine} at 8000 steps"
         );
         // and the change is bounded by a constant times the step (0.8 / steps)
+        assert!(fine < 20.0 * 0.8 / 8000.0, "change {fine} per step");
+    }
+
+    #[test]
+    fn shapes_change_continuously_on_a_curved_skin() {
+        // The same on a bumpy skin, where every triangle turns against its
+        // neighbours: the root frame's tangent must not jump at triangle
+        // edges (a per-triangle tangent turns leaning strands by a fixed
+        // angle there, at any path resolution).
+        let s = Scene::on(bumpy_plane(16), 120, 10);
+        let coarse = largest_step_change(&s, 1000);
+        let fine = largest_step_change(&s, 8000);
+        assert!(
+            fine < 0.3 * coarse,
+            "largest change {coarse} at 1000 steps, {fine} at 8000 steps"
+        );
         assert!(fine < 20.0 * 0.8 / 8000.0, "change {fine} per step");
     }
 
@@ -1268,11 +1314,11 @@ mod tests {
             let out = s.expand(&b, &plain_grooms(s.strands.len()), &raw(CVS), 1);
             let mesh = s.m.mesh();
             let mut layout = ArenaLayout::new();
-            PreparedGuides::layout(&mut layout, s.guide_roots.len(), CVS);
+            PreparedGuides::layout(&mut layout, s.m.p.len(), s.guide_roots.len(), CVS);
             let mut buf = vec![0u8; layout.bytes()];
             let prepared = PreparedGuides::new(&mesh, &s.guides(), CVS, &mut Arena::new(&mut buf)).unwrap();
             for (i, r) in s.strands.iter().enumerate() {
-                let frame = Frame::at(&mesh, r.face as usize, r.u, r.v);
+                let frame = prepared.frame(&mesh, r.face as usize, r.u, r.v);
                 for j in 0..CVS {
                     let p = out[i * CVS + j];
                     let local = frame.to_local(Vec3::new(p[0], p[1], p[2]));

@@ -3,12 +3,14 @@
 use crate::{Mesh, Root};
 use glam::{Vec2, Vec3};
 
-/// An orthonormal frame at a root: `n` is the surface normal, `t` a tangent
-/// tied to the triangle (its UV u-direction when the mesh has UVs, else its
-/// first edge), `b = n x t`.
+/// An orthonormal frame at a root: `n` is the surface normal, `t` the
+/// mesh's vertex tangent field (see [`vertex_tangents`]) made orthogonal to
+/// `n`, `b = n x t`.
 ///
-/// Because the tangent comes from the triangle's own geometry, the frame
-/// follows the deforming mesh without swimming or flipping.
+/// Because the tangent comes from the mesh's own geometry, the frame
+/// follows the deforming mesh without swimming or flipping; because it is
+/// interpolated from the vertices like the normal, it does not jump where a
+/// strand's root crosses from one triangle to the next.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Frame {
     /// Root position.
@@ -21,42 +23,113 @@ pub struct Frame {
     pub n: Vec3,
 }
 
-/// What every frame on one triangle shares: its corners, corner normals and
-/// tangent direction. Strands come in face order, so expansion computes this
-/// once per triangle instead of once per strand.
+/// The tangent direction of one triangle: its UV u-direction when the mesh
+/// has UVs that span it, else its first edge (not normalized).
+fn face_tangent(mesh: &Mesh, face: usize, corners: [Vec3; 3]) -> Vec3 {
+    let [p0, p1, p2] = corners;
+    let (e1, e2) = (p1 - p0, p2 - p0);
+    if let Some(uvs) = mesh.uvs {
+        let idx = mesh.triangles.get(face);
+        let t0 = Vec2::from(uvs.get(idx[0] as usize));
+        let d1 = Vec2::from(uvs.get(idx[1] as usize)) - t0;
+        let d2 = Vec2::from(uvs.get(idx[2] as usize)) - t0;
+        let det = d1.perp_dot(d2);
+        if det.abs() > 1e-12 {
+            return (e1 * d2.y - e2 * d1.y) / det;
+        }
+    }
+    e1
+}
+
+/// Writes a unit tangent per vertex of a checked `mesh` to `out` (its
+/// first `positions.len()` entries): the area-weighted mean direction of the
+/// face tangents around the vertex, zero where they cancel.
+///
+/// Frames interpolate these over each triangle, so a tangent field that is
+/// continuous across triangle edges (within a UV island) gives strands that
+/// do not turn where their roots change triangle. Computed once per frame
+/// on the deformed mesh; it costs one pass over the triangles.
+pub fn vertex_tangents(mesh: &Mesh, out: &mut [[f32; 3]]) {
+    let nv = mesh.positions.len().min(out.len());
+    let out = &mut out[..nv];
+    out.fill([0.0; 3]);
+    for (f, idx) in mesh.triangles.iter().enumerate() {
+        let corners = mesh.corners(f);
+        let [p0, p1, p2] = corners;
+        let area = (p1 - p0).cross(p2 - p0).length();
+        let t = face_tangent(mesh, f, corners).normalize_or_zero() * area;
+        for i in idx {
+            if let Some(o) = out.get_mut(i as usize) {
+                *o = (Vec3::from(*o) + t).into();
+            }
+        }
+    }
+    for o in out.iter_mut() {
+        *o = Vec3::from(*o).normalize_or_zero().into();
+    }
+}
+
+/// `t` made orthogonal to the unit normal `n` and unit length, or zero.
+#[inline]
+fn orthogonal(t: Vec3, n: Vec3) -> Vec3 {
+    (t - n * n.dot(t)).normalize_or_zero()
+}
+
+/// The tangent where the interpolated vertex tangent is lost (zero, or along
+/// the normal): the triangle's own tangent, else any direction.
+fn fallback_tangent(n: Vec3, face_tangent: Vec3) -> Vec3 {
+    let t = orthogonal(face_tangent, n);
+    if t == Vec3::ZERO {
+        n.any_orthonormal_vector()
+    } else {
+        t
+    }
+}
+
+/// What every frame on one triangle shares: its corners, corner normals,
+/// corner tangents and own tangent. Strands come in face order, so
+/// expansion computes this once per triangle instead of once per strand.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FaceBasis {
     corners: [Vec3; 3],
     normals: Option<[Vec3; 3]>,
     face_normal: Vec3,
+    tangents: [Vec3; 3],
     tangent: Vec3,
 }
 
 impl FaceBasis {
-    /// The basis of `face`.
-    pub fn new(mesh: &Mesh, face: usize) -> Self {
+    /// The basis of `face`, with the vertex `tangents` of [`vertex_tangents`]
+    /// (a vertex missing from the slice counts as zero, so an empty slice
+    /// gives every frame its triangle's own tangent).
+    pub fn new(mesh: &Mesh, tangents: &[[f32; 3]], face: usize) -> Self {
         let corners = mesh.corners(face);
         let [p0, p1, p2] = corners;
-        let (e1, e2) = (p1 - p0, p2 - p0);
         let idx = mesh.triangles.get(face);
-        let mut tangent = e1;
-        if let Some(uvs) = mesh.uvs {
-            let t0 = Vec2::from(uvs.get(idx[0] as usize));
-            let d1 = Vec2::from(uvs.get(idx[1] as usize)) - t0;
-            let d2 = Vec2::from(uvs.get(idx[2] as usize)) - t0;
-            let det = d1.perp_dot(d2);
-            if det.abs() > 1e-12 {
-                tangent = (e1 * d2.y - e2 * d1.y) / det;
-            }
-        }
+        let vertex_tangent =
+            |i: u32| Vec3::from(tangents.get(i as usize).copied().unwrap_or_default());
         FaceBasis {
             corners,
             normals: mesh
                 .normals
                 .map(|n| idx.map(|i| Vec3::from(n.get(i as usize)))),
-            face_normal: e1.cross(e2).normalize_or_zero(),
-            tangent,
+            face_normal: (p1 - p0).cross(p2 - p0).normalize_or_zero(),
+            tangents: idx.map(vertex_tangent),
+            tangent: face_tangent(mesh, face, corners),
         }
+    }
+
+    /// The normal sum and tangent sum at barycentric (u, v), before either
+    /// is normalized.
+    #[inline]
+    fn sums(&self, u: f32, v: f32) -> (Vec3, Vec3) {
+        let w = 1.0 - u - v;
+        let [ta, tb, tc] = self.tangents;
+        let n = match self.normals {
+            Some([na, nb, nc]) => na * w + nb * u + nc * v,
+            None => Vec3::ZERO,
+        };
+        (n, ta * w + tb * u + tc * v)
     }
 
     /// The frame at barycentric (u, v); the same numbers as
@@ -65,21 +138,17 @@ impl FaceBasis {
     pub fn frame(&self, u: f32, v: f32) -> Frame {
         let [a, b, c] = self.corners;
         let w = 1.0 - u - v;
-        let n = match self.normals {
-            Some([na, nb, nc]) => {
-                let s = (na * w + nb * u + nc * v).normalize_or_zero();
-                if s == Vec3::ZERO {
-                    self.face_normal
-                } else {
-                    s
-                }
-            }
-            None => self.face_normal,
+        let (n, t) = self.sums(u, v);
+        // a zero normal sum falls back to the face normal, as in
+        // `Mesh::normal`; without vertex normals that is every root
+        let n = match n.normalize_or_zero() {
+            Vec3::ZERO => self.face_normal,
+            n => n,
         };
-        let mut t = (self.tangent - n * n.dot(self.tangent)).normalize_or_zero();
-        if t == Vec3::ZERO {
-            t = n.any_orthonormal_vector();
-        }
+        let t = match orthogonal(t, n) {
+            Vec3::ZERO => fallback_tangent(n, self.tangent),
+            t => t,
+        };
         Frame {
             origin: a * w + b * u + c * v,
             t,
@@ -99,17 +168,19 @@ impl FaceBasis {
 /// order).
 pub(crate) fn frames(
     mesh: &Mesh,
+    tangents: &[[f32; 3]],
     roots: &[Root],
     basis: &mut Option<(u32, FaceBasis)>,
     out: &mut [Frame],
 ) {
     let len = roots.len().min(out.len()).min(FRAME_LANES);
     let lanes = &mut FrameLanes::default();
+    let mut face_tangents = [Vec3::ZERO; FRAME_LANES];
     for (i, root) in roots[..len].iter().enumerate() {
         let face = match *basis {
             Some((f, b)) if f == root.face => b,
             _ => {
-                let b = FaceBasis::new(mesh, root.face as usize);
+                let b = FaceBasis::new(mesh, tangents, root.face as usize);
                 *basis = Some((root.face, b));
                 b
             }
@@ -118,13 +189,9 @@ pub(crate) fn frames(
         let w = 1.0 - u - v;
         let [a, b, c] = face.corners;
         out[i].origin = a * w + b * u + c * v;
-        // a zero normal sum falls back to the face normal, as in `frame`;
-        // without vertex normals that is every root
-        let s = match face.normals {
-            Some([na, nb, nc]) => na * w + nb * u + nc * v,
-            None => Vec3::ZERO,
-        };
-        lanes.set(i, s, face.face_normal, face.tangent);
+        let (n, t) = face.sums(u, v);
+        lanes.set(i, n, face.face_normal, t);
+        face_tangents[i] = face.tangent;
     }
     let FrameLanes { n, face_n, t } = lanes;
     normalize_or_zero(n);
@@ -143,7 +210,7 @@ pub(crate) fn frames(
         let nv = Vec3::new(n[0][i], n[1][i], n[2][i]);
         let mut tv = Vec3::new(t[0][i], t[1][i], t[2][i]);
         if tv == Vec3::ZERO {
-            tv = nv.any_orthonormal_vector();
+            tv = fallback_tangent(nv, face_tangents[i]);
         }
         (frame.n, frame.t, frame.b) = (nv, tv, nv.cross(tv));
     }
@@ -156,7 +223,8 @@ pub(crate) const FRAME_LANES: usize = 32;
 type Lanes3 = [[f32; FRAME_LANES]; 3];
 
 /// [`frames`]' working lanes: the normal (first unnormalized), the face
-/// normal, and the tangent (first the face's, then made orthogonal).
+/// normal, and the tangent (first the interpolated sum, then made
+/// orthogonal).
 #[derive(Default)]
 struct FrameLanes {
     n: Lanes3,
@@ -198,9 +266,10 @@ fn normalize_or_zero(v: &mut Lanes3) {
 }
 
 impl Frame {
-    /// The frame at barycentric (u, v) on `face`.
-    pub fn at(mesh: &Mesh, face: usize, u: f32, v: f32) -> Frame {
-        FaceBasis::new(mesh, face).frame(u, v)
+    /// The frame at barycentric (u, v) on `face`, with the vertex
+    /// `tangents` of [`vertex_tangents`] (see [`FaceBasis::new`]).
+    pub fn at(mesh: &Mesh, tangents: &[[f32; 3]], face: usize, u: f32, v: f32) -> Frame {
+        FaceBasis::new(mesh, tangents, face).frame(u, v)
     }
 
     /// World point to frame coordinates.
@@ -220,15 +289,22 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testmesh::{roots, sphere};
+    use crate::testmesh::{bumpy_plane, roots, sphere};
     use crate::Strided;
+
+    fn tangents(mesh: &Mesh) -> Vec<[f32; 3]> {
+        let mut t = vec![[0.0; 3]; mesh.positions.len()];
+        vertex_tangents(mesh, &mut t);
+        t
+    }
 
     #[test]
     fn frames_are_orthonormal_and_match_mesh_evaluation() {
         let m = sphere(8, 16);
         let mesh = m.mesh();
+        let tangents = tangents(&mesh);
         for f in 0..mesh.triangle_count() {
-            let fr = Frame::at(&mesh, f, 0.2, 0.3);
+            let fr = Frame::at(&mesh, &tangents, f, 0.2, 0.3);
             assert_eq!(fr.origin, mesh.point(f, 0.2, 0.3));
             assert_eq!(fr.n, mesh.normal(f, 0.2, 0.3));
             for (a, b) in [(fr.t, fr.b), (fr.b, fr.n), (fr.n, fr.t)] {
@@ -239,14 +315,57 @@ mod tests {
         }
     }
 
+    /// The barycentric (u, v) of corner `k` of a triangle.
+    fn corner_uv(k: usize) -> Vec2 {
+        [Vec2::ZERO, Vec2::X, Vec2::Y][k]
+    }
+
+    #[test]
+    fn frames_agree_across_triangle_edges() {
+        // where two triangles share an edge, a root on it gets the same
+        // frame from either: the strand does not turn as its root crosses
+        // (the sphere's UV seam and poles included: its seam vertices are
+        // shared, so its face tangents there disagree)
+        let mut ball = sphere(10, 20);
+        ball.n = ball.p.clone();
+        for m in [bumpy_plane(12), ball] {
+            let mesh = m.mesh();
+            let tangents = tangents(&mesh);
+            let mut edges = std::collections::HashMap::new();
+            let mut shared = 0;
+            for f in 0..mesh.triangle_count() {
+                let idx = mesh.triangles.get(f);
+                for k in 0..3 {
+                    let (a, b) = (idx[k], idx[(k + 1) % 3]);
+                    // a point 30% along the edge from its lower vertex
+                    let (lo, hi) = if a < b {
+                        (k, (k + 1) % 3)
+                    } else {
+                        ((k + 1) % 3, k)
+                    };
+                    let at = corner_uv(lo).lerp(corner_uv(hi), 0.3);
+                    let frame = Frame::at(&mesh, &tangents, f, at.x, at.y);
+                    if let Some(other) = edges.insert((a.min(b), a.max(b)), frame) {
+                        shared += 1;
+                        assert!(frame.origin.distance(other.origin) < 1e-6);
+                        let turn = frame.t.distance(other.t);
+                        assert!(turn < 1e-5, "face {f}: tangents {turn} apart");
+                        assert!(frame.n.distance(other.n) < 1e-5);
+                    }
+                }
+            }
+            assert!(shared > mesh.triangle_count());
+        }
+    }
+
     /// Every root's frame from `frames`, block by block, against `FaceBasis::frame`.
-    fn assert_blocks_match(mesh: &Mesh, roots: &[Root]) {
+    fn assert_blocks_match(mesh: &Mesh, tangents: &[[f32; 3]], roots: &[Root]) {
         let mut basis = None;
         let mut out = [Frame::default(); FRAME_LANES];
         for (b, block) in roots.chunks(FRAME_LANES).enumerate() {
-            frames(mesh, block, &mut basis, &mut out);
+            frames(mesh, tangents, block, &mut basis, &mut out);
             for (i, (r, f)) in block.iter().zip(&out).enumerate() {
-                let want = FaceBasis::new(mesh, r.face as usize).frame(r.u, r.v);
+                let want = FaceBasis::new(mesh, tangents, r.face as usize).frame(r.u, r.v);
                 assert_eq!(*f, want, "root {}", b * FRAME_LANES + i);
             }
         }
@@ -258,32 +377,38 @@ mod tests {
         let mesh = m.mesh();
         let mut rs = roots(mesh, 700, 3);
         rs.sort_by_key(|r| r.face);
-        assert_blocks_match(&mesh, &rs);
-        // two triangles with UVs = xy, so the tangent is exactly x: on the
-        // first the corner normals at (0.5, 0.5) cancel (face normal
-        // fallback), on the second they all point along x, the tangent
-        // (any-orthonormal fallback)
+        assert_blocks_match(&mesh, &tangents(&mesh), &rs);
+        // three triangles with UVs = xy, so every tangent is exactly x: on
+        // the first the corner normals at (0.5, 0.5) cancel (face normal
+        // fallback); on the second they all point along x, the tangent
+        // (any-orthonormal fallback); the third has no vertex tangents
+        // (its triangle's tangent)
         let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-        let p: Vec<[f32; 3]> = p.iter().chain(&p).copied().collect();
+        let p: Vec<[f32; 3]> = p.iter().cycle().take(9).copied().collect();
         let uv: Vec<[f32; 2]> = p.iter().map(|q| [q[0], q[1]]).collect();
-        let x = [1.0, 0.0, 0.0];
-        let normals = [[0.0, 0.0, 1.0], x, [-1.0, 0.0, 0.0], x, x, x];
-        let t = [[0, 1, 2], [3, 4, 5]];
+        let (x, z) = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+        let normals = [z, x, [-1.0, 0.0, 0.0], x, x, x, z, z, z];
+        let t = [[0, 1, 2], [3, 4, 5], [6, 7, 8]];
         let mut mesh = Mesh::new(Strided::from_slice(&p), Strided::from_slice(&t));
         mesh.uvs = Some(Strided::from_slice(&uv));
         mesh.normals = Some(Strided::from_slice(&normals));
+        let tangents = &tangents(&mesh)[..6];
         let at = |face| Root {
             face,
             u: 0.5,
             v: 0.5,
             ..Root::default()
         };
-        let (cancel, along) = (FaceBasis::new(&mesh, 0), FaceBasis::new(&mesh, 1));
+        let basis = |f| FaceBasis::new(&mesh, tangents, f);
+        let (cancel, along, bare) = (basis(0), basis(1), basis(2));
         assert_eq!(cancel.frame(0.5, 0.5).n, cancel.face_normal);
+        assert_eq!(cancel.frame(0.5, 0.5).t, Vec3::X);
         let f = along.frame(0.5, 0.5);
         assert_eq!(f.t, f.n.any_orthonormal_vector());
-        let mut with_normals = vec![at(0); 5];
-        with_normals.extend([at(1); 40]);
-        assert_blocks_match(&mesh, &with_normals);
+        assert_eq!(bare.frame(0.5, 0.5).t, Vec3::X);
+        let mut blocks = vec![at(0); 5];
+        blocks.extend([at(1); 40]);
+        blocks.extend([at(2); 30]);
+        assert_blocks_match(&mesh, tangents, &blocks);
     }
 }

@@ -18,7 +18,6 @@ use crate::body::Body;
 use crate::expand::{
     check_frame, check_strands, strand, EndPoints, ExpandParams, Lanes, PreparedGuides, Strands,
 };
-use crate::frame::Frame;
 use crate::groom::StrandGroom;
 use crate::{Error, Mesh, Root};
 use core::f32::consts::FRAC_PI_2;
@@ -109,7 +108,7 @@ pub fn settle_checked(
     let mut points = [[0.0f32; 4]; crate::expand::MAX_STRAND_POINTS];
     let mut report = SettleReport::default();
     for ((root, bind), groom) in roots.iter().zip(bindings).zip(grooms) {
-        let frame = Frame::at(mesh, root.face as usize, root.u, root.v);
+        let frame = guides.frame(mesh, root.face as usize, root.u, root.v);
         // the root itself lies on the surface; every later point must be
         // outside. Gives that, and the tip.
         let mut evaluate = |g: &StrandGroom| {
@@ -296,7 +295,7 @@ mod tests {
             orphan_length: 0.1,
         };
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, guide_roots.len(), CVS);
+        PreparedGuides::layout(&mut layout, m.p.len(), guide_roots.len(), CVS);
         let mut body_buf = vec![0u8; Body::required_bytes(&mesh).unwrap()];
         let body = Body::new(&mesh, &mut Arena::new(&mut body_buf)).unwrap();
         let mut guide_buf = vec![0u8; layout.bytes()];

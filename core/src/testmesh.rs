@@ -2,16 +2,22 @@
 
 use crate::{Mesh, Strided};
 
+#[derive(Clone)]
 pub struct TestMesh {
     pub p: Vec<[f32; 3]>,
     pub t: Vec<[u32; 3]>,
     pub uv: Vec<[f32; 2]>,
+    /// Per-vertex normals, or empty for face normals.
+    pub n: Vec<[f32; 3]>,
 }
 
 impl TestMesh {
     pub fn mesh(&self) -> Mesh<'_> {
         let mut m = Mesh::new(Strided::from_slice(&self.p), Strided::from_slice(&self.t));
         m.uvs = Some(Strided::from_slice(&self.uv));
+        if !self.n.is_empty() {
+            m.normals = Some(Strided::from_slice(&self.n));
+        }
         m
     }
 }
@@ -46,7 +52,31 @@ pub fn graded_plane(n: usize, ratio: f32) -> TestMesh {
             t.push([a, a + s + 1, a + s]);
         }
     }
-    TestMesh { p, t, uv }
+    TestMesh {
+        p,
+        t,
+        uv,
+        n: vec![],
+    }
+}
+
+/// [`graded_plane`] (even spacing) lifted to the height field
+/// z = 0.15 sin(2 pi x) cos(2 pi y), with its exact normals: a curved skin
+/// whose triangles all turn against each other.
+pub fn bumpy_plane(n: usize) -> TestMesh {
+    use core::f32::consts::TAU;
+    let mut m = graded_plane(n, 1.0);
+    m.n =
+        m.p.iter_mut()
+            .map(|q| {
+                let (x, y) = (q[0], q[1]);
+                q[2] = 0.15 * libm::sinf(TAU * x) * libm::cosf(TAU * y);
+                let dx = 0.15 * TAU * libm::cosf(TAU * x) * libm::cosf(TAU * y);
+                let dy = -0.15 * TAU * libm::sinf(TAU * x) * libm::sinf(TAU * y);
+                glam::Vec3::new(-dx, -dy, 1.0).normalize().into()
+            })
+            .collect();
+    m
 }
 
 /// A UV sphere with single-vertex poles.
@@ -80,7 +110,12 @@ pub fn sphere(rows: usize, cols: usize) -> TestMesh {
             t.push([at(r, c), at(r + 1, c + 1), at(r + 1, c)]);
         }
     }
-    TestMesh { p, t, uv }
+    TestMesh {
+        p,
+        t,
+        uv,
+        n: vec![],
+    }
 }
 
 /// Stamps `n` roots with `seed` (heap-backed, for tests).

@@ -106,7 +106,13 @@ fn main() {
     ep.points_per_strand = CVS as u32;
     let (mut bytes, mut per) = (0, 0);
     assert_eq!(
-        pelage_expand_query(guide_roots.len(), &ep, &mut bytes, &mut per),
+        pelage_expand_query(
+            guide_roots.len(),
+            m.positions.len(),
+            &ep,
+            &mut bytes,
+            &mut per
+        ),
         PelageStatus::Ok
     );
     let mut earena = vec![0u8; bytes];
@@ -213,7 +219,7 @@ fn stages(
         orphan_length: ep.orphan_length,
     };
     let mut layout = ArenaLayout::new();
-    PreparedGuides::layout(&mut layout, guides.len(), CVS);
+    PreparedGuides::layout(&mut layout, mesh.positions.len(), guides.len(), CVS);
     let mut arena = vec![0u8; layout.bytes()];
     let t_prepare = time(7, || {
         black_box(PreparedGuides::new(mesh, guides, CVS, &mut Arena::new(&mut arena)).unwrap());

@@ -1008,7 +1008,7 @@ static void test_interp_success(void) {
   g_in.expand_params = pelage_expand_params_defaults();
   g_in.expand_params.orphan_length = g_in.info.mean_guide_length;
   EXPECT(PELAGE_STATUS_OK,
-         pelage_expand_query(g_in.guide_count, &g_in.expand_params, &g_in.expand_arena_bytes, &g_in.per));
+         pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &g_in.expand_params, &g_in.expand_arena_bytes, &g_in.per));
   CHECK(g_in.per == 18);
   REQUIRE(g_in.per >= 4);
   const size_t per = g_in.per, n = g_in.strand_count;
@@ -1093,7 +1093,7 @@ static void test_interp_success(void) {
     PelageExpandParams raw = g_in.expand_params;
     raw.end_points = PELAGE_END_POINTS_RAW;
     size_t bytes = 0, raw_per = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(g_in.guide_count, &raw, &bytes, &raw_per));
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &raw, &bytes, &raw_per));
     CHECK(raw_per == 16 && bytes <= g_in.expand_arena_bytes);
     FILL(g_in.points_out, points_out_bytes());
     EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
@@ -1172,9 +1172,9 @@ static void test_interp_null_pointers(void) {
 
   /* pelage_expand_query */
   size_t *bytes = &g_in.sizes_out[0], *per = &g_in.sizes_out[1];
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, NULL, bytes, per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, &g_in.expand_params, NULL, per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, &g_in.expand_params, bytes, NULL));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, NULL, bytes, per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &g_in.expand_params, NULL, per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &g_in.expand_params, bytes, NULL));
 
   /* pelage_expand: every pointer argument (curve_counts and curve_ids are optional) */
 #define EXPAND_NULL(mesh, guides, strands, bindings, grooms, params, arena, points)                               \
@@ -1423,7 +1423,7 @@ static void test_interp_bad_input(void) {
                      g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY))
   ep = g_in.expand_params, ep.end_points = 9;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(g_in.guide_count, &ep, &g_in.sizes_out[0],
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &ep, &g_in.sizes_out[0],
                                                             &g_in.sizes_out[1]));
   ep = g_in.expand_params, ep.points_per_strand = 1;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
@@ -1448,7 +1448,7 @@ static void test_interp_bad_input(void) {
     /* pelage_expand_query on points_per_strand outside 2..64: printed, not required */
     size_t sizes[2] = {0, 0};
     ep = g_in.expand_params, ep.points_per_strand = 65;
-    const PelageStatus s = pelage_expand_query(g_in.guide_count, &ep, &sizes[0], &sizes[1]);
+    const PelageStatus s = pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &ep, &sizes[0], &sizes[1]);
     printf("note: pelage_expand_query with points_per_strand 65 gives %s (arena %zu, %zu points per curve); "
            "pelage_expand rejects it\n", status_name(s), sizes[0], sizes[1]);
   }

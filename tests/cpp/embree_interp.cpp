@@ -325,7 +325,7 @@ int main(int argc, char** argv) try {
   ep.end_points = PELAGE_END_POINTS_PINNED;
   ep.orphan_length = kGuideLength;
   ep.thread_count = 0;
-  creature::Expander expander(guide_roots.size(), ep);
+  creature::Expander expander(guide_roots.size(), mesh.vertex_count(), ep);
   const size_t per = expander.points_per_curve();
   Fur fur = grow(mesh, guides, roots, maps, expander, true);
   std::printf("\nbind %.2f s (%u orphans of %zu, mean guide length %.4f, spacing %.4f); groom %.3f s; "

@@ -77,7 +77,13 @@ fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) ->
 fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32; 4]> {
     let (mut bytes, mut per) = (0usize, 0usize);
     assert_eq!(
-        pelage_expand_query(g.guide_roots.len(), params, &mut bytes, &mut per),
+        pelage_expand_query(
+            g.guide_roots.len(),
+            m.positions.len(),
+            params,
+            &mut bytes,
+            &mut per
+        ),
         PelageStatus::Ok
     );
     let mut arena = vec![0u8; bytes];
@@ -171,7 +177,7 @@ fn avx2_kernel_gives_the_baseline_bits() {
     };
     for points in [16, 8, 32, 11] {
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, guides.len(), points);
+        PreparedGuides::layout(&mut layout, mesh.positions.len(), guides.len(), points);
         let mut arena = vec![0u8; layout.bytes()];
         let prepared =
             PreparedGuides::new(&mesh, &guides, points, &mut Arena::new(&mut arena)).unwrap();
@@ -344,7 +350,13 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     params.orphan_length = 0.05;
     let (mut ebytes, mut per) = (0, 0);
     assert_eq!(
-        pelage_expand_query(sim.strands.len(), &params, &mut ebytes, &mut per),
+        pelage_expand_query(
+            sim.strands.len(),
+            m.positions.len(),
+            &params,
+            &mut ebytes,
+            &mut per
+        ),
         PelageStatus::Ok
     );
     let mut earena = vec![0u8; ebytes];
@@ -492,7 +504,13 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
     broken[5].guides[0] = 1 << 20;
     let params = pelage_expand_params_defaults();
     let (mut bytes, mut per) = (0, 0);
-    pelage_expand_query(g.guide_roots.len(), &params, &mut bytes, &mut per);
+    pelage_expand_query(
+        g.guide_roots.len(),
+        m.positions.len(),
+        &params,
+        &mut bytes,
+        &mut per,
+    );
     let mut earena = vec![0u8; bytes];
     let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
     let mut call = ExpandCall {
@@ -559,7 +577,13 @@ fn interleaved_outputs_and_host_records_are_checked() {
     let params = pelage_expand_params_defaults();
     let (mut bytes, mut per) = (0, 0);
     assert_eq!(
-        pelage_expand_query(g.guide_roots.len(), &params, &mut bytes, &mut per),
+        pelage_expand_query(
+            g.guide_roots.len(),
+            m.positions.len(),
+            &params,
+            &mut bytes,
+            &mut per
+        ),
         PelageStatus::Ok
     );
     let mut arena = vec![0u8; bytes];
