@@ -993,6 +993,17 @@ mod tests {
             out
         }
 
+        /// Runs `f` with this scene's guides prepared for `n` points.
+        fn prepared<R>(&self, n: usize, f: impl FnOnce(&Mesh, &PreparedGuides) -> R) -> R {
+            let mesh = self.m.mesh();
+            let mut layout = ArenaLayout::new();
+            PreparedGuides::layout(&mut layout, self.m.p.len(), self.guide_roots.len(), n);
+            let mut buf = vec![0u8; layout.bytes()];
+            let mut arena = Arena::new(&mut buf);
+            let prepared = PreparedGuides::new(&mesh, &self.guides(), n, &mut arena).unwrap();
+            f(&mesh, &prepared)
+        }
+
         fn expand(
             &self,
             bindings: &[StrandBinding],
@@ -1000,34 +1011,23 @@ mod tests {
             params: &ExpandParams,
             chunks: usize,
         ) -> Vec<[f32; 4]> {
-            let mesh = self.m.mesh();
-            let mut layout = ArenaLayout::new();
-            PreparedGuides::layout(
-                &mut layout,
-                self.m.p.len(),
-                self.guide_roots.len(),
-                params.points_per_strand,
-            );
-            let mut buf = vec![0u8; layout.bytes()];
-            let mut arena = Arena::new(&mut buf);
-            let prepared =
-                PreparedGuides::new(&mesh, &self.guides(), params.points_per_strand, &mut arena)
-                    .unwrap();
-            let per = params.output_points();
-            let n = self.strands.len();
-            let mut out = vec![[0.0f32; 4]; n * per];
-            for c in 0..chunks {
-                let r = c * n / chunks..(c + 1) * n / chunks;
-                let bytes: &mut [u8] =
-                    bytemuck::cast_slice_mut(&mut out[r.start * per..r.end * per]);
-                let all = Strands {
-                    roots: &self.strands,
-                    bindings,
-                    grooms,
-                };
-                expand(&mesh, &all.range(r), &prepared, params, bytes, 16).unwrap();
-            }
-            out
+            self.prepared(params.points_per_strand, |mesh, prepared| {
+                let per = params.output_points();
+                let n = self.strands.len();
+                let mut out = vec![[0.0f32; 4]; n * per];
+                for c in 0..chunks {
+                    let r = c * n / chunks..(c + 1) * n / chunks;
+                    let bytes: &mut [u8] =
+                        bytemuck::cast_slice_mut(&mut out[r.start * per..r.end * per]);
+                    let all = Strands {
+                        roots: &self.strands,
+                        bindings,
+                        grooms,
+                    };
+                    expand(mesh, &all.range(r), prepared, params, bytes, 16).unwrap();
+                }
+                out
+            })
         }
     }
 
@@ -1158,6 +1158,177 @@ mod tests {
         }
         // float rounding at coordinates of a few units, not a swim
         assert!(worst < 2e-5, "curves moved {worst} away from the body");
+    }
+
+    #[test]
+    fn each_groom_value_shapes_the_curve_as_documented() {
+        // on a curved skin, every groom value against the plain curve:
+        // length scales the root-relative shape, bend moves point j by
+        // bend L t^2 along the root tangent, kink by kink L t in the tangent
+        // plane turning kink_frequency waves over the strand from the
+        // strand's phase, clump pulls point j toward the clump guide by
+        // clump t, widths run linearly from root to tip
+        let s = Scene::on(bumpy_plane(16), 60, 300);
+        let b = s.bind(&BindParams::default());
+        let n = s.strands.len();
+        let phase = |i: usize| 0.7 * i as f32;
+        let plain = StrandGroom {
+            length: 1.0,
+            root_radius: 0.002,
+            tip_radius: 0.0005,
+            kink_frequency: 2.5,
+            ..StrandGroom::default()
+        };
+        let with = |f: &dyn Fn(&mut StrandGroom)| {
+            let grooms: Vec<StrandGroom> = (0..n)
+                .map(|i| {
+                    let (sin, cos) = libm::sincosf(phase(i));
+                    let mut g = StrandGroom {
+                        kink_phase: [cos, sin],
+                        ..plain
+                    };
+                    f(&mut g);
+                    g
+                })
+                .collect();
+            s.expand(&b, &grooms, &raw(CVS), 1)
+        };
+        let base = with(&|_| {});
+        let long = with(&|g| g.length = 1.5);
+        let bent = with(&|g| g.bend = 0.3);
+        let kinked = with(&|g| g.kink_amplitude = 0.05);
+        let clumped = with(&|g| g.clump = 0.6);
+        let at = |c: &[[f32; 4]], i: usize, j: usize| Vec3::from_slice(&c[i * CVS + j][..3]);
+        let delta = core::f32::consts::TAU * 2.5 / (CVS - 1) as f32;
+        let close = |a: Vec3, e: Vec3, what: &str, i: usize, j: usize| {
+            assert!(
+                a.distance(e) < 2e-5,
+                "{what}: strand {i} point {j}: {a} vs {e}"
+            );
+        };
+        s.prepared(CVS, |mesh, prepared| {
+            for (i, r) in s.strands.iter().enumerate() {
+                let f = prepared.frame(mesh, r.face as usize, r.u, r.v);
+                let root = at(&base, i, 0);
+                let len = at(&base, i, CVS - 1).distance(root);
+                assert!(len > 0.05, "strand {i} has length {len}");
+                for j in 0..CVS {
+                    let t = j as f32 / (CVS - 1) as f32;
+                    let p = at(&base, i, j);
+                    let radius = base[i * CVS + j][3];
+                    assert!(
+                        (radius - (0.002 - 0.0015 * t)).abs() < 1e-7,
+                        "radius {radius}"
+                    );
+                    close(at(&long, i, j) - root, (p - root) * 1.5, "length", i, j);
+                    close(at(&bent, i, j), p + f.t * (0.3 * len * t * t), "bend", i, j);
+                    let (sin, cos) = libm::sincosf(phase(i) + j as f32 * delta);
+                    let wave = (f.t * sin + f.b * cos) * (0.05 * len * t);
+                    close(at(&kinked, i, j), p + wave, "kink", i, j);
+                    let centre = Vec3::new(
+                        prepared.world(b[i].clump as usize)[j],
+                        prepared.world(b[i].clump as usize)[CVS + j],
+                        prepared.world(b[i].clump as usize)[2 * CVS + j],
+                    );
+                    close(
+                        at(&clumped, i, j),
+                        p + (centre - p) * (0.6 * t),
+                        "clump",
+                        i,
+                        j,
+                    );
+                }
+            }
+        });
+    }
+
+    #[test]
+    fn curves_keep_their_shape_on_a_bending_body() {
+        // the skin rolls around a cylinder (a bend, not a rigid motion) and
+        // each posed guide rides on its root, keeping its shape in its root
+        // frame: every strand must keep its shape in its own root frame,
+        // bend, kink and lift included (clump is left out: it pulls toward
+        // the guides' world points, which the bend moves apart)
+        let mut flat = graded_plane(16, 1.0);
+        flat.n = vec![[0.0, 0.0, 1.0]; flat.p.len()];
+        let s = Scene::on(flat, 60, 400);
+        let b = s.bind(&BindParams::default());
+        let grooms: Vec<StrandGroom> = (0..s.strands.len())
+            .map(|i| StrandGroom {
+                length: 0.9,
+                root_radius: 0.002,
+                tip_radius: 0.0005,
+                bend: 0.2,
+                kink_amplitude: 0.05,
+                kink_frequency: 3.0,
+                kink_phase: [libm::cosf(i as f32), libm::sinf(i as f32)],
+                lift: [0.1 * libm::sinf(i as f32), 0.05],
+                ..StrandGroom::default()
+            })
+            .collect();
+        let params = raw(CVS);
+        let rest = s.expand(&b, &grooms, &params, 1);
+        let radius = 0.4;
+        let rolled = |p: &[f32; 3]| {
+            let (sin, cos) = libm::sincosf(p[0] / radius);
+            [(radius + p[2]) * sin, p[1], (radius + p[2]) * cos - radius]
+        };
+        let bent = TestMesh {
+            p: s.m.p.iter().map(rolled).collect(),
+            n: s.m
+                .p
+                .iter()
+                .map(|p| {
+                    let (sin, cos) = libm::sincosf(p[0] / radius);
+                    [sin, 0.0, cos]
+                })
+                .collect(),
+            ..s.m.clone()
+        };
+        let frames = |scene: &Scene, roots: &[Root]| {
+            scene.prepared(CVS, |mesh, prepared| {
+                roots
+                    .iter()
+                    .map(|r| prepared.frame(mesh, r.face as usize, r.u, r.v))
+                    .collect::<Vec<_>>()
+            })
+        };
+        let mut posed = Scene {
+            m: bent,
+            guide_roots: s.guide_roots.clone(),
+            guide_points: s.guide_points.clone(),
+            strands: s.strands.clone(),
+        };
+        let (rest_guides, bent_guides) =
+            (frames(&s, &s.guide_roots), frames(&posed, &s.guide_roots));
+        for (g, points) in posed.guide_points.chunks_mut(CVS).enumerate() {
+            for p in points {
+                *p = bent_guides[g]
+                    .to_world(rest_guides[g].to_local(Vec3::from(*p)))
+                    .into();
+            }
+        }
+        let out = posed.expand(&b, &grooms, &params, 1);
+        let (rest_frames, bent_frames) = (frames(&s, &s.strands), frames(&posed, &s.strands));
+        let mut worst = 0.0f32;
+        for (i, (a, o)) in rest.chunks(CVS).zip(out.chunks(CVS)).enumerate() {
+            for (p, q) in a.iter().zip(o) {
+                let before = rest_frames[i].to_local(Vec3::from_slice(&p[..3]));
+                let after = bent_frames[i].to_local(Vec3::from_slice(&q[..3]));
+                worst = worst.max(before.distance(after));
+                assert_eq!(p[3], q[3], "radius");
+            }
+        }
+        assert!(
+            worst < 2e-5,
+            "strands changed shape by {worst} in their frames"
+        );
+        // and the skin did bend under them: the frames turned by up to 2.5 rad
+        let turn = rest_frames
+            .iter()
+            .zip(&bent_frames)
+            .map(|(a, b)| a.n.angle_between(b.n));
+        assert!(turn.fold(0.0f32, f32::max) > 2.0);
     }
 
     /// Roots along the segment y = 0.37 + 0.1 x, x in [0.1, 0.9], on the plane.
@@ -1312,13 +1483,9 @@ mod tests {
             let params = BindParams { min_neighbours: kmin, max_neighbours: kmin + extra, seed, ..BindParams::default() };
             let b = s.bind(&params);
             let out = s.expand(&b, &plain_grooms(s.strands.len()), &raw(CVS), 1);
-            let mesh = s.m.mesh();
-            let mut layout = ArenaLayout::new();
-            PreparedGuides::layout(&mut layout, s.m.p.len(), s.guide_roots.len(), CVS);
-            let mut buf = vec![0u8; layout.bytes()];
-            let prepared = PreparedGuides::new(&mesh, &s.guides(), CVS, &mut Arena::new(&mut buf)).unwrap();
+            s.prepared(CVS, |mesh, prepared| {
             for (i, r) in s.strands.iter().enumerate() {
-                let frame = prepared.frame(&mesh, r.face as usize, r.u, r.v);
+                let frame = prepared.frame(mesh, r.face as usize, r.u, r.v);
                 for j in 0..CVS {
                     let p = out[i * CVS + j];
                     let local = frame.to_local(Vec3::new(p[0], p[1], p[2]));
@@ -1332,6 +1499,8 @@ mod tests {
                         "strand {} point {}: {:?} outside {:?}..{:?}", i, j, local, lo, hi);
                 }
             }
+            Ok(())
+            })?;
         }
     }
 

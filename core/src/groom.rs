@@ -117,3 +117,121 @@ impl GroomMaps<'_> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::{Texels, Texture};
+    use crate::testmesh::{graded_plane, roots};
+    use crate::Strided;
+
+    /// A linear function of the surface point: barycentric and bilinear
+    /// interpolation both reproduce it exactly, so every strand's value is
+    /// known.
+    fn linear(x: f32, y: f32) -> f32 {
+        0.2 + 0.5 * x + 0.25 * y
+    }
+
+    #[test]
+    fn maps_give_each_strand_the_value_at_its_root() {
+        // the plane's UVs are its x and y, so all three maps below hold the
+        // same function; a 64 x 64 float texture and an 8-bit one quantized
+        // to 1/255
+        let m = graded_plane(12, 4.0);
+        let mesh = m.mesh();
+        let per_vertex: Vec<f32> = m.p.iter().map(|p| linear(p[0], p[1])).collect();
+        let size = 64;
+        let centre = |i: usize| (i as f32 + 0.5) / size as f32;
+        let texels: Vec<f32> = (0..size * size)
+            .map(|i| linear(centre(i % size), centre(i / size)))
+            .collect();
+        let bytes: Vec<u8> = texels.iter().map(|v| (v * 255.0).round() as u8).collect();
+        let texture = |texels, row_stride| {
+            ScalarMap::Texture(Texture {
+                texels,
+                width: size,
+                height: size,
+                row_stride,
+            })
+        };
+        let maps = GroomMaps {
+            length: ScalarMap::PerVertex(Strided::from_slice(&per_vertex)),
+            root_width: texture(Texels::F32(bytemuck::cast_slice(&texels)), 4 * size),
+            tip_width: texture(Texels::U8(&bytes), size),
+            bend: ScalarMap::Constant(-0.1),
+            kink_amplitude: ScalarMap::Constant(0.02),
+            kink_frequency: ScalarMap::Constant(4.0),
+            clump: ScalarMap::PerVertex(Strided::from_slice(&per_vertex)),
+        };
+        let rs = roots(mesh, 2000, 4);
+        let mut out = vec![StrandGroom::default(); rs.len()];
+        maps.evaluate(&mesh, &rs, 9, &mut out).unwrap();
+        let mut inside = 0;
+        for (r, g) in rs.iter().zip(&out) {
+            let p = mesh.point(r.face as usize, r.u, r.v);
+            let want = linear(p.x, p.y);
+            assert!(
+                (g.length - want).abs() < 1e-5,
+                "per-vertex {} vs {want}",
+                g.length
+            );
+            assert!((g.clump - want.min(1.0)).abs() < 1e-5, "clamped clump");
+            assert_eq!(
+                (g.bend, g.kink_amplitude, g.kink_frequency),
+                (-0.1, 0.02, 4.0)
+            );
+            // within half a texel of the border the lookup clamps
+            let interior = (0.5 / size as f32..1.0 - 0.5 / size as f32).contains(&p.x)
+                && (0.5 / size as f32..1.0 - 0.5 / size as f32).contains(&p.y);
+            if interior {
+                inside += 1;
+                assert!((2.0 * g.root_radius - want).abs() < 1e-5, "float texture");
+                assert!(
+                    (2.0 * g.tip_radius - want).abs() < 0.5 / 255.0 + 1e-5,
+                    "8-bit texture"
+                );
+            }
+            let [c, s] = g.kink_phase;
+            assert!((c * c + s * s - 1.0).abs() < 1e-5);
+        }
+        assert!(inside > rs.len() * 9 / 10);
+        // the phase is keyed by strand id alone: the same ids in another
+        // order, on other faces, give the same phases; another seed does not
+        let mut moved: Vec<crate::Root> = rs.iter().rev().copied().collect();
+        for (r, o) in moved.iter_mut().zip(rs.iter()) {
+            (r.face, r.u, r.v) = (o.face, o.u, o.v);
+        }
+        let mut again = vec![StrandGroom::default(); rs.len()];
+        maps.evaluate(&mesh, &moved, 9, &mut again).unwrap();
+        for (r, g) in moved.iter().zip(&again) {
+            let first = rs.iter().position(|o| o.id == r.id).unwrap();
+            assert_eq!(g.kink_phase, out[first].kink_phase);
+        }
+        maps.evaluate(&mesh, &rs, 10, &mut again).unwrap();
+        let same = again
+            .iter()
+            .zip(&out)
+            .filter(|(a, b)| a.kink_phase == b.kink_phase);
+        assert!(same.count() < rs.len() / 100);
+    }
+
+    #[test]
+    fn negative_values_clamp() {
+        let m = graded_plane(4, 1.0);
+        let mesh = m.mesh();
+        let maps = GroomMaps {
+            length: ScalarMap::Constant(-1.0),
+            root_width: ScalarMap::Constant(-0.1),
+            tip_width: ScalarMap::Constant(-0.1),
+            clump: ScalarMap::Constant(-2.0),
+            ..GroomMaps::default()
+        };
+        let rs = roots(mesh, 50, 1);
+        let mut out = vec![StrandGroom::default(); rs.len()];
+        maps.evaluate(&mesh, &rs, 0, &mut out).unwrap();
+        assert!(out.iter().all(|g| g.length == 0.0
+            && g.root_radius == 0.0
+            && g.tip_radius == 0.0
+            && g.clump == 0.0));
+    }
+}

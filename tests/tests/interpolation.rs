@@ -75,6 +75,18 @@ fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) ->
 }
 
 fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32; 4]> {
+    let guides = guides_desc(&g.guide_roots, &g.guide_points);
+    expand_from(m, &guides, g, params).unwrap()
+}
+
+/// `g`'s strands expanded from `guides` (g's guides, possibly stored
+/// otherwise), or the failing status with the output left untouched.
+fn expand_from(
+    m: &CreatureMesh,
+    guides: &PelageGuidesDesc,
+    g: &Groom,
+    params: &PelageExpandParams,
+) -> Result<Vec<[f32; 4]>, PelageStatus> {
     let (mut bytes, mut per) = (0usize, 0usize);
     assert_eq!(
         pelage_expand_query(
@@ -91,16 +103,169 @@ fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32;
     let mut counts = vec![0u32; g.strands.len()];
     let call = ExpandCall {
         mesh: &desc(m),
-        guides: &guides_desc(&g.guide_roots, &g.guide_points),
+        guides,
         strands: &g.strands,
         bindings: &g.bindings,
         grooms: &g.grooms,
         params,
     };
-    let s = call.run(&mut arena, &mut out, Some(&mut counts));
+    let canary = [-7.0f32; 4];
+    out.fill(canary);
+    match call.run(&mut arena, &mut out, Some(&mut counts)) {
+        PelageStatus::Ok => {
+            assert!(counts.iter().all(|&c| c as usize == per));
+            Ok(out)
+        }
+        status => {
+            assert!(out.iter().all(|p| *p == canary) && counts.iter().all(|&c| c == 0));
+            Err(status)
+        }
+    }
+}
+
+#[test]
+fn groom_maps_through_the_c_api_give_each_strand_its_value() {
+    // a per-vertex map with interleaved values (stride 8), an 8-bit texture
+    // with padded rows and a float texture: every strand gets the map's
+    // value at its root (the core's lookups, here from the host's buffers)
+    use pelage_core::map::{Texels, Texture};
+    let m = default_creature();
+    let mesh = mesh_view(&m);
+    let strands = stamp_roots(mesh, 5000, 3);
+    let interleaved: Vec<[f32; 2]> = m
+        .positions
+        .iter()
+        .map(|p| [1.0 + 0.5 * p[1], -1.0])
+        .collect();
+    let (w, h, row) = (37usize, 23usize, 40usize);
+    let bytes: Vec<u8> = (0..row * h)
+        .map(|i| ((i % row) * 7 + (i / row) * 11) as u8)
+        .collect();
+    let floats: Vec<f32> = (0..w * h)
+        .map(|i| 0.001 * (i % w) as f32 + 0.002 * (i / w) as f32)
+        .collect();
+    let map =
+        |kind: PelageMapKind, data: *const std::ffi::c_void, width, height, stride| PelageMap {
+            kind: kind as u32,
+            constant: 0.0,
+            data,
+            width,
+            height,
+            stride,
+        };
+    let mut maps = pelage_groom_maps_defaults();
+    maps.length = map(
+        PelageMapKind::PerVertex,
+        interleaved.as_ptr().cast(),
+        0,
+        0,
+        8,
+    );
+    maps.clump = map(PelageMapKind::TextureU8, bytes.as_ptr().cast(), w, h, row);
+    maps.root_width = map(
+        PelageMapKind::TextureF32,
+        floats.as_ptr().cast(),
+        w,
+        h,
+        4 * w,
+    );
+    let mut grooms = vec![PelageStrandGroom::default(); strands.len()];
+    let s = pelage_groom_evaluate(
+        &desc(&m),
+        &maps,
+        as_c(&strands).as_ptr(),
+        strands.len(),
+        grooms.as_mut_ptr(),
+        grooms.len(),
+    );
     assert_eq!(s, PelageStatus::Ok);
-    assert!(counts.iter().all(|&c| c as usize == per));
-    out
+    let texture = |texels, row_stride| Texture {
+        texels,
+        width: w,
+        height: h,
+        row_stride,
+    };
+    let u8_texture = texture(Texels::U8(&bytes), row);
+    let f32_texture = texture(Texels::F32(bytemuck::cast_slice(&floats)), 4 * w);
+    for (r, g) in strands.iter().zip(&grooms) {
+        let (f, u, v) = (r.face as usize, r.u, r.v);
+        let [a, b, c] = m.triangles[f].map(|i| interleaved[i as usize][0]);
+        let length = a * (1.0 - u - v) + b * u + c * v;
+        assert!(
+            (g.length - length).abs() < 1e-5,
+            "length {} vs {length}",
+            g.length
+        );
+        let uv = mesh.uv(f, u, v).unwrap();
+        let clump = u8_texture.sample(uv.x, uv.y);
+        assert!(
+            (g.clump - clump).abs() < 1e-6,
+            "clump {} vs {clump}",
+            g.clump
+        );
+        let width = f32_texture.sample(uv.x, uv.y);
+        assert!((2.0 * g.root_radius - width).abs() < 1e-7, "width");
+        assert_eq!((g.tip_radius, g.bend), (0.00025, 0.0), "defaults elsewhere");
+    }
+    // values must vary over the body, or the test would prove little
+    let spread = |f: fn(&PelageStrandGroom) -> f32| {
+        let (lo, hi) = grooms
+            .iter()
+            .map(f)
+            .fold((f32::MAX, f32::MIN), |(l, h), x| (l.min(x), h.max(x)));
+        hi - lo
+    };
+    assert!(
+        spread(|g| g.length) > 0.5 && spread(|g| g.clump) > 0.5 && spread(|g| g.root_radius) > 0.01
+    );
+}
+
+#[test]
+fn guides_with_their_own_point_counts_through_offsets() {
+    // each guide's segments split into 1, 2 or 3 equal parts: the same
+    // polylines stored with 12, 23 or 34 points through `offsets`.
+    // Resampling is uniform in point index, so they resample to the same
+    // points and every curve must match the fixed-count one
+    let m = default_creature();
+    let g = groom(&m, 600, 20_000, &styled());
+    let mut params = pelage_expand_params_defaults();
+    params.points_per_strand = CVS as u32;
+    params.thread_count = 2;
+    let fixed = expand(&m, &g, &params);
+    let mut points = vec![];
+    let mut offsets = vec![0u32];
+    for (i, guide) in g.guide_points.chunks(CVS).enumerate() {
+        let parts = 1 + i % 3;
+        points.push(guide[0]);
+        for w in guide.windows(2) {
+            let (a, b) = (Vec3::from(w[0]), Vec3::from(w[1]));
+            points.extend((1..=parts).map(|k| a.lerp(b, k as f32 / parts as f32).to_array()));
+        }
+        offsets.push(points.len() as u32);
+    }
+    let mut guides = guides_desc(&g.guide_roots, &points);
+    guides.offsets = offsets.as_ptr();
+    guides.points_per_guide = 0;
+    let varied = expand_from(&m, &guides, &g, &params).unwrap();
+    let worst = fixed
+        .iter()
+        .zip(&varied)
+        .map(|(a, b)| Vec3::from_slice(&a[..3]).distance(Vec3::from_slice(&b[..3])))
+        .fold(0.0f32, f32::max);
+    assert!(worst < 2e-5, "curves from offsets differ by {worst}");
+    // broken offsets are refused before anything is written
+    let last = offsets.len() - 1;
+    let mut bad = |edit: &dyn Fn(&mut Vec<u32>)| {
+        let mut o = offsets.clone();
+        edit(&mut o);
+        let mut d = guides;
+        d.offsets = o.as_ptr();
+        expand_from(&m, &d, &g, &params).unwrap_err()
+    };
+    assert_eq!(bad(&|o| o[0] = 1), PelageStatus::InvalidArgument);
+    assert_eq!(bad(&|o| o[5] = o[4] + 1), PelageStatus::InvalidArgument);
+    assert_eq!(bad(&|o| o[last] -= 1), PelageStatus::InvalidArgument);
+    assert_eq!(bad(&|o| o.swap(3, 4)), PelageStatus::InvalidArgument);
 }
 
 fn styled() -> PelageGroomMaps {
