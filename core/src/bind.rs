@@ -102,6 +102,10 @@ pub struct BindReport {
     pub mean_guide_length: f32,
     /// Mean guide spacing, sqrt(mesh area / guide count).
     pub mean_spacing: f32,
+    /// Guide roots the searches looked at, over all strands. Per strand it
+    /// is the search's cost, and it stays flat as guides are added (the
+    /// search walks the grid cells around the strand, not every guide).
+    pub examined: u64,
 }
 
 /// Guide roots in a spatial grid, with their normals and regions.
@@ -254,24 +258,27 @@ impl<'a> GuideIndex<'a> {
                 orphans: 0,
                 mean_guide_length: (total_length / n as f64) as f32,
                 mean_spacing,
+                examined: 0,
             },
         })
     }
 
-    /// Mean length and spacing of the guides (orphans are counted by `bind`).
+    /// Mean length and spacing of the guides (orphans and examined guides
+    /// are counted by `bind`).
     pub fn report(&self) -> BindReport {
         self.report
     }
 
-    /// Binds `strands` into `out` (same length); returns the number of orphans.
-    /// Pure per strand: disjoint ranges can run on different threads.
+    /// Binds `strands` into `out` (same length); returns the report with
+    /// their orphans and examined guides counted. Pure per strand: disjoint
+    /// ranges can run on different threads.
     pub fn bind(
         &self,
         mesh: &Mesh,
         strands: &[Root],
         params: &BindParams,
         out: &mut [StrandBinding],
-    ) -> Result<u32, Error> {
+    ) -> Result<BindReport, Error> {
         check(params, mesh)?;
         if out.len() < strands.len() {
             return Err(Error::CapacityExceeded {
@@ -280,22 +287,28 @@ impl<'a> GuideIndex<'a> {
             });
         }
         crate::root::check_roots(mesh, strands, "strand roots")?;
-        let mut orphans = 0;
+        let mut report = self.report;
         for (r, b) in strands.iter().zip(out.iter_mut()) {
-            *b = self.bind_one(mesh, r, params);
-            orphans += (b.count == 0) as u32;
+            let examined;
+            (*b, examined) = self.bind_one(mesh, r, params);
+            report.orphans += (b.count == 0) as u32;
+            report.examined += examined as u64;
         }
-        Ok(orphans)
+        Ok(report)
     }
 
-    fn bind_one(&self, mesh: &Mesh, r: &Root, params: &BindParams) -> StrandBinding {
+    /// The binding of one strand, and how many guide roots its search
+    /// looked at.
+    fn bind_one(&self, mesh: &Mesh, r: &Root, params: &BindParams) -> (StrandBinding, u32) {
         let face = r.face as usize;
         let p = mesh.point(face, r.u, r.v);
         let n = mesh.normal(face, r.u, r.v);
         let region = region_of(mesh, params.regions, r);
-        let gather = |radius: f32| {
+        let mut examined = 0;
+        let mut gather = |radius: f32| {
             let mut near = Nearest::<{ MAX_NEIGHBOURS + 1 }>::new();
             self.grid.any_within(p, radius, |g| {
+                examined += 1;
                 let gi = g as usize;
                 let d = Vec3::from(self.position[gi]) - p;
                 let d2 = d.length_squared();
@@ -321,7 +334,7 @@ impl<'a> GuideIndex<'a> {
             ..StrandBinding::default()
         };
         if near.len == 0 {
-            return orphan;
+            return (orphan, examined);
         }
         // a guide missing from the gather lies beyond `reach`, the cap
         let spacing = match near.len {
@@ -337,7 +350,7 @@ impl<'a> GuideIndex<'a> {
             .take_while(|(d2, _)| *d2 < radius * radius)
             .count();
         if within == 0 {
-            return orphan;
+            return (orphan, examined);
         }
         let span = params.max_neighbours - params.min_neighbours + 1;
         let k = params.min_neighbours
@@ -370,7 +383,7 @@ impl<'a> GuideIndex<'a> {
         } else {
             b.weights[0] = 1.0;
         }
-        b
+        (b, examined)
     }
 }
 
@@ -397,11 +410,7 @@ pub fn bind(
         });
     }
     let index = GuideIndex::new(mesh, guides, params, arena)?;
-    let orphans = index.bind(mesh, strands, params, out)?;
-    Ok(BindReport {
-        orphans,
-        ..index.report()
-    })
+    index.bind(mesh, strands, params, out)
 }
 
 #[cfg(test)]
@@ -633,5 +642,26 @@ mod tests {
             run(&m, &g, &pts, &bad_strand, &ok),
             Err(Error::OutOfRange { .. })
         ));
+    }
+
+    #[test]
+    fn the_search_looks_at_a_bounded_number_of_guides() {
+        // 64x more guides: a search over all guides would look at 64x as
+        // many per strand; the grid looks at about the same number
+        let m = graded_plane(16, 1.0);
+        let strands = roots(m.mesh(), 2000, 8);
+        let per_strand = |guides: u32| {
+            let g = roots(m.mesh(), guides, 3);
+            let pts = straight_guides(&m.mesh(), &g, 4, 0.1);
+            let (_, report) = run(&m, &g, &pts, &strands, &BindParams::default()).unwrap();
+            assert_eq!(report.orphans, 0);
+            report.examined as f32 / strands.len() as f32
+        };
+        let (few, many) = (per_strand(250), per_strand(16_000));
+        assert!(few > 8.0, "{few} guides looked at per strand");
+        assert!(
+            many < 2.0 * few,
+            "{few} per strand with 250 guides, {many} with 16000"
+        );
     }
 }

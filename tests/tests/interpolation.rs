@@ -255,7 +255,7 @@ fn guides_with_their_own_point_counts_through_offsets() {
     assert!(worst < 2e-5, "curves from offsets differ by {worst}");
     // broken offsets are refused before anything is written
     let last = offsets.len() - 1;
-    let mut bad = |edit: &dyn Fn(&mut Vec<u32>)| {
+    let bad = |edit: &dyn Fn(&mut Vec<u32>)| {
         let mut o = offsets.clone();
         edit(&mut o);
         let mut d = guides;
