@@ -177,12 +177,11 @@ pub(crate) fn frames(
     let lanes = &mut FrameLanes::default();
     let mut face_tangents = [Vec3::ZERO; FRAME_LANES];
     for (i, root) in roots[..len].iter().enumerate() {
-        let face = match *basis {
-            Some((f, b)) if f == root.face => b,
+        let face = match basis {
+            Some((f, b)) if *f == root.face => b,
             _ => {
                 let b = FaceBasis::new(mesh, tangents, root.face as usize);
-                *basis = Some((root.face, b));
-                b
+                &basis.insert((root.face, b)).1
             }
         };
         let (u, v) = (root.u, root.v);
@@ -195,14 +194,23 @@ pub(crate) fn frames(
     }
     let FrameLanes { n, face_n, t } = lanes;
     normalize_or_zero(n);
-    for i in 0..FRAME_LANES {
-        let zero = n[0][i] == 0.0 && n[1][i] == 0.0 && n[2][i] == 0.0;
-        for (c, f) in n.iter_mut().zip(face_n.iter()) {
-            c[i] = if zero { f[i] } else { c[i] };
+    // component by component, so that each loop runs over whole lanes
+    let mut zero = [false; FRAME_LANES];
+    for (i, z) in zero.iter_mut().enumerate() {
+        *z = n[0][i] == 0.0 && n[1][i] == 0.0 && n[2][i] == 0.0;
+    }
+    for (c, f) in n.iter_mut().zip(face_n.iter()) {
+        for i in 0..FRAME_LANES {
+            c[i] = if zero[i] { f[i] } else { c[i] };
         }
-        let d = n[0][i] * t[0][i] + n[1][i] * t[1][i] + n[2][i] * t[2][i];
-        for (c, nc) in t.iter_mut().zip(n.iter()) {
-            c[i] -= nc[i] * d;
+    }
+    let mut d = [0.0f32; FRAME_LANES];
+    for (i, d) in d.iter_mut().enumerate() {
+        *d = n[0][i] * t[0][i] + n[1][i] * t[1][i] + n[2][i] * t[2][i];
+    }
+    for (c, nc) in t.iter_mut().zip(n.iter()) {
+        for i in 0..FRAME_LANES {
+            c[i] -= nc[i] * d[i];
         }
     }
     normalize_or_zero(t);
@@ -257,10 +265,13 @@ fn normalize_or_zero(v: &mut Lanes3) {
     for r in rcp.iter_mut() {
         *r = 1.0 / *r;
     }
-    for (i, &r) in rcp.iter().enumerate() {
-        let ok = r.is_finite() && r > 0.0;
-        for c in v.iter_mut() {
-            c[i] = if ok { c[i] * r } else { 0.0 };
+    for c in v.iter_mut() {
+        for (x, &r) in c.iter_mut().zip(&rcp) {
+            *x = if r.is_finite() && r > 0.0 {
+                *x * r
+            } else {
+                0.0
+            };
         }
     }
 }
