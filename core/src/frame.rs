@@ -24,7 +24,10 @@ pub struct Frame {
 }
 
 /// The tangent direction of one triangle: its UV u-direction when the mesh
-/// has UVs that span it, else its first edge (not normalized).
+/// has UVs that span it, else its first edge. Not normalized: the UV
+/// direction comes scaled by twice the triangle's area times its texel
+/// density (no division or square root), which is the weight
+/// [`vertex_tangents`] gives it.
 fn face_tangent(mesh: &Mesh, face: usize, corners: [Vec3; 3]) -> Vec3 {
     let [p0, p1, p2] = corners;
     let (e1, e2) = (p1 - p0, p2 - p0);
@@ -34,16 +37,20 @@ fn face_tangent(mesh: &Mesh, face: usize, corners: [Vec3; 3]) -> Vec3 {
         let d1 = Vec2::from(uvs.get(idx[1] as usize)) - t0;
         let d2 = Vec2::from(uvs.get(idx[2] as usize)) - t0;
         let det = d1.perp_dot(d2);
+        // the gradient of u is (e1 d2.y - e2 d1.y) / det: only det's sign
+        // matters for the direction (mirrored UV islands)
         if det.abs() > 1e-12 {
-            return (e1 * d2.y - e2 * d1.y) / det;
+            let t = e1 * d2.y - e2 * d1.y;
+            return if det > 0.0 { t } else { -t };
         }
     }
     e1
 }
 
 /// Writes a unit tangent per vertex of a checked `mesh` to `out` (its
-/// first `positions.len()` entries): the area-weighted mean direction of the
-/// face tangents around the vertex, zero where they cancel.
+/// first `positions.len()` entries): the weighted mean direction of the
+/// face tangents around the vertex (weighted by area where the UVs have an
+/// even texel density), zero where they cancel.
 ///
 /// Frames interpolate these over each triangle, so a tangent field that is
 /// continuous across triangle edges (within a UV island) gives strands that
@@ -54,10 +61,7 @@ pub fn vertex_tangents(mesh: &Mesh, out: &mut [[f32; 3]]) {
     let out = &mut out[..nv];
     out.fill([0.0; 3]);
     for (f, idx) in mesh.triangles.iter().enumerate() {
-        let corners = mesh.corners(f);
-        let [p0, p1, p2] = corners;
-        let area = (p1 - p0).cross(p2 - p0).length();
-        let t = face_tangent(mesh, f, corners).normalize_or_zero() * area;
+        let t = face_tangent(mesh, f, mesh.corners(f));
         for i in idx {
             if let Some(o) = out.get_mut(i as usize) {
                 *o = (Vec3::from(*o) + t).into();
