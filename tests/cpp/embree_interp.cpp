@@ -431,20 +431,33 @@ int main(int argc, char** argv) try {
     RTCBounds b;
     rtcGetSceneBounds(scene, &b);
     // Embree drops bad primitives silently: shoot at the middle of every
-    // 500th hair from the side and expect a curve.
-    size_t probes = 0, found = 0;
+    // 500th hair from the side and expect a curve. The skin next to a hair
+    // lying on it, or a tight kink (round curves are approximate there), can
+    // take one side ray, so four are shot around the hair; a hair missing
+    // from the BVH misses all four.
+    size_t probes = 0, found = 0, retried = 0;
     for (size_t i = 0; i < n; i += 500, ++probes) {
       const float* c = &pts[4 * per * i];
       const float* m = c + 4 * (per / 2);
       const V3 mid{m[0], m[1], m[2]}, along = normalize(V3{m[4] - m[0], m[5] - m[1], m[6] - m[2]});
       const V3 side = normalize(cross(along, std::fabs(along.x) < 0.9f ? V3{1, 0, 0} : V3{0, 1, 0}));
+      const V3 other = cross(along, side);
       const float r = std::max(m[3], 1e-5f);
-      found += creature::trace(scene, mid + 4.0f * r * side, -1.0f * side, 8.0f * r).hit.geomID == fur_id;
+      int tries = 0;
+      for (const V3 d : {side, -1.0f * side, other, -1.0f * other}) {
+        ++tries;
+        if (creature::trace(scene, mid + 4.0f * r * d, -1.0f * d, 8.0f * r).hit.geomID == fur_id) {
+          ++found;
+          break;
+        }
+      }
+      retried += tries > 1;
     }
     std::printf("  %zu segments (pelage_curves_segment_indices), %zu float4 points (stride 16); commit %.2f s; "
                 "bounds (%.3f %.3f %.3f) .. (%.3f %.3f %.3f)\n",
                 indices.size(), per * n, bvh_s, b.lower_x, b.lower_y, b.lower_z, b.upper_x, b.upper_y, b.upper_z);
-    std::printf("  side rays at hair midpoints: %zu of %zu hit a curve\n", found, probes);
+    std::printf("  side rays at hair midpoints: %zu of %zu hairs hit (%zu needed more than one of 4 directions)\n", found,
+                probes, retried);
     expect(indices_ok, "segment indices: curve c, segment s -> c * per + s");
     expect(device.errors.empty(), fmt("no Embree error callback (%zu calls)", device.errors.size()));
     for (const std::string& e : device.errors) std::printf("    Embree: %s\n", e.c_str());
