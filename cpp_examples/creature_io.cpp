@@ -17,7 +17,7 @@ PelageError::PelageError(PelageStatus s, const std::string& what) : std::runtime
 
 void check(PelageStatus status, const char* what) {
   if (status != PELAGE_STATUS_OK) {
-    throw PelageError(status, std::string(what) + ": " + pelage_status_string(status) + ": " + pelage_last_error());
+    throw PelageError(status, std::string(what) + ": " + pelage_status_message(status) + ": " + pelage_last_error());
   }
 }
 

@@ -16,7 +16,7 @@
 /* Prints the status and pelage's detailed message, then exits on failure. */
 static void check(PelageStatus status, const char *what) {
   if (status != PELAGE_STATUS_OK) {
-    fprintf(stderr, "%s failed: %s (%s)\n", what, pelage_status_string(status), pelage_last_error());
+    fprintf(stderr, "%s failed: %s (%s)\n", what, pelage_status_message(status), pelage_last_error());
     exit(EXIT_FAILURE);
   }
 }

@@ -48,7 +48,8 @@ typedef enum PelageStatus {
   PELAGE_STATUS_CORRUPT_DATA = 7,
   // Serialized data or a struct comes from an incompatible version.
   PELAGE_STATUS_VERSION_MISMATCH = 8,
-  // A progress callback asked to stop.
+  // Reserved for the progress/cancel callback of long calls (planned in
+  // DESIGN.md); no call returns it yet.
   PELAGE_STATUS_CANCELLED = 9,
   // An internal error (a bug in pelage, or the system refused a thread);
   // outputs may be partly written.
@@ -372,7 +373,7 @@ uint32_t pelage_version(void);
 // "unknown status" for values this library does not define).
 //
 // Thread safety: may be called from any thread at any time.
-const char *pelage_status_string(int32_t status);
+const char *pelage_status_message(int32_t status);
 
 // The detailed message of the last failed call on the calling thread ("" if
 // none yet; successful calls leave it unchanged). The pointer stays valid

@@ -46,7 +46,7 @@ pub use stamp::{
     pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageStampInfo,
     PelageStampParams,
 };
-pub use status::{pelage_last_error, pelage_status_string, PelageStatus};
+pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
 
 /// Major version of the library this header belongs to.
 pub const PELAGE_VERSION_MAJOR: u32 = 0;

@@ -26,7 +26,8 @@ pub enum PelageStatus {
     CorruptData = 7,
     /// Serialized data or a struct comes from an incompatible version.
     VersionMismatch = 8,
-    /// A progress callback asked to stop.
+    /// Reserved for the progress/cancel callback of long calls (planned in
+    /// DESIGN.md); no call returns it yet.
     Cancelled = 9,
     /// An internal error (a bug in pelage, or the system refused a thread);
     /// outputs may be partly written.
@@ -38,7 +39,7 @@ pub enum PelageStatus {
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
-pub extern "C" fn pelage_status_string(status: i32) -> *const c_char {
+pub extern "C" fn pelage_status_message(status: i32) -> *const c_char {
     const ALL: [PelageStatus; 11] = [
         PelageStatus::Ok,
         PelageStatus::NullParameter,

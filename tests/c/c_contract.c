@@ -4,7 +4,7 @@
  * and root buffers, bad and misaligned strides and pointers, NaN/Inf input,
  * out-of-range indices and bad maps, and checks for each call:
  *   - the documented PelageStatus,
- *   - a non-empty pelage_last_error() and a non-NULL pelage_status_string(),
+ *   - a non-empty pelage_last_error() and a non-NULL pelage_status_message(),
  *   - that every output buffer (pre-filled with 0xCD canary bytes) is left
  *     untouched, except *root_count on CAPACITY_EXCEEDED from a short root
  *     buffer, which reports the count needed (documented).
@@ -74,9 +74,9 @@ static void expect_(const char *file, int line, const char *what, PelageStatus g
             status_name(got), status_name(want), message ? message : "(NULL)");
     return;
   }
-  if (pelage_status_string(got) == NULL) {
+  if (pelage_status_message(got) == NULL) {
     ++g_failures;
-    fprintf(stderr, "%s:%d: %s: pelage_status_string(%d) is NULL\n", file, line, what, (int)got);
+    fprintf(stderr, "%s:%d: %s: pelage_status_message(%d) is NULL\n", file, line, what, (int)got);
   }
   if (want != PELAGE_STATUS_OK && (message == NULL || message[0] == '\0')) {
     ++g_failures;
@@ -243,20 +243,20 @@ static void bad_evaluate_(int line, const char *what, PelageStatus got, PelageSt
 static void test_version_and_strings(void) {
   CHECK(pelage_version() == PELAGE_VERSION_MAJOR * 10000u + PELAGE_VERSION_MINOR * 100u + PELAGE_VERSION_PATCH);
   for (int s = -3; s <= 12; ++s) {
-    const char *str = pelage_status_string(s);
+    const char *str = pelage_status_message(s);
     CHECK(str != NULL && str[0] != '\0');
   }
   for (int s = 1; s <= 10; ++s) { /* every defined code has its own message */
-    CHECK(strcmp(pelage_status_string(s), pelage_status_string(0)) != 0);
-    CHECK(strcmp(pelage_status_string(s), pelage_status_string(999)) != 0);
+    CHECK(strcmp(pelage_status_message(s), pelage_status_message(0)) != 0);
+    CHECK(strcmp(pelage_status_message(s), pelage_status_message(999)) != 0);
   }
   const int unknown[] = {999, -1, 11, INT32_MAX, INT32_MIN};
   for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {
-    const char *str = pelage_status_string(unknown[i]);
+    const char *str = pelage_status_message(unknown[i]);
     CHECK(str != NULL && str[0] != '\0');
   }
-  printf("status strings: 0 \"%s\", 5 \"%s\", 999 \"%s\"\n", pelage_status_string(0), pelage_status_string(5),
-         pelage_status_string(999));
+  printf("status strings: 0 \"%s\", 5 \"%s\", 999 \"%s\"\n", pelage_status_message(0), pelage_status_message(5),
+         pelage_status_message(999));
   CHECK(pelage_last_error() != NULL);
 }
 

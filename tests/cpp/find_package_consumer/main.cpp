@@ -17,6 +17,6 @@ int main() {
   std::vector<unsigned char> arena(arena_bytes);
   std::vector<PelageRoot> roots(max_roots);
   const PelageStatus s = pelage_stamp(&mesh, &params, arena.data(), arena.size(), roots.data(), roots.size(), &count, nullptr);
-  std::printf("consumer: pelage %u, %s, %zu roots\n", pelage_version(), pelage_status_string(s), count);
+  std::printf("consumer: pelage %u, %s, %zu roots\n", pelage_version(), pelage_status_message(s), count);
   return s == PELAGE_STATUS_OK && count > 90 && count < 110 ? 0 : 1;
 }
