@@ -122,11 +122,14 @@ typedef struct PelageBindParams {
   uint64_t seed;
   // Guides whose root normal dotted with the strand's is not above this are
   // excluded (0: the paper's rule, exclude guides facing away; default 0.25).
+  // Within 0.25 above it a guide's weight fades, reaching 0 at the cutoff.
   float min_normal_dot;
-  // Search radius in units of the local guide spacing.
+  // Search radius in units of the local guide spacing (the strand's
+  // distance to its third nearest eligible guide, at most 3 mean spacings).
   float search_factor;
   // Excludes guides around a rim: either root below the other's tangent
-  // plane by more than this times their distance.
+  // plane by more than this times their distance. Above half of it a
+  // guide's weight fades, reaching 0 at the cutoff.
   float max_wrap_slope;
   // Parting regions (per-vertex ids or an id texture); kind NONE by default.
   struct PelageRegionMap regions;

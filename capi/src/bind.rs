@@ -24,11 +24,14 @@ pub struct PelageBindParams {
     pub seed: u64,
     /// Guides whose root normal dotted with the strand's is not above this are
     /// excluded (0: the paper's rule, exclude guides facing away; default 0.25).
+    /// Within 0.25 above it a guide's weight fades, reaching 0 at the cutoff.
     pub min_normal_dot: f32,
-    /// Search radius in units of the local guide spacing.
+    /// Search radius in units of the local guide spacing (the strand's
+    /// distance to its third nearest eligible guide, at most 3 mean spacings).
     pub search_factor: f32,
     /// Excludes guides around a rim: either root below the other's tangent
-    /// plane by more than this times their distance.
+    /// plane by more than this times their distance. Above half of it a
+    /// guide's weight fades, reaching 0 at the cutoff.
     pub max_wrap_slope: f32,
     /// Parting regions (per-vertex ids or an id texture); kind NONE by default.
     pub regions: PelageRegionMap,
