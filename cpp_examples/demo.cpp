@@ -194,8 +194,10 @@ int main(int argc, char** argv) try {
   // 4. Bind every render hair to its neighbour guides (once per groom).
   clock = {};
   PelageBindInfo bind_info{};
+  PelageBindParams bind_params = pelage_bind_params_defaults();
+  bind_params.thread_count = 0;  // all cores; the bindings are the same for any count
   const std::vector<PelageStrandBinding> bindings =
-      creature::bind(mesh, guides, roots.data(), n, pelage_bind_params_defaults(), &bind_info);
+      creature::bind(mesh, guides, roots.data(), n, bind_params, &bind_info);
   std::snprintf(note, sizeof note, "%u orphans, guide spacing %.4f", bind_info.orphans,
                 double(bind_info.mean_spacing));
   rows.push_back({"bind", clock.seconds(), note});

@@ -133,6 +133,9 @@ typedef struct PelageBindParams {
   float max_wrap_slope;
   // Parting regions (per-vertex ids or an id texture); kind NONE by default.
   struct PelageRegionMap regions;
+  // Threads pelage_bind splits the strands over: 0 = all cores, 1 = the
+  // calling thread only. The bindings are bitwise identical for any value.
+  uint32_t thread_count;
 } PelageBindParams;
 
 // A triangle mesh in host memory, borrowed for one call (like an Embree
@@ -386,7 +389,7 @@ const char *pelage_status_message(int32_t status);
 const char *pelage_last_error(void);
 
 // Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0.25,
-// search_factor 2.5, max_wrap_slope 0.3, no regions.
+// search_factor 2.5, max_wrap_slope 0.3, no regions, 1 thread.
 //
 // Thread safety: may be called from any thread at any time.
 struct PelageBindParams pelage_bind_params_defaults(void);
@@ -401,7 +404,8 @@ enum PelageStatus pelage_bind_query(size_t guide_count, size_t *arena_bytes);
 // of another parting region, or beyond the search radius; a randomized count
 // per strand; inverse-distance weights that fade to zero as a guide leaves
 // the set. Writes `strand_count` records to `bindings` and, optionally,
-// `info`. Nothing is written on failure.
+// `info`. Nothing is written on failure. Strands are split over
+// `params->thread_count` threads; the bindings do not depend on it.
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, void *arena, size_t arena_bytes, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);

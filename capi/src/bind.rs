@@ -2,9 +2,11 @@
 
 use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
+use crate::threads::split_over_threads;
 use crate::{PelageGuidesDesc, PelageMeshDesc, PelageRegionMap, PelageRoot, PelageStatus};
 use bytemuck::{Pod, Zeroable};
-use pelage_core::bind::{self, BindParams, StrandBinding, MAX_NEIGHBOURS};
+use pelage_core::bind::{self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS};
+use pelage_core::root::check_roots;
 use pelage_core::{Arena, Root};
 
 /// Most guides a strand can use.
@@ -35,6 +37,9 @@ pub struct PelageBindParams {
     pub max_wrap_slope: f32,
     /// Parting regions (per-vertex ids or an id texture); kind NONE by default.
     pub regions: PelageRegionMap,
+    /// Threads pelage_bind splits the strands over: 0 = all cores, 1 = the
+    /// calling thread only. The bindings are bitwise identical for any value.
+    pub thread_count: u32,
 }
 
 /// Guides and weights of one strand (the flat, Pod binding record; store it
@@ -69,7 +74,7 @@ pub struct PelageBindInfo {
 }
 
 /// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0.25,
-/// search_factor 2.5, max_wrap_slope 0.3, no regions.
+/// search_factor 2.5, max_wrap_slope 0.3, no regions, 1 thread.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -83,6 +88,7 @@ pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
         search_factor: d.search_factor,
         max_wrap_slope: d.max_wrap_slope,
         regions: PelageRegionMap::none(),
+        thread_count: 1,
     }
 }
 
@@ -103,7 +109,8 @@ pub extern "C" fn pelage_bind_query(guide_count: usize, arena_bytes: *mut usize)
 /// of another parting region, or beyond the search radius; a randomized count
 /// per strand; inverse-distance weights that fade to zero as a guide leaves
 /// the set. Writes `strand_count` records to `bindings` and, optionally,
-/// `info`. Nothing is written on failure.
+/// `info`. Nothing is written on failure. Strands are split over
+/// `params->thread_count` threads; the bindings do not depend on it.
 ///
 /// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 #[no_mangle]
@@ -140,9 +147,20 @@ pub extern "C" fn pelage_bind(
                 format!("bindings: {strand_count} needed, {bindings_capacity} available"),
             ));
         }
-        let out = slice_mut(bindings, strand_count, "bindings")?;
+        let out: &mut [StrandBinding] = bytemuck::cast_slice_mut(slice_mut(bindings, strand_count, "bindings")?);
         let arena = bytes_mut(arena, arena_bytes, "arena")?;
-        let report = bind::bind(&mesh, &guides, strands, &core, &mut Arena::new(arena), bytemuck::cast_slice_mut(out))?;
+        let index = GuideIndex::new(&mesh, &guides, &core, &mut Arena::new(arena))?;
+        // every strand is checked before any range writes
+        check_roots(&mesh, strands, "strand roots")?;
+        let reports = split_over_threads(strand_count, p.thread_count, out, 1, |range, part| {
+            index.bind(&mesh, &strands[range], &core, part)
+        })?;
+        let mut report = index.report();
+        for r in reports {
+            let r = r?;
+            report.orphans += r.orphans;
+            report.examined += r.examined;
+        }
         if let Some(info) = opt_mut(info) {
             *info = PelageBindInfo {
                 orphans: report.orphans,

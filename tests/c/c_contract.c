@@ -889,7 +889,7 @@ static void test_interp_defaults(void) {
   const PelageBindParams b = pelage_bind_params_defaults();
   CHECK(b.min_neighbours == 3 && b.max_neighbours == 6 && b.seed == 0);
   CHECK(b.min_normal_dot == 0.25f && b.search_factor == 2.5f && b.max_wrap_slope == 0.3f);
-  CHECK(b.regions.kind == PELAGE_REGION_KIND_NONE && b.regions.data == NULL);
+  CHECK(b.regions.kind == PELAGE_REGION_KIND_NONE && b.regions.data == NULL && b.thread_count == 1);
   const PelageGroomMaps m = pelage_groom_maps_defaults();
   const PelageMap *all[7] = {&m.length, &m.root_width, &m.tip_width, &m.bend, &m.kink_amplitude, &m.kink_frequency,
                              &m.clump};

@@ -219,7 +219,9 @@ Fur grow(const creature::Mesh& mesh, const PelageGuidesDesc& guides, const std::
          const PelageGroomMaps& maps, creature::Expander& expander, bool with_counts) {
   Fur f;
   creature::Stopwatch clock;
-  f.bindings = creature::bind(mesh, guides, roots.data(), roots.size(), pelage_bind_params_defaults(), &f.info);
+  PelageBindParams bind_params = pelage_bind_params_defaults();
+  bind_params.thread_count = 0;
+  f.bindings = creature::bind(mesh, guides, roots.data(), roots.size(), bind_params, &f.info);
   f.bind_s = clock.seconds();
   clock = {};
   f.grooms = creature::groom(mesh, maps, roots.data(), roots.size());

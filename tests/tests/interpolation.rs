@@ -26,13 +26,27 @@ struct Groom {
 }
 
 fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) -> Groom {
+    groom_on_threads(m, guides, strands, maps, 1)
+}
+
+/// [`groom`], bound on `threads` threads.
+fn groom_on_threads(
+    m: &CreatureMesh,
+    guides: u32,
+    strands: u32,
+    maps: &PelageGroomMaps,
+    threads: u32,
+) -> Groom {
     let mesh = mesh_view(m);
     let guide_roots = stamp_roots(mesh, guides, 1);
     let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.08);
     let strands = stamp_roots(mesh, strands, 2);
     let d = desc(m);
     let g = guides_desc(&guide_roots, &guide_points);
-    let params = pelage_bind_params_defaults();
+    let params = PelageBindParams {
+        thread_count: threads,
+        ..pelage_bind_params_defaults()
+    };
     let mut bytes = 0usize;
     assert_eq!(
         pelage_bind_query(guide_roots.len(), &mut bytes),
@@ -274,6 +288,22 @@ fn styled() -> PelageGroomMaps {
     maps.clump.constant = 0.3;
     maps.bend.constant = 0.1;
     maps
+}
+
+#[test]
+fn bindings_are_the_same_on_any_thread_count() {
+    let m = default_creature();
+    let one = groom(&m, 2000, 30_000, &styled());
+    for threads in [2, 7, 0] {
+        let other = groom_on_threads(&m, 2000, 30_000, &styled(), threads);
+        assert!(other.bindings == one.bindings, "{threads} threads");
+        assert_eq!(other.info.orphans, one.info.orphans);
+    }
+    let orphans = one.bindings.iter().filter(|b| b.count == 0).count();
+    assert_eq!(
+        orphans, one.info.orphans as usize,
+        "orphans summed over the ranges"
+    );
 }
 
 #[test]
