@@ -157,9 +157,7 @@ pub extern "C" fn pelage_bind(
         })?;
         let mut report = index.report();
         for r in reports {
-            let r = r?;
-            report.orphans += r.orphans;
-            report.examined += r.examined;
+            report.merge(r?);
         }
         if let Some(info) = opt_mut(info) {
             *info = PelageBindInfo {

@@ -108,6 +108,15 @@ pub struct BindReport {
     pub examined: u64,
 }
 
+impl BindReport {
+    /// Adds the counts (orphans, examined guides) of another range of
+    /// strands bound with the same index.
+    pub fn merge(&mut self, other: BindReport) {
+        self.orphans += other.orphans;
+        self.examined += other.examined;
+    }
+}
+
 /// Guide roots in a spatial grid, with their normals and regions.
 pub struct GuideIndex<'a> {
     position: &'a [[f32; 3]],

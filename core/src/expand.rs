@@ -1225,11 +1225,8 @@ mod tests {
                     let (sin, cos) = libm::sincosf(phase(i) + j as f32 * delta);
                     let wave = (f.t * sin + f.b * cos) * (0.05 * len * t);
                     close(at(&kinked, i, j), p + wave, "kink", i, j);
-                    let centre = Vec3::new(
-                        prepared.world(b[i].clump as usize)[j],
-                        prepared.world(b[i].clump as usize)[CVS + j],
-                        prepared.world(b[i].clump as usize)[2 * CVS + j],
-                    );
+                    let c = prepared.world(b[i].clump as usize);
+                    let centre = Vec3::new(c[j], c[CVS + j], c[2 * CVS + j]);
                     close(
                         at(&clumped, i, j),
                         p + (centre - p) * (0.6 * t),
@@ -1393,36 +1390,32 @@ mod tests {
         worst
     }
 
-    #[test]
-    fn shapes_change_continuously_along_a_path() {
-        // Continuous weights: refining the path 8x shrinks the largest
-        // change between neighbours about 8x. A hard k cutoff would leave a
-        // jump of the same size at every resolution.
-        let s = Scene::plane(120, 10);
-        let coarse = largest_step_change(&s, 1000);
-        let fine = largest_step_change(&s, 8000);
+    /// Refining the path 8x must shrink the largest change between
+    /// neighbouring strands about 8x, to within a constant times the step
+    /// (0.8 / steps): a jump (a seam) stays the same size at every
+    /// resolution.
+    fn assert_shapes_change_continuously(s: &Scene) {
+        let coarse = largest_step_change(s, 1000);
+        let fine = largest_step_change(s, 8000);
         assert!(
             fine < 0.3 * coarse,
             "largest change {coarse} at 1000 steps, {fine} at 8000 steps"
         );
-        // and the change is bounded by a constant times the step (0.8 / steps)
         assert!(fine < 20.0 * 0.8 / 8000.0, "change {fine} per step");
     }
 
     #[test]
+    fn shapes_change_continuously_along_a_path() {
+        // continuous weights: a hard k cutoff would leave a jump
+        assert_shapes_change_continuously(&Scene::plane(120, 10));
+    }
+
+    #[test]
     fn shapes_change_continuously_on_a_curved_skin() {
-        // The same on a bumpy skin, where every triangle turns against its
-        // neighbours: the root frame's tangent must not jump at triangle
-        // edges (a per-triangle tangent turns leaning strands by a fixed
-        // angle there, at any path resolution).
-        let s = Scene::on(bumpy_plane(16), 120, 10);
-        let coarse = largest_step_change(&s, 1000);
-        let fine = largest_step_change(&s, 8000);
-        assert!(
-            fine < 0.3 * coarse,
-            "largest change {coarse} at 1000 steps, {fine} at 8000 steps"
-        );
-        assert!(fine < 20.0 * 0.8 / 8000.0, "change {fine} per step");
+        // on a bumpy skin every triangle turns against its neighbours: the
+        // root frame's tangent must not jump at triangle edges (a
+        // per-triangle tangent turns leaning strands by a fixed angle there)
+        assert_shapes_change_continuously(&Scene::on(bumpy_plane(16), 120, 10));
     }
 
     fn special() -> impl Strategy<Value = f32> {
