@@ -179,7 +179,6 @@ pub(crate) fn frames(
 ) {
     let len = roots.len().min(out.len()).min(FRAME_LANES);
     let lanes = &mut FrameLanes::default();
-    let mut face_tangents = [Vec3::ZERO; FRAME_LANES];
     for (i, root) in roots[..len].iter().enumerate() {
         let face = match basis {
             Some((f, b)) if *f == root.face => b,
@@ -194,7 +193,6 @@ pub(crate) fn frames(
         out[i].origin = a * w + b * u + c * v;
         let (n, t) = face.sums(u, v);
         lanes.set(i, n, face.face_normal, t);
-        face_tangents[i] = face.tangent;
     }
     let FrameLanes { n, face_n, t } = lanes;
     normalize_or_zero(n);
@@ -222,7 +220,10 @@ pub(crate) fn frames(
         let nv = Vec3::new(n[0][i], n[1][i], n[2][i]);
         let mut tv = Vec3::new(t[0][i], t[1][i], t[2][i]);
         if tv == Vec3::ZERO {
-            tv = fallback_tangent(nv, face_tangents[i]);
+            // rare (the vertex tangents cancel or run along the normal): the
+            // triangle's own tangent is computed again only here
+            let face = roots[i].face as usize;
+            tv = fallback_tangent(nv, face_tangent(mesh, face, mesh.corners(face)));
         }
         (frame.n, frame.t, frame.b) = (nv, tv, nv.cross(tv));
     }
