@@ -31,6 +31,8 @@ fn cell_hash(c: [i32; 3]) -> u32 {
 pub struct HashGrid<'a> {
     heads: &'a mut [u32],
     next: &'a mut [u32],
+    /// Buckets in use, a power of two: the front of `heads`.
+    buckets: usize,
     inv_cell: f32,
 }
 
@@ -46,15 +48,19 @@ impl<'a> HashGrid<'a> {
         debug_assert!(heads.len().is_power_of_two());
         heads.fill(EMPTY);
         HashGrid {
+            buckets: heads.len(),
             heads,
             next,
             inv_cell: 1.0 / cell,
         }
     }
 
-    /// Empties the grid and changes its cell size.
-    pub fn reset(&mut self, cell: f32) {
-        self.heads.fill(EMPTY);
+    /// Empties the grid, changes its cell size, and sizes its bucket table
+    /// for `points` points (within the storage): a grid rebuilt for fewer
+    /// points clears and walks a smaller table.
+    pub fn reset(&mut self, cell: f32, points: usize) {
+        self.buckets = Self::buckets_for(points).min(self.heads.len());
+        self.heads[..self.buckets].fill(EMPTY);
         self.inv_cell = 1.0 / cell;
     }
 
@@ -67,7 +73,7 @@ impl<'a> HashGrid<'a> {
 
     #[inline]
     fn bucket(&self, c: [i32; 3]) -> usize {
-        cell_hash(c) as usize & (self.heads.len() - 1)
+        cell_hash(c) as usize & (self.buckets - 1)
     }
 
     /// Inserts point `index` at `p`.
@@ -106,7 +112,7 @@ impl<'a> HashGrid<'a> {
     pub fn in_box(&self, lo: Vec3, hi: Vec3) -> InBox<'_> {
         let (lo, hi) = (self.cell_of(lo), self.cell_of(hi));
         InBox {
-            heads: self.heads,
+            heads: &self.heads[..self.buckets],
             next: self.next,
             lo,
             hi,

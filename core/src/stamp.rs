@@ -255,34 +255,35 @@ fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
     params.black_scale + (1.0 - params.black_scale) * d.clamp(0.0, 1.0)
 }
 
-/// Stable LSD radix sort of `keys` by their upper 32 bits (11-bit digits),
-/// using `spare` (same length) as the second buffer.
-fn radix_sort_high32(keys: &mut [u64], spare: &mut [u64]) {
-    const BITS: u32 = 11;
-    let (mut src, mut dst) = (keys, spare);
-    let mut swapped = false;
-    for pass in 0..3 {
-        let shift = 32 + pass * BITS;
+/// Bits of a rank sort key above the candidate index: the LOD level, then
+/// a hash that shuffles each level (ties keep candidate order).
+const RANK_KEY_BITS: u32 = 22;
+/// Bits of the hash in a rank sort key (the level takes 4).
+const RANK_HASH_BITS: u32 = RANK_KEY_BITS - 4;
+const _: () = assert!(LOD_LEVELS <= 16);
+
+/// Stable LSD radix sort of `keys` by bits 32 to 32 + [`RANK_KEY_BITS`], in
+/// two passes of 11-bit digits, using `spare` (same length) as the second
+/// buffer; the sorted keys end in `keys`.
+fn radix_sort_rank_keys(keys: &mut [u64], spare: &mut [u64]) {
+    const BITS: u32 = RANK_KEY_BITS / 2;
+    let pass = |src: &[u64], dst: &mut [u64], shift: u32| {
         let digit = |k: u64| ((k >> shift) & ((1 << BITS) - 1)) as usize;
         let mut count = [0usize; 1 << BITS];
-        for &k in src.iter() {
+        for &k in src {
             count[digit(k)] += 1;
         }
         let mut at = 0;
         for c in count.iter_mut() {
             (*c, at) = (at, at + *c);
         }
-        for &k in src.iter() {
+        for &k in src {
             dst[count[digit(k)]] = k;
             count[digit(k)] += 1;
         }
-        core::mem::swap(&mut src, &mut dst);
-        swapped = !swapped;
-    }
-    if swapped {
-        // after an odd number of passes the sorted keys sit in `spare`
-        dst.copy_from_slice(src);
-    }
+    };
+    pass(keys, spare, 32);
+    pass(spare, keys, 32 + BITS);
 }
 
 /// The x extent of triangle `t` within the strip y0 <= y <= y1, if any.
@@ -957,10 +958,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let keys = &mut scratch.keys[..n];
         for (j, key) in keys.iter_mut().enumerate() {
             let l = scratch.level[j].min(finest) as u64;
-            let h = rng::hash(self.seed, j as u64, Purpose::LodOrder, 0) >> 40;
-            *key = (l << 56) | (h << 32) | j as u64;
+            let h = rng::hash(self.seed, j as u64, Purpose::LodOrder, 0) >> (64 - RANK_HASH_BITS);
+            *key = (l << (32 + RANK_HASH_BITS)) | (h << 32) | j as u64;
         }
-        radix_sort_high32(keys, &mut scratch.spare[..n]);
+        radix_sort_rank_keys(keys, &mut scratch.spare[..n]);
         let rank_of = &mut scratch.next[..n];
         for (rank, key) in keys.iter().enumerate() {
             rank_of[(*key & 0xFFFF_FFFF) as usize] = rank as u32;
@@ -1029,7 +1030,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
         for k in 0..finest {
             let s = spacing(k);
-            grid.reset(GRID_CELL * self.radius * s);
+            let fresh = start[k as usize] as u32..start[k as usize + 1] as u32;
+            let most = n_assigned + n_pending + fresh.len();
+            grid.reset(GRID_CELL * self.radius * s, most);
             // a record farther inside its triangle than the spacing cannot clash
             for &i in &assigned[..n_assigned] {
                 let q = &near[i as usize];
@@ -1038,7 +1041,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 }
             }
             // the pending records and the fresh ones, merged in index order
-            let fresh = start[k as usize] as u32..start[k as usize + 1] as u32;
             let (mut a, mut b, mut n_tried) = (0, fresh.start, 0);
             while a < n_pending || b < fresh.end {
                 let take_pending = b == fresh.end

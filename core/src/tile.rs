@@ -21,7 +21,8 @@ const ATTEMPTS: u32 = 30;
 const GEN_CELLS: usize = 68;
 /// An upper bound on points at unit spacing on the torus (hexagonal packing).
 const MAX_POINTS: usize = (2.0 * TILE_SIDE as f64 * TILE_SIDE as f64 / 1.732_050_8) as usize + 1;
-const EMPTY: u32 = u32::MAX;
+/// Coordinate of an empty generation cell: far from the tile on any wrap.
+const FAR: f32 = 1.0e6;
 
 /// A periodic Poisson-disk point set of side [`TILE_SIDE`] and spacing 1,
 /// bucketed into unit cells for lookups.
@@ -38,7 +39,7 @@ impl<'a> Tile<'a> {
             .add::<[f32; 2]>(MAX_POINTS * 2)
             .add::<u8>(MAX_POINTS)
             .add::<u32>(TILE_SIDE * TILE_SIDE + 1)
-            .add::<u32>(GEN_CELLS * GEN_CELLS)
+            .add::<[f32; 2]>(GEN_CELLS * GEN_CELLS)
             .add::<u32>(MAX_POINTS);
     }
 
@@ -48,12 +49,12 @@ impl<'a> Tile<'a> {
         let points = arena.alloc::<[f32; 2]>(MAX_POINTS)?;
         let levels = arena.alloc::<u8>(MAX_POINTS)?;
         let cell_start = arena.alloc::<u32>(TILE_SIDE * TILE_SIDE + 1)?;
-        let grid = arena.alloc::<u32>(GEN_CELLS * GEN_CELLS)?;
+        let grid = arena.alloc::<[f32; 2]>(GEN_CELLS * GEN_CELLS)?;
         let active = arena.alloc::<u32>(MAX_POINTS)?;
         let n = bridson(seed, gen, grid, active);
         bucket(&gen[..n], points, cell_start);
         let points = &points[..n];
-        assign_levels(points, &mut levels[..n]);
+        assign_levels(points, cell_start, &mut levels[..n]);
         Ok(Tile {
             points,
             levels: &levels[..n],
@@ -116,22 +117,32 @@ fn torus_dist2(a: [f32; 2], b: [f32; 2]) -> f32 {
 
 #[inline]
 fn wrap_coord(x: f32) -> f32 {
-    let w = x - SIDE * crate::grid::floor_i32(x / SIDE) as f32;
-    if !(0.0..SIDE).contains(&w) {
-        0.0
+    // x is within 2 of the tile: one add or subtract brings it back, and
+    // rounding may land exactly on the far side
+    let w = if x < 0.0 {
+        x + SIDE
+    } else if x >= SIDE {
+        x - SIDE
     } else {
+        x
+    };
+    if w < SIDE {
         w
+    } else {
+        0.0
     }
 }
 
-fn bridson(seed: u64, points: &mut [[f32; 2]], grid: &mut [u32], active: &mut [u32]) -> usize {
+/// Bridson's algorithm on the torus. `grid` holds the point of each
+/// generation cell (at most one fits), or a far sentinel.
+fn bridson(seed: u64, points: &mut [[f32; 2]], grid: &mut [[f32; 2]], active: &mut [u32]) -> usize {
     let h = SIDE / GEN_CELLS as f32;
     let cell_of = |p: [f32; 2]| {
         let x = ((p[0] / h) as usize).min(GEN_CELLS - 1);
         let y = ((p[1] / h) as usize).min(GEN_CELLS - 1);
         y * GEN_CELLS + x
     };
-    grid.fill(EMPTY);
+    grid.fill([FAR; 2]);
     let mut draw = 0u32;
     let mut next = || {
         draw += 1;
@@ -139,7 +150,7 @@ fn bridson(seed: u64, points: &mut [[f32; 2]], grid: &mut [u32], active: &mut [u
     };
     let first = [next() * SIDE, next() * SIDE];
     points[0] = first;
-    grid[cell_of(first)] = 0;
+    grid[cell_of(first)] = first;
     active[0] = 0;
     let (mut n, mut n_active) = (1usize, 1usize);
     while n_active > 0 {
@@ -153,9 +164,9 @@ fn bridson(seed: u64, points: &mut [[f32; 2]], grid: &mut [u32], active: &mut [u
                 wrap_coord(centre[0] + radius * libm::cosf(angle)),
                 wrap_coord(centre[1] + radius * libm::sinf(angle)),
             ];
-            if n < points.len() && fits(p, points, grid, h) {
+            if n < points.len() && fits(p, grid, h) {
                 points[n] = p;
-                grid[cell_of(p)] = n as u32;
+                grid[cell_of(p)] = p;
                 active[n_active] = n as u32;
                 n += 1;
                 n_active += 1;
@@ -171,21 +182,46 @@ fn bridson(seed: u64, points: &mut [[f32; 2]], grid: &mut [u32], active: &mut [u
     n
 }
 
-fn fits(p: [f32; 2], points: &[[f32; 2]], grid: &[u32], h: f32) -> bool {
+/// Whether `p` is at least 1 from every point in the 5x5 generation cells
+/// around it, nearest cells first: most candidates fail, and they fail there.
+fn fits(p: [f32; 2], grid: &[[f32; 2]], h: f32) -> bool {
+    const ORDER: [(isize, isize); 25] = {
+        let mut order = [(0, 0); 25];
+        let mut i = 0;
+        let mut ring = 0;
+        while ring <= 2 {
+            let mut dy = -2;
+            while dy <= 2 {
+                let mut dx = -2;
+                while dx <= 2 {
+                    let r = if dx * dx > dy * dy { dx * dx } else { dy * dy };
+                    if r == ring * ring {
+                        order[i] = (dx, dy);
+                        i += 1;
+                    }
+                    dx += 1;
+                }
+                dy += 1;
+            }
+            ring += 1;
+        }
+        order
+    };
+    let g = GEN_CELLS as isize;
+    let wrap = |c: isize| {
+        (if c < 0 {
+            c + g
+        } else if c >= g {
+            c - g
+        } else {
+            c
+        }) as usize
+    };
     let cx = (p[0] / h) as isize;
     let cy = (p[1] / h) as isize;
-    let g = GEN_CELLS as isize;
-    for dy in -2..=2 {
-        for dx in -2..=2 {
-            let x = (cx + dx).rem_euclid(g) as usize;
-            let y = (cy + dy).rem_euclid(g) as usize;
-            let q = grid[y * GEN_CELLS + x];
-            if q != EMPTY && torus_dist2(p, points[q as usize]) < 1.0 {
-                return false;
-            }
-        }
-    }
-    true
+    ORDER
+        .iter()
+        .all(|&(dx, dy)| torus_dist2(p, grid[wrap(cy + dy) * GEN_CELLS + wrap(cx + dx)]) >= 1.0)
 }
 
 /// Counting sort of the points into unit cells (stable, so deterministic).
@@ -210,22 +246,43 @@ fn bucket(src: &[[f32; 2]], dst: &mut [[f32; 2]], cell_start: &mut [u32]) {
 
 /// Greedy nested selection: level `k` points are at least `sqrt(2)^(L-1-k)`
 /// apart from every point of level `<= k`, so each level prefix is itself a
-/// Poisson set with half the density of the next.
-fn assign_levels(points: &[[f32; 2]], levels: &mut [u8]) {
+/// Poisson set with half the density of the next. `points` are bucketed by
+/// `cell_start`; each point is tested against the chosen ones in the cells
+/// within the spacing, or against the list of chosen ones when that is
+/// shorter (the coarse levels), which tests the same points.
+fn assign_levels(points: &[[f32; 2]], cell_start: &[u32], levels: &mut [u8]) {
     let finest = (LOD_LEVELS - 1) as u8;
     levels.fill(finest);
-    let mut chosen = [[0.0f32; 2]; MAX_POINTS];
+    let mut chosen = [0u32; MAX_POINTS];
     let mut n_chosen = 0;
+    let side = TILE_SIDE as isize;
     for k in 0..finest {
         let r = libm::powf(2.0, 0.5 * (finest - k) as f32);
         let r2 = r * r;
-        for (i, &p) in points.iter().enumerate() {
+        let reach = libm::ceilf(r) as isize;
+        let by_cells = 2 * reach < side;
+        for i in 0..points.len() {
             if levels[i] != finest {
                 continue;
             }
-            if chosen[..n_chosen].iter().all(|&q| torus_dist2(p, q) >= r2) {
+            let p = points[i];
+            let far = |j: usize| torus_dist2(p, points[j]) >= r2;
+            let free = if by_cells && (2 * reach + 1).pow(2) < n_chosen as isize {
+                let (cx, cy) = (p[0] as isize, p[1] as isize);
+                (-reach..=reach).all(|dy| {
+                    let row = (cy + dy).rem_euclid(side) * side;
+                    (-reach..=reach).all(|dx| {
+                        let c = (row + (cx + dx).rem_euclid(side)) as usize;
+                        let cell = cell_start[c] as usize..cell_start[c + 1] as usize;
+                        cell.into_iter().all(|j| levels[j] == finest || far(j))
+                    })
+                })
+            } else {
+                chosen[..n_chosen].iter().all(|&j| far(j as usize))
+            };
+            if free {
                 levels[i] = k;
-                chosen[n_chosen] = p;
+                chosen[n_chosen] = i as u32;
                 n_chosen += 1;
             }
         }
