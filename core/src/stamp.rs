@@ -681,8 +681,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     }
 
     /// Stamps the triangles in `faces` at the current radius into `out`, in
-    /// face order; returns how many were written. Pure: safe to run disjoint
-    /// ranges on different threads.
+    /// face order; returns how many were written. Slots past that count may
+    /// be overwritten too. Pure: safe to run disjoint ranges on different
+    /// threads.
     pub fn stamp_faces(&self, faces: Range<usize>, out: &mut [Candidate]) -> Result<usize, Error> {
         let mut n = 0;
         for f in faces {
@@ -710,6 +711,19 @@ impl<'m, 'a> Stamper<'m, 'a> {
             det / ec.length(),
             det / eb.length(),
         ];
+        let place = |p: Vec2, level: u8| {
+            let d = p - pa;
+            let u = d.perp_dot(ec) * inv_det;
+            let v = eb.perp_dot(d) * inv_det;
+            let candidate = Candidate {
+                position: (a + e1 * u + e2 * v).into(),
+                face: f as u32,
+                uv: [u, v],
+                level: level as u32,
+                edge_distance: ((1.0 - u - v) * alt[0]).min(u * alt[1]).min(v * alt[2]),
+            };
+            (candidate, (u >= 0.0) & (v >= 0.0) & (u + v <= 1.0))
+        };
         let corners = [pa, pa + eb, pa + ec];
         let lo_y = corners[0].y.min(corners[1].y).min(corners[2].y);
         let hi_y = corners[0].y.max(corners[1].y).max(corners[2].y);
@@ -728,23 +742,21 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let len = (side - wx).min(last - cx + 1);
                 let shift = Vec2::new((cx - wx) as f32, shift_y);
                 let (points, levels) = self.tile.run(wx as usize, wy as usize, len as usize);
+                let room = out.len() >= n + points.len();
                 for (&p, &level) in points.iter().zip(levels) {
-                    let d = Vec2::from(p) + shift - pa;
-                    let u = d.perp_dot(ec) * inv_det;
-                    let v = eb.perp_dot(d) * inv_det;
-                    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
+                    let (candidate, inside) = place(Vec2::from(p) + shift, level);
+                    if room {
+                        // written whether inside or not, and kept only when
+                        // inside: a branch on the test would mispredict about
+                        // every other point
+                        out[n] = candidate;
+                        n += inside as usize;
+                    } else if inside {
                         let available = out.len();
-                        let slot = out.get_mut(n).ok_or(Error::CapacityExceeded {
+                        *out.get_mut(n).ok_or(Error::CapacityExceeded {
                             needed: n + 1,
                             available,
-                        })?;
-                        *slot = Candidate {
-                            position: (a + e1 * u + e2 * v).into(),
-                            face: f as u32,
-                            uv: [u, v],
-                            level: level as u32,
-                            edge_distance: ((1.0 - u - v) * alt[0]).min(u * alt[1]).min(v * alt[2]),
-                        };
+                        })? = candidate;
                         n += 1;
                     }
                 }
@@ -1284,6 +1296,30 @@ mod tests {
         let kept = stamper.prune(&mut cands, &mut scratch).unwrap();
         assert!(kept < n, "the pass removed nothing to compare");
         assert_eq!(&cands[..kept], &expect[..]);
+    }
+
+    #[test]
+    fn an_output_of_exactly_the_count_is_enough() {
+        let m = sphere(12, 24);
+        let mesh = m.mesh();
+        let p = params(3000);
+        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+        let mut arena = Arena::new(&mut buf);
+        let stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
+        let faces = 0..mesh.triangle_count();
+        let mut roomy = vec![Candidate::default(); stamper.candidate_bound(faces.clone())];
+        let n = stamper.stamp_faces(faces.clone(), &mut roomy).unwrap();
+        let mut exact = vec![Candidate::default(); n];
+        assert_eq!(stamper.stamp_faces(faces.clone(), &mut exact), Ok(n));
+        assert_eq!(exact[..], roomy[..n]);
+        let mut short = vec![Candidate::default(); n - 1];
+        assert_eq!(
+            stamper.stamp_faces(faces, &mut short),
+            Err(Error::CapacityExceeded {
+                needed: n,
+                available: n - 1
+            })
+        );
     }
 
     #[test]
