@@ -408,7 +408,8 @@ fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
         .add::<u64>(candidates)
         .add::<u64>(candidates)
         .add::<Near>(candidates)
-        .add::<f32>(4 * GATHER);
+        .add::<f32>(4 * GATHER)
+        .add::<u32>(GATHER);
 }
 
 /// Edge-pass status of a candidate not yet reached (the LOD pass keeps a
@@ -464,6 +465,7 @@ struct Gathered<'a> {
     y: &'a mut [f32],
     z: &'a mut [f32],
     r2: &'a mut [f32],
+    face: &'a mut [u32],
     len: usize,
 }
 
@@ -478,20 +480,17 @@ impl<'a> Gathered<'a> {
             y,
             z,
             r2,
+            face: arena.alloc::<u32>(GATHER)?,
             len: 0,
         })
     }
 
-    /// Adds a point; false when full.
+    /// Writes a point of face `face` in the slot after the last (not full),
+    /// without taking it: the caller advances `len` to keep it.
     #[inline]
-    fn push(&mut self, p: [f32; 3], r2: f32) -> bool {
+    fn set(&mut self, p: [f32; 3], face: u32) {
         let i = self.len;
-        if i == GATHER {
-            return false;
-        }
-        (self.x[i], self.y[i], self.z[i], self.r2[i]) = (p[0], p[1], p[2], r2);
-        self.len += 1;
-        true
+        (self.x[i], self.y[i], self.z[i], self.face[i]) = (p[0], p[1], p[2], face);
     }
 
     /// Whether `p` is closer to a gathered point than its clash distance.
@@ -800,24 +799,32 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let reach = Vec3::splat(self.local_radius(f) * spacing * 1.0001);
         let (lo, hi) = (lo - reach, hi + reach);
         let normal = Vec3::from(face.normal);
+        // the clash distance of each gathered point, or -1 (no clash) for
+        // a face whose normal opposes
+        let clash_distances = |buf: &mut Gathered| {
+            for (r2, &o) in buf.r2[..buf.len].iter_mut().zip(&buf.face[..buf.len]) {
+                let other = &self.faces[o as usize];
+                let r = self.radius * spacing / other.scale.max(face.scale);
+                let facing = Vec3::from(other.normal).dot(normal) > 0.0;
+                *r2 = if facing { r * r } else { -1.0 };
+            }
+        };
         buf.len = 0;
         for i in grid.in_box(lo, hi) {
-            let o = &records[i as usize];
-            let p = at(o);
-            if o.face == f || !(p.cmpge(lo) & p.cmple(hi)).all() {
-                continue;
-            }
-            let other = &self.faces[o.face as usize];
-            if Vec3::from(other.normal).dot(normal) <= 0.0 {
-                continue;
-            }
-            let r = self.radius * spacing / other.scale.max(face.scale);
-            if !buf.push(o.position, r * r) {
+            if buf.len == GATHER {
+                clash_distances(buf);
                 Self::test_group(group.clone(), status, buf);
                 buf.len = 0;
-                buf.push(o.position, r * r);
             }
+            let o = &records[i as usize];
+            let p = at(o);
+            // every point is written and only those of other faces in the box
+            // kept: branches on these tests would mispredict
+            let keep = (o.face != f) & (p.cmpge(lo) & p.cmple(hi)).all();
+            buf.set(o.position, o.face);
+            buf.len += keep as usize;
         }
+        clash_distances(buf);
         Self::test_group(group, status, buf);
     }
 
