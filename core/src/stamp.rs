@@ -408,8 +408,8 @@ fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
         .add::<u64>(candidates)
         .add::<u64>(candidates)
         .add::<Near>(candidates)
-        .add::<f32>(4 * GATHER)
-        .add::<u32>(GATHER);
+        .add::<f32>(4 * GATHER_SLOTS)
+        .add::<u32>(GATHER_SLOTS);
 }
 
 /// Edge-pass status of a candidate not yet reached (the LOD pass keeps a
@@ -469,18 +469,23 @@ struct Gathered<'a> {
     len: usize,
 }
 
+/// Lanes of the clash test; the gathered arrays are padded to a multiple.
+const LANES: usize = 8;
+/// Slots of each gathered array: [`GATHER`] rounded up to whole lanes.
+const GATHER_SLOTS: usize = GATHER.div_ceil(LANES) * LANES;
+
 impl<'a> Gathered<'a> {
     fn new(arena: &mut Arena<'a>) -> Result<Self, Error> {
-        let all = arena.alloc::<f32>(4 * GATHER)?;
-        let (x, rest) = all.split_at_mut(GATHER);
-        let (y, rest) = rest.split_at_mut(GATHER);
-        let (z, r2) = rest.split_at_mut(GATHER);
+        let all = arena.alloc::<f32>(4 * GATHER_SLOTS)?;
+        let (x, rest) = all.split_at_mut(GATHER_SLOTS);
+        let (y, rest) = rest.split_at_mut(GATHER_SLOTS);
+        let (z, r2) = rest.split_at_mut(GATHER_SLOTS);
         Ok(Gathered {
             x,
             y,
             z,
             r2,
-            face: arena.alloc::<u32>(GATHER)?,
+            face: arena.alloc::<u32>(GATHER_SLOTS)?,
             len: 0,
         })
     }
@@ -493,24 +498,32 @@ impl<'a> Gathered<'a> {
         (self.x[i], self.y[i], self.z[i], self.face[i]) = (p[0], p[1], p[2], face);
     }
 
-    /// Whether `p` is closer to a gathered point than its clash distance.
+    /// Gives the slots past `len` up to whole lanes a clash distance that
+    /// never clashes, so the test runs on whole lanes only (whatever the
+    /// slots hold, no squared distance, not even NaN, is below -1).
+    #[inline]
+    fn pad(&mut self) {
+        let end = self.len.div_ceil(LANES) * LANES;
+        self.r2[self.len..end].fill(-1.0);
+    }
+
+    /// Whether `p` is closer to a gathered point than its clash distance
+    /// (after [`pad`](Self::pad)).
     #[inline]
     fn clashes(&self, p: [f32; 3]) -> bool {
-        const LANES: usize = 8;
-        let n = self.len;
+        let n = self.len.div_ceil(LANES) * LANES;
         let (xs, ys, zs, rs) = (&self.x[..n], &self.y[..n], &self.z[..n], &self.r2[..n]);
         // no early exit inside a chunk, so each chunk runs as vector code
-        xs.chunks(LANES)
-            .zip(ys.chunks(LANES))
-            .zip(zs.chunks(LANES).zip(rs.chunks(LANES)))
+        xs.chunks_exact(LANES)
+            .zip(ys.chunks_exact(LANES))
+            .zip(zs.chunks_exact(LANES).zip(rs.chunks_exact(LANES)))
             .any(|((x, y), (z, r))| {
-                x.iter()
-                    .zip(y)
-                    .zip(z.iter().zip(r))
-                    .fold(false, |hit, ((&x, &y), (&z, &r))| {
-                        let (dx, dy, dz) = (x - p[0], y - p[1], z - p[2]);
-                        hit | (dx * dx + dy * dy + dz * dz < r)
-                    })
+                let mut hit = 0u32;
+                for l in 0..LANES {
+                    let (dx, dy, dz) = (x[l] - p[0], y[l] - p[1], z[l] - p[2]);
+                    hit |= ((dx * dx + dy * dy + dz * dz) < r[l]) as u32;
+                }
+                hit != 0
             })
     }
 }
@@ -802,12 +815,18 @@ impl<'m, 'a> Stamper<'m, 'a> {
         // the clash distance of each gathered point, or -1 (no clash) for
         // a face whose normal opposes
         let clash_distances = |buf: &mut Gathered| {
+            // gathered points come in runs of one face: its distance is reused
+            let (mut last, mut last_r2) = (u32::MAX, 0.0);
             for (r2, &o) in buf.r2[..buf.len].iter_mut().zip(&buf.face[..buf.len]) {
-                let other = &self.faces[o as usize];
-                let r = self.radius * spacing / other.scale.max(face.scale);
-                let facing = Vec3::from(other.normal).dot(normal) > 0.0;
-                *r2 = if facing { r * r } else { -1.0 };
+                if o != last {
+                    let other = &self.faces[o as usize];
+                    let r = self.radius * spacing / other.scale.max(face.scale);
+                    let facing = Vec3::from(other.normal).dot(normal) > 0.0;
+                    (last, last_r2) = (o, if facing { r * r } else { -1.0 });
+                }
+                *r2 = last_r2;
             }
+            buf.pad();
         };
         buf.len = 0;
         for i in grid.in_box(lo, hi) {
