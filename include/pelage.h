@@ -13,6 +13,7 @@
 #ifndef PELAGE_H
 #define PELAGE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -20,7 +21,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 3
+#define PELAGE_VERSION_MINOR 4
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
@@ -327,6 +328,10 @@ typedef struct PelageSettleInfo {
   uint32_t unresolved;
 } PelageSettleInfo;
 
+// A progress callback: `user_data` as given with it, `fraction` the share of
+// the work done in [0, 1]. Returns true to go on, false to cancel.
+typedef bool (*PelageProgressFn)(void *user_data, double fraction);
+
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
   // Number of roots wanted on the whole mesh (at most 2^28; unused when
@@ -347,6 +352,15 @@ typedef struct PelageStampParams {
   float black_scale;
   // Triangles with density below this get no roots (bald regions); 0 disables it.
   float bald_below;
+  // Optional (NULL: none). Called on the calling thread with the share of
+  // the work done, from 0 to 1, never decreasing, every few thousand
+  // triangles and after each stage; the last call, with 1, comes before
+  // any root is written. Return false to cancel: pelage_stamp then returns
+  // PELAGE_STATUS_CANCELLED and writes nothing. Like Embree's
+  // RTCProgressMonitorFunction.
+  PelageProgressFn progress;
+  // Passed unchanged to `progress`.
+  void *progress_user_data;
 } PelageStampParams;
 
 // What a stamping call did.
@@ -517,7 +531,8 @@ enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, si
 enum PelageStatus pelage_settle(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, struct PelageSettleInfo *info);
 
 // Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
-// seed 0, target_count 0, radius 0 (derived from the count).
+// seed 0, target_count 0, radius 0 (derived from the count), no progress
+// callback.
 //
 // Thread safety: may be called from any thread at any time.
 struct PelageStampParams pelage_stamp_params_defaults(void);
@@ -538,6 +553,8 @@ enum PelageStatus pelage_stamp_query(const struct PelageMeshDesc *mesh, const st
 // `*root_count` is the number written and `info` (optional, may be NULL) is
 // filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
 // of roots needed when the root buffer was the limit; nothing else is written.
+// `params->progress`, when set, reports progress and can cancel the call
+// (PELAGE_STATUS_CANCELLED, nothing written).
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct PelageStampParams *params, void *arena, size_t arena_bytes, struct PelageRoot *roots, size_t roots_capacity, size_t *root_count, struct PelageStampInfo *info);

@@ -43,15 +43,15 @@ pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};
 pub use stamp::{
-    pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageStampInfo,
-    PelageStampParams,
+    pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageProgressFn,
+    PelageStampInfo, PelageStampParams,
 };
 pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
 
 /// Major version of the library this header belongs to.
 pub const PELAGE_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const PELAGE_VERSION_MINOR: u32 = 3;
+pub const PELAGE_VERSION_MINOR: u32 = 4;
 /// Patch version.
 pub const PELAGE_VERSION_PATCH: u32 = 0;
 

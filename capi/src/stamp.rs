@@ -27,7 +27,21 @@ pub struct PelageStampParams {
     pub black_scale: f32,
     /// Triangles with density below this get no roots (bald regions); 0 disables it.
     pub bald_below: f32,
+    /// Optional (NULL: none). Called on the calling thread with the share of
+    /// the work done, from 0 to 1, never decreasing, every few thousand
+    /// triangles and after each stage; the last call, with 1, comes before
+    /// any root is written. Return false to cancel: pelage_stamp then returns
+    /// PELAGE_STATUS_CANCELLED and writes nothing. Like Embree's
+    /// RTCProgressMonitorFunction.
+    pub progress: PelageProgressFn,
+    /// Passed unchanged to `progress`.
+    pub progress_user_data: *mut std::ffi::c_void,
 }
+
+/// A progress callback: `user_data` as given with it, `fraction` the share of
+/// the work done in [0, 1]. Returns true to go on, false to cancel.
+pub type PelageProgressFn =
+    Option<unsafe extern "C" fn(user_data: *mut std::ffi::c_void, fraction: f64) -> bool>;
 
 /// What a stamping call did.
 #[repr(C)]
@@ -48,7 +62,8 @@ pub struct PelageStampInfo {
 }
 
 /// Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
-/// seed 0, target_count 0, radius 0 (derived from the count).
+/// seed 0, target_count 0, radius 0 (derived from the count), no progress
+/// callback.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -61,6 +76,8 @@ pub extern "C" fn pelage_stamp_params_defaults() -> PelageStampParams {
         density: PelageMap::constant(1.0),
         black_scale: d.black_scale,
         bald_below: d.bald_below,
+        progress: None,
+        progress_user_data: std::ptr::null_mut(),
     }
 }
 
@@ -114,6 +131,8 @@ pub extern "C" fn pelage_stamp_query(
 /// `*root_count` is the number written and `info` (optional, may be NULL) is
 /// filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
 /// of roots needed when the root buffer was the limit; nothing else is written.
+/// `params->progress`, when set, reports progress and can cancel the call
+/// (PELAGE_STATUS_CANCELLED, nothing written).
 ///
 /// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 #[no_mangle]
@@ -145,7 +164,13 @@ pub extern "C" fn pelage_stamp(
                 format!("arena too small: {need} bytes needed, {} available", arena.len()),
             ));
         }
-        match stamp::stamp(mesh, &p, &mut Arena::new(arena), out) {
+        let mut progress = |fraction: f32| match params.progress {
+            // SAFETY: the caller's callback, called as its contract in the
+            // header states, with the user data it gave
+            Some(f) => unsafe { f(params.progress_user_data, fraction as f64) },
+            None => true,
+        };
+        match stamp::stamp_with_progress(mesh, &p, &mut Arena::new(arena), out, &mut progress) {
             Ok((n, report)) => {
                 *root_count = n;
                 if let Some(info) = opt_mut(info) {

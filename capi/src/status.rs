@@ -110,6 +110,7 @@ impl From<Error> for Failure {
             Error::InvalidArgument(_) | Error::BadStride { .. } => PelageStatus::InvalidArgument,
             Error::NonFinite { .. } => PelageStatus::NonFinite,
             Error::OutOfRange { .. } => PelageStatus::OutOfRange,
+            Error::Cancelled => PelageStatus::Cancelled,
         };
         Failure::new(status, e.to_string())
     }

@@ -45,6 +45,8 @@ pub enum Error {
         /// Which input is malformed.
         what: &'static str,
     },
+    /// The caller's progress callback asked to stop.
+    Cancelled,
 }
 
 impl Error {
@@ -106,6 +108,7 @@ impl fmt::Display for Error {
                     "{what}: stride smaller than the element or buffer too short"
                 )
             }
+            Error::Cancelled => write!(f, "cancelled by the progress callback"),
         }
     }
 }

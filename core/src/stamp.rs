@@ -498,13 +498,16 @@ impl<'a> Gathered<'a> {
         (self.x[i], self.y[i], self.z[i], self.face[i]) = (p[0], p[1], p[2], face);
     }
 
-    /// Gives the slots past `len` up to whole lanes a clash distance that
-    /// never clashes, so the test runs on whole lanes only (whatever the
-    /// slots hold, no squared distance, not even NaN, is below -1).
+    /// Fills the slots past `len` up to whole lanes with points at the
+    /// origin and a clash distance that never clashes (no squared distance
+    /// is below -1), so the test runs on whole lanes only.
     #[inline]
     fn pad(&mut self) {
-        let end = self.len.div_ceil(LANES) * LANES;
-        self.r2[self.len..end].fill(-1.0);
+        let (len, end) = (self.len, self.len.div_ceil(LANES) * LANES);
+        for a in [&mut *self.x, &mut *self.y, &mut *self.z] {
+            a[len..end].fill(0.0);
+        }
+        self.r2[len..end].fill(-1.0);
     }
 
     /// Whether `p` is closer to a gathered point than its clash distance
@@ -982,6 +985,19 @@ impl<'m, 'a> Stamper<'m, 'a> {
         scratch: &mut Scratch,
         out: &mut [Root],
     ) -> Result<(), Error> {
+        self.finish_reporting(cands, scratch, out, &mut |_| Ok(()))
+    }
+
+    /// [`finish`](Self::finish), calling `done` with the share of the work
+    /// done after each LOD level and once more before `out` is written; an
+    /// error from `done` ends the call there.
+    fn finish_reporting(
+        &self,
+        cands: &[Candidate],
+        scratch: &mut Scratch,
+        out: &mut [Root],
+        done: &mut dyn FnMut(f32) -> Result<(), Error>,
+    ) -> Result<(), Error> {
         let n = cands.len();
         let m = self.output_count(n);
         if out.len() < m {
@@ -991,7 +1007,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             });
         }
         scratch.check(n)?;
-        self.assign_levels(cands, scratch);
+        self.assign_levels(cands, scratch, done)?;
         let finest = (LOD_LEVELS - 1) as u8;
         let keys = &mut scratch.keys[..n];
         for (j, key) in keys.iter_mut().enumerate() {
@@ -1004,6 +1020,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         for (rank, key) in keys.iter().enumerate() {
             rank_of[(*key & 0xFFFF_FFFF) as usize] = rank as u32;
         }
+        done(1.0)?;
         let mut id = 0;
         for (c, &rank) in cands.iter().zip(rank_of.iter()) {
             if (rank as usize) < m {
@@ -1031,7 +1048,12 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// any finer one, so it keeps its tile level; the others are copied to
     /// [`Near`] records, grouped by tile level, that the levels walk, one
     /// triangle's records at a time.
-    fn assign_levels(&self, cands: &[Candidate], scratch: &mut Scratch) {
+    fn assign_levels(
+        &self,
+        cands: &[Candidate],
+        scratch: &mut Scratch,
+        done: &mut dyn FnMut(f32) -> Result<(), Error>,
+    ) -> Result<(), Error> {
         let n = cands.len();
         let finest = (LOD_LEVELS - 1) as u8;
         let spacings: [f32; LOD_LEVELS] =
@@ -1127,7 +1149,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
             }
             core::mem::swap(&mut pending, &mut next_pending);
             n_pending = carried;
+            done((k + 1) as f32 / LOD_LEVELS as f32)?;
         }
+        Ok(())
     }
 
     fn report(&self, candidates: usize, kept: usize) -> StampReport {
@@ -1152,6 +1176,36 @@ pub fn stamp(
     arena: &mut Arena,
     out: &mut [Root],
 ) -> Result<(usize, StampReport), Error> {
+    stamp_with_progress(mesh, params, arena, out, &mut |_| true)
+}
+
+/// Faces stamped between two progress reports.
+const PROGRESS_FACES: usize = 8192;
+/// Share of the progress the stamping passes take (the LOD levels and the
+/// ranks take the rest): pass `i` ends at `PASSES_SHARE * (1 - 2^-(i+1))`,
+/// as the number of passes is not known in advance.
+const PASSES_SHARE: f32 = 0.6;
+
+/// [`stamp`], calling `progress` with the share of the work done, in
+/// `[0, 1]`, never decreasing, every few thousand triangles and after each
+/// stage (the last call, with 1, comes before `out` is written). Returning
+/// `false` cancels: the call returns [`Error::Cancelled`] having written
+/// nothing to `out`. The calls do not change the result.
+pub fn stamp_with_progress(
+    mesh: Mesh,
+    params: &StampParams,
+    arena: &mut Arena,
+    out: &mut [Root],
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<(usize, StampReport), Error> {
+    let mut done = |fraction: f32| {
+        if progress(fraction) {
+            Ok(())
+        } else {
+            Err(Error::Cancelled)
+        }
+    };
+    done(0.0)?;
     // validated once; the bound holds for every radius the stamper reaches
     let (bound, degenerate) = checked_bound(&mesh, params)?;
     let need = bytes_for(mesh.triangle_count(), bound);
@@ -1162,18 +1216,28 @@ pub fn stamp(
         });
     }
     let Some(mut stamper) = Stamper::build(mesh, params, degenerate, arena)? else {
+        done(1.0)?;
         let report = StampReport {
             degenerate_triangles: degenerate,
             ..StampReport::default()
         };
         return Ok((0, report));
     };
-    let faces = 0..mesh.triangle_count();
+    let faces = mesh.triangle_count();
     let mut scratch = Scratch::new(arena, bound)?;
     let cands = arena.alloc::<Candidate>(bound)?;
+    let mut pass_start = 0.0;
     loop {
-        let n = stamper.stamp_faces(faces.clone(), cands)?;
+        let pass_end = PASSES_SHARE - 0.5 * (PASSES_SHARE - pass_start);
+        let placed_end = pass_start + 0.4 * (pass_end - pass_start);
+        let mut n = 0;
+        for first in (0..faces).step_by(PROGRESS_FACES) {
+            let last = (first + PROGRESS_FACES).min(faces);
+            n += stamper.stamp_faces(first..last, &mut cands[n..])?;
+            done(pass_start + (placed_end - pass_start) * last as f32 / faces as f32)?;
+        }
         let kept = stamper.prune(&mut cands[..n], &mut scratch)?;
+        done(pass_end)?;
         if stamper.converged(n, kept) {
             let m = stamper.output_count(kept);
             if out.len() < m {
@@ -1182,9 +1246,16 @@ pub fn stamp(
                     available: out.len(),
                 });
             }
-            stamper.finish(&cands[..kept], &mut scratch, &mut out[..m])?;
+            let mut finishing = |share: f32| done(pass_end + (1.0 - pass_end) * share);
+            stamper.finish_reporting(
+                &cands[..kept],
+                &mut scratch,
+                &mut out[..m],
+                &mut finishing,
+            )?;
             return Ok((m, stamper.report(n, kept)));
         }
+        pass_start = pass_end;
     }
 }
 
@@ -1322,6 +1393,45 @@ mod tests {
         let kept = stamper.prune(&mut cands, &mut scratch).unwrap();
         assert!(kept < n, "the pass removed nothing to compare");
         assert_eq!(&cands[..kept], &expect[..]);
+    }
+
+    #[test]
+    fn progress_rises_to_one_and_a_false_return_cancels_with_nothing_written() {
+        let m = graded_plane(30, 10.0);
+        let mesh = m.mesh();
+        let p = params(6000);
+        let (reference, report) = run(mesh, &p);
+        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+        let mut out = vec![Root::default(); max_roots(&mesh, &p).unwrap()];
+        let mut seen = Vec::new();
+        let (n, again) =
+            stamp_with_progress(mesh, &p, &mut Arena::new(&mut buf), &mut out, &mut |f| {
+                seen.push(f);
+                true
+            })
+            .unwrap();
+        assert_eq!((&out[..n], again), (&reference[..], report));
+        assert!(seen.windows(2).all(|w| w[0] <= w[1]), "{seen:?}");
+        assert_eq!((seen[0], *seen.last().unwrap()), (0.0, 1.0));
+        // placement chunks, the edge pass and every LOD level report
+        assert!(seen.len() >= LOD_LEVELS + 2, "{seen:?}");
+        for stop in [1, seen.len() / 2, seen.len()] {
+            let mut calls = 0;
+            let mut untouched = vec![Root::default(); out.len()];
+            let result = stamp_with_progress(
+                mesh,
+                &p,
+                &mut Arena::new(&mut buf),
+                &mut untouched,
+                &mut |_| {
+                    calls += 1;
+                    calls != stop
+                },
+            );
+            assert_eq!(result, Err(Error::Cancelled));
+            assert_eq!(calls, stop);
+            assert!(untouched.iter().all(|r| *r == Root::default()));
+        }
     }
 
     #[test]

@@ -267,6 +267,7 @@ static void test_defaults(void) {
   CHECK(d.density.kind == PELAGE_MAP_KIND_CONSTANT && d.density.constant == 1.0f);
   CHECK(d.black_scale == 0.5f);
   CHECK(d.bald_below == 1.0f / 512.0f);
+  CHECK(d.progress == NULL && d.progress_user_data == NULL);
 }
 
 /* The reference stamp on the sphere, and the success-path invariants. */
@@ -1751,6 +1752,52 @@ static void test_threads(void) {
   printf("last error: this thread \"%s\"; other thread \"%s\"\n", mine, g_worker_after);
 }
 
+/* A progress callback that records its calls and cancels at call `cancel_at`
+ * (never when it is 0). */
+typedef struct Progress {
+  int calls, cancel_at, decreased;
+  double last;
+} Progress;
+
+static bool on_progress(void *user_data, double fraction) {
+  Progress *p = user_data;
+  p->decreased |= p->calls > 0 && fraction < p->last;
+  p->last = fraction;
+  p->calls++;
+  return p->calls != p->cancel_at;
+}
+
+/* Progress rises to 1 without changing the roots; a false return at any call
+ * cancels with nothing written. */
+static void test_progress(void) {
+  const PelageMeshDesc mesh = sphere_desc(&g_sphere);
+  PelageStampParams p = g_params;
+  Progress seen = {0, 0, 0, -1.0};
+  p.progress = on_progress;
+  p.progress_user_data = &seen;
+  PelageRoot *roots = malloc(g_capacity * sizeof *roots);
+  REQUIRE(roots);
+  size_t count = 0;
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, g_arena, g_arena_bytes, roots, g_capacity, &count, NULL));
+  CHECK(count == g_count && memcmp(roots, g_roots, g_count * sizeof *roots) == 0);
+  CHECK(seen.calls >= 3 && !seen.decreased && seen.last == 1.0);
+  /* the first call, one in the middle, and the last (1.0, before any root is written) */
+  const int stops[3] = {1, seen.calls / 2, seen.calls};
+  for (int i = 0; i < 3; i++) {
+    const int at = stops[i];
+    Progress stop = {0, at, 0, -1.0};
+    p.progress_user_data = &stop;
+    PelageStampInfo info;
+    FILL(roots, g_capacity * sizeof *roots), FILL(&count, sizeof count), FILL(&info, sizeof info);
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_stamp(&mesh, &p, g_arena, g_arena_bytes, roots, g_capacity, &count, &info));
+    CHECK(stop.calls == at);
+    CHECK(untouched(roots, g_capacity * sizeof *roots) && untouched(&count, sizeof count) &&
+          untouched(&info, sizeof info));
+    CHECK(strstr(pelage_last_error(), "cancel") != NULL);
+  }
+  free(roots);
+}
+
 int main(void) {
   g_sphere = sphere_new(24, 48);
   test_version_and_strings();
@@ -1761,6 +1808,7 @@ int main(void) {
   test_bad_meshes();
   test_bad_params();
   test_capacity();
+  test_progress();
   test_evaluate();
   test_interp_defaults();
   test_interp_success();
