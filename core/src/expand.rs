@@ -1206,6 +1206,13 @@ mod tests {
                 "{what}: strand {i} point {j}: {a} vs {e}"
             );
         };
+        // an orphan (no guide passes the gates, here on a steep bump) has no
+        // clump centre; the clump check needs nearly every strand bound
+        let orphans = b
+            .iter()
+            .filter(|x| x.clump == crate::bind::NO_GUIDE)
+            .count();
+        assert!(orphans * 100 <= n, "{orphans} orphans of {n}");
         s.prepared(CVS, |mesh, prepared| {
             for (i, r) in s.strands.iter().enumerate() {
                 let f = prepared.frame(mesh, r.face as usize, r.u, r.v);
@@ -1225,6 +1232,9 @@ mod tests {
                     let (sin, cos) = libm::sincosf(phase(i) + j as f32 * delta);
                     let wave = (f.t * sin + f.b * cos) * (0.05 * len * t);
                     close(at(&kinked, i, j), p + wave, "kink", i, j);
+                    if b[i].clump == crate::bind::NO_GUIDE {
+                        continue;
+                    }
                     let c = prepared.world(b[i].clump as usize);
                     let centre = Vec3::new(c[j], c[CVS + j], c[2 * CVS + j]);
                     close(

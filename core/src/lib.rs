@@ -12,6 +12,7 @@
 pub mod arena;
 pub mod bind;
 pub mod body;
+pub mod chart;
 pub mod error;
 pub mod expand;
 pub mod frame;

@@ -2,17 +2,26 @@
 //! violations removed and a nested LOD order.
 //!
 //! Every triangle is laid flat, scaled by its density, rotated and translated
-//! at random (keyed by its index) inside a periodic Poisson tile, and takes the
-//! tile points that fall inside it. Then:
+//! inside a periodic Poisson tile, and takes the tile points that fall inside
+//! it. Where the paper places each triangle at random on its own, neighbouring
+//! triangles that bend by less than [`chart::MAX_BEND_DEGREES`] and share a
+//! density step are unfolded together into charts (see [`chart`]), and each
+//! chart takes one random rotation and offset (keyed by its first triangle):
+//! across the edges inside a chart the points come from one continuous piece
+//! of the tile, so they need no repair. Then:
 //! 1. **Edge pass.** Points of different triangles closer than the disk radius
-//!    (in 3D) are resolved by dropping the later one, in face order.
+//!    (in 3D) are resolved by dropping the later one, in face order. Only
+//!    points whose disk reaches a cut edge, or past a linked neighbour, take
+//!    part (27% of them at 1M roots on the creature, 69% with a placement per
+//!    triangle). Across a linked edge that bends by `a`, the tile's spacing
+//!    shrinks by at most `cos(a / 2)` in 3D (0.99905 at 5 degrees).
 //! 2. **Count.** The radius is derived so the *expected* number of stamped
 //!    points equals the target: for a uniform random placement in a periodic
 //!    tile of density `rho` points per `r^2`, a triangle of flattened area `A`
 //!    scaled by `s` receives `rho * A * s^2 / r^2` points on average, hence
 //!    `r = sqrt(rho * sum(A_i s_i^2) / N)`. The edge pass removes a
-//!    mesh-dependent share, which a model fitted to the tile's measured loss
-//!    per edge length predicts for the first pass; the measured count then
+//!    mesh-dependent share, which a model fitted to the measured loss per
+//!    length of cut edge predicts for the first pass; the measured count then
 //!    corrects the radius until the count is within [`COUNT_TOLERANCE`] of
 //!    the target (dense stamps usually need no correction). (The paper's
 //!    `0.35 / (sqrt(N) * A_max_normalized)` is not dimensionally a length.)
@@ -24,6 +33,7 @@
 //! spread it over threads; the result is bitwise identical for any split.
 
 use crate::arena::{Arena, ArenaLayout};
+use crate::chart::{self, Unfolded};
 use crate::grid::{floor_i32, HashGrid};
 use crate::rng::{self, Purpose};
 use crate::tile::{Tile, LOD_LEVELS, TILE_SIDE};
@@ -40,14 +50,20 @@ pub const COUNT_TOLERANCE: f32 = 0.02;
 /// points per bucket; 5 measured best against 3, 4, 6 and 8 on the creature
 /// at 1M roots.
 const GRID_CELL: f32 = 5.0;
-/// Points the edge pass removes per disk radius of face edge, and the edge
+/// Points the edge pass removes per disk radius of cut edge (an edge whose
+/// two faces are not laid out together, see [`chart`]), and the edge
 /// length (in radii) below which the loss falls off: a fit of the measured
-/// loss of this tile over creature meshes of 16K to 320K triangles and
-/// 10K to 3M roots (within 2% of the count at 30K roots and more). The model
-/// only picks the first radius; the measured count corrects the rest.
-const EDGE_LOSS: f32 = 0.30;
+/// loss over creature meshes of 16K to 320K triangles and 10K to 3M roots
+/// (within 1.1% of the count at 100K roots and more, 2.7% at 30K). The
+/// model only picks the first radius; the measured count corrects the rest.
+const EDGE_LOSS: f32 = 0.125;
 /// See [`EDGE_LOSS`].
-const EDGE_LOSS_KNEE: f32 = 2.64;
+const EDGE_LOSS_KNEE: f32 = 0.12;
+/// How far a chart reaches from its first corner, in disk radii: two
+/// tiles. Charts cut at the reach add edges to check; a larger reach saves
+/// little more (27.0% of the points take part in the edge pass at 1M roots
+/// on the creature, 29.1% at one tile, 25.6% unbounded).
+const CHART_REACH: f32 = 2.0 * TILE_SIDE as f32;
 /// Fixed-point steps of the first radius.
 const PREDICTION_STEPS: u32 = 4;
 /// Passes that correct the radius from the measured count.
@@ -132,53 +148,63 @@ pub struct Candidate {
     pub uv: [f32; 2],
     /// LOD level inherited from the tile (0 = coarsest).
     pub level: u32,
-    /// Distance to the triangle's boundary in units of the local disk radius:
-    /// only points closer than a spacing to the boundary can conflict with
-    /// points of other triangles.
+    /// In units of the local disk radius, the radius of the smallest disk
+    /// around the point that crosses a cut edge of its triangle, or the far
+    /// side of a linked neighbour: up to there every point comes from the
+    /// same piece of the tile, so only points closer than a spacing to that
+    /// boundary can conflict with points of other triangles.
     pub edge_distance: f32,
 }
 
-/// Per-face data the stages share, computed once for every pass.
+/// Per-face data the edge and LOD passes read for every point they test.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 struct Face {
     normal: [f32; 3],
     /// 0 for a skipped (degenerate or bald) face.
     scale: f32,
-    /// Edges p1 - p0 and p2 - p0 laid flat, rotated and scaled by `scale`
-    /// (world units; a pass divides by the radius).
-    eb: [f32; 2],
-    ec: [f32; 2],
-    /// Where p0 lands in the tile.
-    offset: [f32; 2],
 }
 
-impl Face {
-    fn new(mesh: &Mesh, seed: u64, f: usize, scale: f32) -> Self {
-        let normal = mesh.face_normal(f).into();
-        if scale == 0.0 {
-            return Face {
-                normal,
-                ..Face::default()
-            };
-        }
-        let [a, b, c] = mesh.corners(f);
-        let (e1, e2) = (b - a, c - a);
-        let x = e1.normalize();
-        let y = x.cross(e2).cross(x).normalize();
-        let angle = rng::unit(seed, f as u64, Purpose::StampRotation, 0) * core::f32::consts::TAU;
+/// Where a face lies in the tile, computed once for every pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+struct TilePlace {
+    /// Corners in the chart's plane, turned by the chart's rotation (world
+    /// units times the face's scale; a pass divides by the radius). Faces
+    /// linked across an edge hold bit-identical copies of its two corners.
+    corners: [[f32; 2]; 3],
+    /// For each linked edge, the neighbour's third corner, turned the same way.
+    across: [[f32; 2]; 3],
+    /// Where the chart's plane origin lands in the tile (tile units).
+    offset: [f32; 2],
+    /// [`Unfolded::edges`], and in bit `6 + i` whether edge `i` runs from
+    /// the lower vertex index to the higher.
+    edges: u32,
+}
+
+impl TilePlace {
+    fn new(mesh: &Mesh, seed: u64, f: usize, laid: &Unfolded) -> Self {
+        let chart = laid.chart as u64;
+        let angle = rng::unit(seed, chart, Purpose::StampRotation, 0) * core::f32::consts::TAU;
         let rot = Vec2::new(libm::cosf(angle), libm::sinf(angle));
         let offset = Vec2::new(
-            rng::unit(seed, f as u64, Purpose::StampOffsetX, 0),
-            rng::unit(seed, f as u64, Purpose::StampOffsetY, 0),
+            rng::unit(seed, chart, Purpose::StampOffsetX, 0),
+            rng::unit(seed, chart, Purpose::StampOffsetY, 0),
         ) * TILE_SIDE as f32;
-        Face {
-            normal,
-            scale,
-            eb: rot.rotate(Vec2::new(e1.length(), 0.0) * scale).into(),
-            ec: rot.rotate(Vec2::new(e2.dot(x), e2.dot(y)) * scale).into(),
+        let turn = |p: [f32; 2]| rot.rotate(Vec2::from(p)).into();
+        let v = mesh.triangles.get(f);
+        let forward = (0..3).fold(0, |e, i| e | ((v[i] < v[(i + 1) % 3]) as u32) << (6 + i));
+        TilePlace {
+            corners: laid.corners.map(turn),
+            across: laid.across.map(turn),
             offset: offset.into(),
+            edges: laid.edges | forward,
         }
+    }
+
+    /// Edge `i` (corner `i` to corner `i + 1`) in the chart's plane.
+    fn edge(&self, i: usize) -> Vec2 {
+        Vec2::from(self.corners[(i + 1) % 3]) - Vec2::from(self.corners[i])
     }
 }
 
@@ -190,6 +216,7 @@ pub struct Stamper<'m, 'a> {
     target: u32,
     tile: Tile<'a>,
     faces: &'a [Face],
+    places: &'a [TilePlace],
     scaled_area: f64,
     first_radius: f32,
     radius: f32,
@@ -243,6 +270,13 @@ fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
     Ok(report.degenerate_triangles as u32)
 }
 
+/// Steps the density takes between black and white when it scales faces.
+/// Only faces of one scale are laid out together (see [`chart`]), so a
+/// smooth gradient is stamped as bands of equal scale: a step is 0.8% of
+/// the face size at the paper's `black_scale` of 0.5 (1.6% of the root
+/// density in white regions, 3.1% in black ones).
+pub const DENSITY_STEPS: f32 = 64.0;
+
 /// Scale of a face from its density (0 = no roots).
 fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
     if mesh.is_degenerate(face) {
@@ -252,7 +286,8 @@ fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
     if d < params.bald_below {
         return 0.0;
     }
-    params.black_scale + (1.0 - params.black_scale) * d.clamp(0.0, 1.0)
+    let step = libm::roundf(d.clamp(0.0, 1.0) * DENSITY_STEPS) / DENSITY_STEPS;
+    params.black_scale + (1.0 - params.black_scale) * step
 }
 
 /// Bits of a rank sort key above the candidate index: the LOD level, then
@@ -389,12 +424,12 @@ fn first_radius(scaled_area: f64, target: u32, density: f32) -> Option<f32> {
 /// Arena bytes [`stamp`] needs for `mesh` and `params`.
 pub fn required_bytes(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
     let bound = candidates_bound(mesh, params)?;
-    Ok(bytes_for(mesh.triangle_count(), bound))
+    Ok(bytes_for(mesh, bound))
 }
 
-fn bytes_for(faces: usize, bound: usize) -> usize {
+fn bytes_for(mesh: &Mesh, bound: usize) -> usize {
     let mut layout = ArenaLayout::new();
-    Stamper::layout(&mut layout, faces);
+    Stamper::layout(&mut layout, mesh);
     select_layout(&mut layout, bound);
     layout.add::<Candidate>(bound);
     layout.bytes()
@@ -410,6 +445,204 @@ fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
         .add::<Near>(candidates)
         .add::<f32>(4 * GATHER_SLOTS)
         .add::<u32>(GATHER_SLOTS);
+}
+
+/// Tile points a face collects before they become candidates: the inside
+/// test runs on every tile point the face covers, the rest only on the
+/// points inside, a batch at a time, as vector code.
+const BATCH: usize = 128;
+
+/// Tile points found inside one face, waiting to become candidates.
+struct Batch {
+    x: [f32; BATCH],
+    y: [f32; BATCH],
+    level: [u8; BATCH],
+    len: usize,
+}
+
+impl Default for Batch {
+    fn default() -> Self {
+        Batch {
+            x: [0.0; BATCH],
+            y: [0.0; BATCH],
+            level: [0; BATCH],
+            len: 0,
+        }
+    }
+}
+
+/// One face at one radius, in tile units: what placing its tile points needs.
+struct Placing {
+    /// Corner 0 and the edges to corners 1 and 2 in the world.
+    a: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    corners: [Vec2; 3],
+    /// Twice the signed area a point `p` makes with edge `e` is
+    /// `cross_x[e] * p.y - cross_y[e] * p.x - cross_c[e]`: the edge taken
+    /// from its lower-numbered vertex, and negated (exactly) when the face
+    /// runs it the other way. The two faces on a linked edge compute the
+    /// same area bit for bit, so a tile point on it goes to exactly one.
+    cross_x: [f32; 3],
+    cross_y: [f32; 3],
+    cross_c: [f32; 3],
+    /// Whether the face takes the points exactly on edge `e` (when it runs
+    /// the edge from its lower vertex).
+    ties: [bool; 3],
+    inv_len: [f32; 3],
+    inv_det: f32,
+    /// 1 for a linked edge, 0 for a cut one.
+    linked: [f32; 3],
+    /// The far edges of each linked neighbour (from either end of the
+    /// shared edge to its third corner): start, unit direction, length.
+    far_from: [Vec2; 6],
+    far_dir: [Vec2; 6],
+    far_len: [f32; 6],
+}
+
+impl Placing {
+    fn new(face: &TilePlace, mesh: &Mesh, f: usize, k: f32) -> Self {
+        let offset = Vec2::from(face.offset);
+        let at = |p: [f32; 2]| offset + Vec2::from(p) * k;
+        let corners = face.corners.map(at);
+        let [a, b, c] = mesh.corners(f);
+        let mut place = Placing {
+            a,
+            e1: b - a,
+            e2: c - a,
+            corners,
+            cross_x: [0.0; 3],
+            cross_y: [0.0; 3],
+            cross_c: [0.0; 3],
+            ties: [false; 3],
+            inv_len: [0.0; 3],
+            inv_det: 1.0 / (corners[1] - corners[0]).perp_dot(corners[2] - corners[0]),
+            linked: [0.0; 3],
+            far_from: [Vec2::ZERO; 6],
+            far_dir: [Vec2::ZERO; 6],
+            far_len: [0.0; 6],
+        };
+        for i in 0..3 {
+            let (p, q) = (corners[i], corners[(i + 1) % 3]);
+            let forward = face.edges & (64 << i) != 0;
+            let (from, to) = if forward { (p, q) } else { (q, p) };
+            let (dir, sign) = (to - from, if forward { 1.0 } else { -1.0 });
+            place.cross_x[i] = sign * dir.x;
+            place.cross_y[i] = sign * dir.y;
+            place.cross_c[i] = sign * dir.perp_dot(from);
+            place.ties[i] = forward;
+            place.inv_len[i] = 1.0 / (q - p).length();
+            if face.edges & (1 << i) != 0 {
+                place.linked[i] = 1.0;
+                let w = at(face.across[i]);
+                for (s, end) in [(2 * i, p), (2 * i + 1, q)] {
+                    let d = w - end;
+                    place.far_from[s] = end;
+                    place.far_len[s] = d.length();
+                    place.far_dir[s] = d / place.far_len[s];
+                }
+            }
+        }
+        place
+    }
+
+    /// Twice the signed area tile point `(x, y)` makes with edge `e`
+    /// (positive inside).
+    #[inline]
+    fn area(&self, e: usize, x: f32, y: f32) -> f32 {
+        self.cross_x[e] * y - self.cross_y[e] * x - self.cross_c[e]
+    }
+
+    /// Adds tile point `p` to `batch` when it lies inside the face (the
+    /// slot is written either way: a branch would mispredict about every
+    /// other point). `batch` must have room.
+    #[inline]
+    fn test(&self, batch: &mut Batch, p: Vec2, level: u8) {
+        let mut inside = true;
+        for e in 0..3 {
+            let s = self.area(e, p.x, p.y);
+            inside &= (s > 0.0) | ((s == 0.0) & self.ties[e]);
+        }
+        // the caller keeps len below BATCH; the mask spares the bounds checks
+        let i = batch.len & (BATCH - 1);
+        (batch.x[i], batch.y[i], batch.level[i]) = (p.x, p.y, level);
+        batch.len += inside as usize;
+    }
+
+    /// Writes the points of `batch` to `out` from slot `n` as candidates of
+    /// face `f` and empties the batch; returns the new count.
+    fn emit(
+        &self,
+        batch: &mut Batch,
+        f: u32,
+        out: &mut [Candidate],
+        n: usize,
+    ) -> Result<usize, Error> {
+        let len = batch.len;
+        batch.len = 0;
+        let available = out.len();
+        let out = out.get_mut(n..n + len).ok_or(Error::CapacityExceeded {
+            needed: n + len,
+            available,
+        })?;
+        let mut distance = [0.0f32; BATCH];
+        let lanes = len.div_ceil(LANES) * LANES;
+        self.edge_distances(&batch.x[..lanes], &batch.y[..lanes], &mut distance);
+        for (i, c) in out.iter_mut().enumerate() {
+            let (x, y) = (batch.x[i], batch.y[i]);
+            let (u, v) = (
+                self.area(2, x, y) * self.inv_det,
+                self.area(0, x, y) * self.inv_det,
+            );
+            *c = Candidate {
+                position: (self.a + self.e1 * u + self.e2 * v).into(),
+                face: f,
+                uv: [u, v],
+                level: batch.level[i] as u32,
+                edge_distance: libm::sqrtf(distance[i]),
+            };
+        }
+        Ok(n + len)
+    }
+
+    /// The squares of [`Candidate::edge_distance`] of tile points
+    /// `(xs, ys)` (whole lanes): for each, the smallest disk around it that
+    /// crosses a cut edge, or the far side of a linked neighbour (up to
+    /// there, every point comes from one piece of the stamp).
+    fn edge_distances(&self, xs: &[f32], ys: &[f32], out: &mut [f32]) {
+        let lanes = xs.chunks_exact(LANES).zip(ys.chunks_exact(LANES));
+        for ((x, y), d) in lanes.zip(out.chunks_exact_mut(LANES)) {
+            let mut best = [f32::INFINITY; LANES];
+            for e in 0..3 {
+                let mut far = [f32::INFINITY; LANES];
+                for s in [2 * e, 2 * e + 1] {
+                    let (fx, fy) = (self.far_from[s].x, self.far_from[s].y);
+                    let (ux, uy, len) = (self.far_dir[s].x, self.far_dir[s].y, self.far_len[s]);
+                    for l in 0..LANES {
+                        let (dx, dy) = (x[l] - fx, y[l] - fy);
+                        let t = dx * ux + dy * uy;
+                        let c = if t < 0.0 { 0.0 } else { t };
+                        let c = if c > len { len } else { c };
+                        let d2 = dx * dx + dy * dy - c * (2.0 * t - c);
+                        far[l] = if d2 < far[l] { d2 } else { far[l] };
+                    }
+                }
+                let (cx, cy, cc) = (self.cross_x[e], self.cross_y[e], self.cross_c[e]);
+                let (inv_len, linked) = (self.inv_len[e], self.linked[e]);
+                for l in 0..LANES {
+                    let line = (cx * y[l] - cy * x[l] - cc) * inv_len;
+                    let crossed = linked * far[l];
+                    let term = if crossed > line * line {
+                        crossed
+                    } else {
+                        line * line
+                    };
+                    best[l] = if term < best[l] { term } else { best[l] };
+                }
+            }
+            d.copy_from_slice(&best);
+        }
+    }
 }
 
 /// Edge-pass status of a candidate not yet reached (the LOD pass keeps a
@@ -578,9 +811,13 @@ impl<'a> Scratch<'a> {
 
 impl<'m, 'a> Stamper<'m, 'a> {
     /// Adds the bytes [`Stamper::new`] takes from the arena.
-    pub fn layout(layout: &mut ArenaLayout, faces: usize) {
+    pub fn layout(layout: &mut ArenaLayout, mesh: &Mesh) {
         Tile::layout(layout);
-        layout.add::<Face>(faces);
+        layout
+            .add::<Face>(mesh.triangle_count())
+            .add::<TilePlace>(mesh.triangle_count())
+            .add::<Unfolded>(mesh.triangle_count());
+        chart::layout(layout, mesh);
     }
 
     /// Validates the inputs, builds the tile and the per-face data, and picks
@@ -604,10 +841,15 @@ impl<'m, 'a> Stamper<'m, 'a> {
     ) -> Result<Option<Self>, Error> {
         let tile = Tile::build(params.seed, arena)?;
         let faces = arena.alloc::<Face>(mesh.triangle_count())?;
+        let places = arena.alloc::<TilePlace>(mesh.triangle_count())?;
+        let laid = arena.alloc::<Unfolded>(mesh.triangle_count())?;
         let mut area = 0.0f64;
         for (f, face) in faces.iter_mut().enumerate() {
             let scale = face_scale(&mesh, params, f);
-            *face = Face::new(&mesh, params.seed, f, scale);
+            *face = Face {
+                normal: mesh.face_normal(f).into(),
+                scale,
+            };
             area += mesh.area(f) as f64 * (scale as f64) * (scale as f64);
         }
         let fixed = params.radius > 0.0;
@@ -619,12 +861,21 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 None => return Ok(None),
             }
         };
+        chart::unfold(&mesh, |f| faces[f].scale, CHART_REACH * radius, arena, laid)?;
+        for (f, place) in places.iter_mut().enumerate() {
+            *place = if faces[f].scale == 0.0 {
+                TilePlace::default()
+            } else {
+                TilePlace::new(&mesh, params.seed, f, &laid[f])
+            };
+        }
         let mut stamper = Stamper {
             mesh,
             seed: params.seed,
             target: params.target_count,
             tile,
             faces,
+            places,
             scaled_area: area,
             first_radius: radius,
             fixed,
@@ -647,10 +898,15 @@ impl<'m, 'a> Stamper<'m, 'a> {
     fn predicted_loss(&self, r: f32) -> f64 {
         let k = 0.5 / r;
         let mut loss = 0.0f32;
-        for face in self.faces.iter().filter(|f| f.scale != 0.0) {
-            let (eb, ec) = (Vec2::from(face.eb), Vec2::from(face.ec));
-            for l in [eb.length(), ec.length(), (ec - eb).length()] {
-                let x = l * k;
+        let stamped = self
+            .faces
+            .iter()
+            .zip(self.places)
+            .filter(|(f, _)| f.scale != 0.0);
+        for (_, place) in stamped {
+            // a linked edge loses nothing: both sides are one piece of the stamp
+            for i in (0..3).filter(|&i| place.edges & (1 << i) == 0) {
+                let x = place.edge(i).length() * k;
                 loss += x * x / (x + EDGE_LOSS_KNEE);
             }
         }
@@ -711,35 +967,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     }
 
     fn stamp_face(&self, f: usize, out: &mut [Candidate], mut n: usize) -> Result<usize, Error> {
-        let face = &self.faces[f];
-        let [a, b, c] = self.mesh.corners(f);
-        let (e1, e2) = (b - a, c - a);
-        let k = 1.0 / self.radius;
-        let eb = Vec2::from(face.eb) * k;
-        let ec = Vec2::from(face.ec) * k;
-        let pa = Vec2::from(face.offset);
-        let det = eb.perp_dot(ec);
-        let inv_det = 1.0 / det;
-        // altitudes onto the edges opposite each corner, in stamp units
-        let alt = [
-            det / (ec - eb).length(),
-            det / ec.length(),
-            det / eb.length(),
-        ];
-        let place = |p: Vec2, level: u8| {
-            let d = p - pa;
-            let u = d.perp_dot(ec) * inv_det;
-            let v = eb.perp_dot(d) * inv_det;
-            let candidate = Candidate {
-                position: (a + e1 * u + e2 * v).into(),
-                face: f as u32,
-                uv: [u, v],
-                level: level as u32,
-                edge_distance: ((1.0 - u - v) * alt[0]).min(u * alt[1]).min(v * alt[2]),
-            };
-            (candidate, (u >= 0.0) & (v >= 0.0) & (u + v <= 1.0))
-        };
-        let corners = [pa, pa + eb, pa + ec];
+        let place = Placing::new(&self.places[f], &self.mesh, f, 1.0 / self.radius);
+        let mut batch = Batch::default();
+        let corners = place.corners;
         let lo_y = corners[0].y.min(corners[1].y).min(corners[2].y);
         let hi_y = corners[0].y.max(corners[1].y).max(corners[2].y);
         let side = TILE_SIDE as i32;
@@ -757,28 +987,16 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let len = (side - wx).min(last - cx + 1);
                 let shift = Vec2::new((cx - wx) as f32, shift_y);
                 let (points, levels) = self.tile.run(wx as usize, wy as usize, len as usize);
-                let room = out.len() >= n + points.len();
                 for (&p, &level) in points.iter().zip(levels) {
-                    let (candidate, inside) = place(Vec2::from(p) + shift, level);
-                    if room {
-                        // written whether inside or not, and kept only when
-                        // inside: a branch on the test would mispredict about
-                        // every other point
-                        out[n] = candidate;
-                        n += inside as usize;
-                    } else if inside {
-                        let available = out.len();
-                        *out.get_mut(n).ok_or(Error::CapacityExceeded {
-                            needed: n + 1,
-                            available,
-                        })? = candidate;
-                        n += 1;
+                    if batch.len == BATCH {
+                        n = place.emit(&mut batch, f as u32, out, n)?;
                     }
+                    place.test(&mut batch, Vec2::from(p) + shift, level);
                 }
                 cx += len;
             }
         }
-        Ok(n)
+        place.emit(&mut batch, f as u32, out, n)
     }
 
     /// Marks [`CLASHED`] in `status` every point of `group` (points of one
@@ -872,10 +1090,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// than the disk radius to an earlier kept one, compacting them to the
     /// front of `cands`. Returns the number kept.
     ///
-    /// Points of one triangle are spaced by the tile, so only points within a
-    /// disk radius of their triangle's boundary take part: this is exact on any
-    /// surface whose dihedral angles are above 90 degrees and whose separate
-    /// same-facing sheets are a radius apart. A triangle's points are tested
+    /// Points of one triangle and of its linked neighbours are spaced by the
+    /// tile, so only points whose [`Candidate::edge_distance`] is below 1
+    /// take part: this is exact (up to the bend of linked edges) on any
+    /// surface whose dihedral angles at cut edges are above 90 degrees and
+    /// whose separate same-facing sheets are a radius apart. A triangle's points are tested
     /// together, against the kept points of earlier triangles gathered once
     /// from the grid (see `mark_clashes`).
     pub fn prune(&self, cands: &mut [Candidate], scratch: &mut Scratch) -> Result<usize, Error> {
@@ -1043,7 +1262,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// in which case it is tried again at the next level. Candidates are
     /// visited in index order at every level.
     ///
-    /// A candidate farther from its triangle's boundary than its tile
+    /// A candidate whose [`Candidate::edge_distance`] is at least its tile
     /// level's spacing can conflict with no other triangle at that level or
     /// any finer one, so it keeps its tile level; the others are copied to
     /// [`Near`] records, grouped by tile level, that the levels walk, one
@@ -1208,7 +1427,7 @@ pub fn stamp_with_progress(
     done(0.0)?;
     // validated once; the bound holds for every radius the stamper reaches
     let (bound, degenerate) = checked_bound(&mesh, params)?;
-    let need = bytes_for(mesh.triangle_count(), bound);
+    let need = bytes_for(&mesh, bound);
     if arena.remaining() < need {
         return Err(Error::CapacityExceeded {
             needed: need,
@@ -1432,6 +1651,39 @@ mod tests {
             assert_eq!(calls, stop);
             assert!(untouched.iter().all(|r| *r == Root::default()));
         }
+    }
+
+    #[test]
+    fn a_flat_chart_is_one_piece_of_the_tile() {
+        // a flat plane unfolds onto itself: every candidate, on either side
+        // of any edge, is a point of one Poisson set, and a tile point on a
+        // shared edge goes to exactly one of its two faces
+        let m = graded_plane(10, 1.0);
+        let mesh = m.mesh();
+        // few enough roots that the chart reaches across the whole plane
+        let p = params(2000);
+        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+        let mut arena = Arena::new(&mut buf);
+        let stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
+        assert!(stamper
+            .places
+            .iter()
+            .all(|t| t.offset == stamper.places[0].offset));
+        let faces = 0..mesh.triangle_count();
+        let mut cands = vec![Candidate::default(); stamper.candidate_bound(faces.clone())];
+        let n = stamper.stamp_faces(faces, &mut cands).unwrap();
+        let mut closest = f32::INFINITY;
+        for (i, a) in cands[..n].iter().enumerate() {
+            for b in &cands[i + 1..n] {
+                closest = closest.min(Vec3::from(a.position).distance(Vec3::from(b.position)));
+            }
+        }
+        assert!(
+            closest >= stamper.radius * 0.9999,
+            "{closest} vs {}",
+            stamper.radius
+        );
+        assert!(cands[..n].iter().all(|c| c.edge_distance >= 0.0));
     }
 
     #[test]
