@@ -443,6 +443,7 @@ fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
         .add::<u64>(candidates)
         .add::<u64>(candidates)
         .add::<Near>(candidates)
+        .add::<Near>(GROUP)
         .add::<f32>(4 * GATHER_SLOTS)
         .add::<u32>(GATHER_SLOTS);
 }
@@ -702,6 +703,13 @@ struct Gathered<'a> {
     len: usize,
 }
 
+/// Records of one face an LOD level tests at once (a face with more is
+/// tested in chunks).
+#[cfg(not(test))]
+const GROUP: usize = 256;
+#[cfg(test)]
+const GROUP: usize = 5;
+
 /// Lanes of the clash test; the gathered arrays are padded to a multiple.
 const LANES: usize = 8;
 /// Slots of each gathered array: [`GATHER`] rounded up to whole lanes.
@@ -781,6 +789,8 @@ pub struct Scratch<'a> {
     /// The points of the grid: those the edge pass keeps, in order; in the
     /// LOD pass, the candidates it re-checks, grouped by tile level.
     near: &'a mut [Near],
+    /// The records of one face that one LOD level tests.
+    group: &'a mut [Near],
     gathered: Gathered<'a>,
 }
 
@@ -794,6 +804,7 @@ impl<'a> Scratch<'a> {
             keys: arena.alloc::<u64>(candidates)?,
             spare: arena.alloc::<u64>(candidates)?,
             near: arena.alloc::<Near>(candidates)?,
+            group: arena.alloc::<Near>(GROUP)?,
             gathered: Gathered::new(arena)?,
         })
     }
@@ -1111,10 +1122,20 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 .iter()
                 .position(|c| c.face != f)
                 .map_or(n, |e| j + e);
-            let group = (j..end).zip(&cands[j..end]).filter_map(Near::near_edge);
+            // the face's records go after the inserted ones, where those it
+            // keeps stay
+            let (records, rest) = near.split_at_mut(inserted);
+            let mut m = 0;
+            for q in (j..end).zip(&cands[j..end]).filter_map(Near::near_edge) {
+                rest[m] = q;
+                m += 1;
+            }
+            let group = &rest[..m];
             let gathered = &mut scratch.gathered;
-            self.mark_clashes(&grid, near, group.clone(), 1.0, status, gathered);
-            for q in group {
+            self.mark_clashes(&grid, records, group.iter().copied(), 1.0, status, gathered);
+            let first = inserted;
+            for g in first..first + m {
+                let q = near[g];
                 let s = &mut status[q.index as usize];
                 if *s != CLASHED {
                     *s = KEPT;
@@ -1342,12 +1363,20 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     .iter()
                     .position(|&m| near[m as usize].face != f)
                     .map_or(n_tried, |e| g + e);
-                let group = tried[g..end]
-                    .iter()
-                    .map(|&m| near[m as usize])
-                    .filter(|q| q.edge_distance < s);
-                let gathered = &mut scratch.gathered;
-                self.mark_clashes(&grid, near, group, s, level, gathered);
+                // copied out in chunks, as the group is walked several times
+                let mut c = g;
+                while c < end {
+                    let mut m = 0;
+                    while c < end && m < GROUP {
+                        let q = near[tried[c] as usize];
+                        scratch.group[m] = q;
+                        m += (q.edge_distance < s) as usize;
+                        c += 1;
+                    }
+                    let group = scratch.group[..m].iter().copied();
+                    let gathered = &mut scratch.gathered;
+                    self.mark_clashes(&grid, near, group, s, level, gathered);
+                }
                 for &m in &tried[g..end] {
                     let q = &near[m as usize];
                     let l = &mut level[q.index as usize];
