@@ -76,12 +76,14 @@ pub fn layout(layout: &mut ArenaLayout, mesh: &Mesh) {
 }
 
 /// Lays every triangle with a nonzero `scale` into a chart, writing
-/// `out[f]` for each (the others are left as they are). `reach` bounds the
-/// distance of any corner from its chart's first corner, in the units of
-/// [`Unfolded::corners`]. The mesh must be validated.
+/// `out[f]` for each (the others are left as they are). `normal` gives each
+/// triangle's unit normal. `reach` bounds the distance of any corner from
+/// its chart's first corner, in the units of [`Unfolded::corners`]. The
+/// mesh must be validated.
 pub fn unfold(
     mesh: &Mesh,
     scale: impl Fn(usize) -> f32,
+    normal: impl Fn(usize) -> Vec3,
     reach: f32,
     arena: &mut Arena,
     out: &mut [Unfolded],
@@ -117,7 +119,7 @@ pub fn unfold(
             if out[g].chart != NONE || scale(g) != scale(f) {
                 continue;
             }
-            if mesh.face_normal(f).dot(mesh.face_normal(g)) < MIN_NORMAL_DOT {
+            if normal(f).dot(normal(g)) < MIN_NORMAL_DOT {
                 continue;
             }
             let w = unfold_across(mesh, &out[f], f, i, g, j, scale(f));
@@ -310,7 +312,16 @@ mod tests {
         layout(&mut layout_bytes, &mesh);
         let mut buf = vec![0u8; layout_bytes.bytes()];
         let mut out = vec![Unfolded::default(); mesh.triangle_count()];
-        unfold(&mesh, scale, reach, &mut Arena::new(&mut buf), &mut out).unwrap();
+        let normal = |f: usize| mesh.face_normal(f);
+        unfold(
+            &mesh,
+            scale,
+            normal,
+            reach,
+            &mut Arena::new(&mut buf),
+            &mut out,
+        )
+        .unwrap();
         out
     }
 

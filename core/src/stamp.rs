@@ -177,28 +177,54 @@ struct TilePlace {
     across: [[f32; 2]; 3],
     /// Where the chart's plane origin lands in the tile (tile units).
     offset: [f32; 2],
+    /// The chart's rotation (cosine, sine).
+    rot: [f32; 2],
     /// [`Unfolded::edges`], and in bit `6 + i` whether edge `i` runs from
     /// the lower vertex index to the higher.
     edges: u32,
 }
 
+/// A chart's random rotation and offset in the tile.
+#[derive(Clone, Copy)]
+struct ChartFrame {
+    rot: Vec2,
+    offset: Vec2,
+}
+
+impl ChartFrame {
+    /// The frame of the chart whose first face is `chart`.
+    fn new(seed: u64, chart: usize) -> Self {
+        let id = chart as u64;
+        let angle = rng::unit(seed, id, Purpose::StampRotation, 0) * core::f32::consts::TAU;
+        ChartFrame {
+            rot: Vec2::new(libm::cosf(angle), libm::sinf(angle)),
+            offset: Vec2::new(
+                rng::unit(seed, id, Purpose::StampOffsetX, 0),
+                rng::unit(seed, id, Purpose::StampOffsetY, 0),
+            ) * TILE_SIDE as f32,
+        }
+    }
+}
+
 impl TilePlace {
-    fn new(mesh: &Mesh, seed: u64, f: usize, laid: &Unfolded) -> Self {
-        let chart = laid.chart as u64;
-        let angle = rng::unit(seed, chart, Purpose::StampRotation, 0) * core::f32::consts::TAU;
-        let rot = Vec2::new(libm::cosf(angle), libm::sinf(angle));
-        let offset = Vec2::new(
-            rng::unit(seed, chart, Purpose::StampOffsetX, 0),
-            rng::unit(seed, chart, Purpose::StampOffsetY, 0),
-        ) * TILE_SIDE as f32;
-        let turn = |p: [f32; 2]| rot.rotate(Vec2::from(p)).into();
+    fn new(mesh: &Mesh, f: usize, laid: &Unfolded, frame: ChartFrame) -> Self {
+        let turn = |p: [f32; 2]| frame.rot.rotate(Vec2::from(p)).into();
         let v = mesh.triangles.get(f);
         let forward = (0..3).fold(0, |e, i| e | ((v[i] < v[(i + 1) % 3]) as u32) << (6 + i));
         TilePlace {
             corners: laid.corners.map(turn),
             across: laid.across.map(turn),
-            offset: offset.into(),
+            offset: frame.offset.into(),
+            rot: frame.rot.into(),
             edges: laid.edges | forward,
+        }
+    }
+
+    /// The frame of this face's chart.
+    fn frame(&self) -> ChartFrame {
+        ChartFrame {
+            rot: Vec2::from(self.rot),
+            offset: Vec2::from(self.offset),
         }
     }
 
@@ -376,9 +402,22 @@ fn candidates_bound(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
 }
 
 /// [`candidates_bound`] and the number of degenerate triangles.
+///
+/// The sum of the per-face bounds of [`face_bound`] is bounded by the same
+/// expression summed before rounding, plus 2 per face, so one walk over the
+/// faces gives both the scaled area (hence the smallest radius) and the bound.
 fn checked_bound(mesh: &Mesh, params: &StampParams) -> Result<(usize, u32), Error> {
     let degenerate = validate(mesh, params)?;
-    let area = scaled_area(mesh, params);
+    let (mut area, mut perimeter, mut stamped) = (0.0f64, 0.0f64, 0usize);
+    for f in 0..mesh.triangle_count() {
+        let s = face_scale(mesh, params, f) as f64;
+        if s != 0.0 {
+            let [a, b, c] = mesh.corners(f);
+            area += mesh.area(f) as f64 * s * s;
+            perimeter += ((b - a).length() + (c - b).length() + (a - c).length()) as f64 * s;
+            stamped += 1;
+        }
+    }
     let r_min = if params.radius > 0.0 {
         params.radius
     } else {
@@ -386,17 +425,18 @@ fn checked_bound(mesh: &Mesh, params: &StampParams) -> Result<(usize, u32), Erro
             return Ok((0, degenerate));
         };
         r * min_radius_factor(params.target_count, mesh.triangle_count())
-    };
-    let bound = (0..mesh.triangle_count())
-        .map(|f| face_bound(mesh, f, face_scale(mesh, params, f), r_min))
-        .fold(0usize, usize::saturating_add);
+    } as f64;
+    let dilated = area / (r_min * r_min)
+        + 0.5 * perimeter / r_min
+        + core::f64::consts::FRAC_PI_4 * stamped as f64;
     // ids, ranks and sort keys are 32-bit
-    if bound > 4 * MAX_TARGET as usize {
+    let bound = dilated * 1.154_700_6 + 2.0 * stamped as f64 + 1.0;
+    if bound.is_nan() || bound > 4.0 * MAX_TARGET as f64 {
         return Err(Error::InvalidArgument(
             "radius too small for this mesh (over 2^30 candidates)",
         ));
     }
-    Ok((bound, degenerate))
+    Ok((bound as usize, degenerate))
 }
 
 /// The tile's density is not known before it is built, only bounded;
@@ -872,12 +912,21 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 None => return Ok(None),
             }
         };
-        chart::unfold(&mesh, |f| faces[f].scale, CHART_REACH * radius, arena, laid)?;
-        for (f, place) in places.iter_mut().enumerate() {
-            *place = if faces[f].scale == 0.0 {
+        let (scale, normal) = (|f: usize| faces[f].scale, |f: usize| faces[f].normal.into());
+        chart::unfold(&mesh, scale, normal, CHART_REACH * radius, arena, laid)?;
+        // a chart's first face comes before its others: its frame is made
+        // once, kept in its slot, and read by the others
+        for f in 0..faces.len() {
+            places[f] = if faces[f].scale == 0.0 {
                 TilePlace::default()
             } else {
-                TilePlace::new(&mesh, params.seed, f, &laid[f])
+                let chart = laid[f].chart as usize;
+                let frame = if chart == f {
+                    ChartFrame::new(params.seed, chart)
+                } else {
+                    places[chart].frame()
+                };
+                TilePlace::new(&mesh, f, &laid[f], frame)
             };
         }
         let mut stamper = Stamper {
