@@ -371,13 +371,21 @@ fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize {
     if scale == 0.0 {
         return 0;
     }
-    let [a, b, c] = mesh.corners(face);
+    let (area, perimeter) = area_and_perimeter(mesh, face);
     let k = scale / r;
-    let area = mesh.area(face) * k * k;
-    let perimeter = ((b - a).length() + (c - b).length() + (a - c).length()) * k;
-    let dilated = area + 0.5 * perimeter + core::f32::consts::FRAC_PI_4;
+    let dilated = area * k * k + 0.5 * perimeter * k + core::f32::consts::FRAC_PI_4;
     // saturating: a radius tiny next to the face is reported by the caller
-    (dilated as f64 * 1.154_700_6).min(usize::MAX as f64 / 4.0) as usize + 2
+    (dilated as f64 * HEX_PACKING).min(usize::MAX as f64 / 4.0) as usize + 2
+}
+
+/// Points per unit area of the densest packing at unit spacing (2 / sqrt 3).
+const HEX_PACKING: f64 = 1.154_700_6;
+
+/// Area and perimeter of `face`.
+fn area_and_perimeter(mesh: &Mesh, face: usize) -> (f32, f32) {
+    let [a, b, c] = mesh.corners(face);
+    let perimeter = (b - a).length() + (c - b).length() + (a - c).length();
+    (mesh.area(face), perimeter)
 }
 
 /// Upper bound on the roots [`stamp`] writes: the target (surplus stamps
@@ -412,9 +420,9 @@ fn checked_bound(mesh: &Mesh, params: &StampParams) -> Result<(usize, u32), Erro
     for f in 0..mesh.triangle_count() {
         let s = face_scale(mesh, params, f) as f64;
         if s != 0.0 {
-            let [a, b, c] = mesh.corners(f);
-            area += mesh.area(f) as f64 * s * s;
-            perimeter += ((b - a).length() + (c - b).length() + (a - c).length()) as f64 * s;
+            let (a, p) = area_and_perimeter(mesh, f);
+            area += a as f64 * s * s;
+            perimeter += p as f64 * s;
             stamped += 1;
         }
     }
@@ -430,7 +438,7 @@ fn checked_bound(mesh: &Mesh, params: &StampParams) -> Result<(usize, u32), Erro
         + 0.5 * perimeter / r_min
         + core::f64::consts::FRAC_PI_4 * stamped as f64;
     // ids, ranks and sort keys are 32-bit
-    let bound = dilated * 1.154_700_6 + 2.0 * stamped as f64 + 1.0;
+    let bound = dilated * HEX_PACKING + 2.0 * stamped as f64 + 1.0;
     if bound.is_nan() || bound > 4.0 * MAX_TARGET as f64 {
         return Err(Error::InvalidArgument(
             "radius too small for this mesh (over 2^30 candidates)",
