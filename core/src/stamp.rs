@@ -25,9 +25,12 @@
 //!    corrects the radius until the count is within [`COUNT_TOLERANCE`] of
 //!    the target (dense stamps usually need no correction). (The paper's
 //!    `0.35 / (sqrt(N) * A_max_normalized)` is not dimensionally a length.)
-//! 3. **LOD.** Each tile point carries a nested level; the levels are
-//!    re-checked in 3D across triangles, coarse to fine, demoting points that
-//!    conflict, and the rank sorts by (level, hash of id).
+//! 3. **LOD.** Each tile point carries a nested level. Across triangles, a
+//!    point moves to the first level whose spacing it respects from every
+//!    point of another triangle that comes before it (a coarser tile level,
+//!    or the same level on an earlier triangle); the rule reads tile levels
+//!    only, so it needs one query per point and level and no re-checking.
+//!    The rank is a counting sort by (level, hash of the index).
 //!
 //! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
 //! spread it over threads; the result is bitwise identical for any split.
@@ -140,20 +143,42 @@ pub struct StampReport {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Candidate {
-    /// World position at rest.
-    pub position: [f32; 3],
     /// Triangle index.
     pub face: u32,
     /// Barycentric coordinates on the triangle.
     pub uv: [f32; 2],
     /// LOD level inherited from the tile (0 = coarsest).
-    pub level: u32,
-    /// In units of the local disk radius, the radius of the smallest disk
-    /// around the point that crosses a cut edge of its triangle, or the far
-    /// side of a linked neighbour: up to there every point comes from the
-    /// same piece of the tile, so only points closer than a spacing to that
-    /// boundary can conflict with points of other triangles.
-    pub edge_distance: f32,
+    pub level: u16,
+    /// How many LOD levels, coarsest first, have a spacing (in units of the
+    /// local disk radius) that reaches from the point past a cut edge of its
+    /// triangle or the far side of a linked neighbour. Within that distance
+    /// every point comes from the same piece of the tile, so only at those
+    /// levels can the point conflict with points of other triangles;
+    /// [`LOD_LEVELS`] means even the disk radius reaches (the point takes
+    /// part in the edge pass).
+    pub near_levels: u16,
+}
+
+impl Candidate {
+    /// Whether the disk radius reaches past the triangle's boundary, so that
+    /// the point takes part in the edge pass.
+    #[inline]
+    pub fn near_edge(&self) -> bool {
+        self.near_levels as usize == LOD_LEVELS
+    }
+}
+
+/// The spacing of each LOD level in units of the disk radius: `sqrt(2)`
+/// between levels, 1 at the finest.
+fn lod_spacings() -> [f32; LOD_LEVELS] {
+    core::array::from_fn(|k| libm::powf(2.0, 0.5 * (LOD_LEVELS - 1 - k) as f32))
+}
+
+/// Corner 0 of face `f` and its edges to corners 1 and 2: a point at
+/// barycentric `(u, v)` lies at `a + e1 * u + e2 * v`.
+fn face_frame(mesh: &Mesh, f: usize) -> [Vec3; 3] {
+    let [a, b, c] = mesh.corners(f);
+    [a, b - a, c - a]
 }
 
 /// Per-face data the edge and LOD passes read for every point they test.
@@ -252,6 +277,10 @@ pub struct Stamper<'m, 'a> {
     previous: Option<(f32, usize)>,
     passes: u32,
     degenerate: u32,
+    /// [`lod_spacings`].
+    spacings: [f32; LOD_LEVELS],
+    /// Their squares.
+    squares: [f32; LOD_LEVELS],
 }
 
 /// Smallest `black_scale`: the spacing in black regions is the radius over
@@ -314,37 +343,6 @@ fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
     }
     let step = libm::roundf(d.clamp(0.0, 1.0) * DENSITY_STEPS) / DENSITY_STEPS;
     params.black_scale + (1.0 - params.black_scale) * step
-}
-
-/// Bits of a rank sort key above the candidate index: the LOD level, then
-/// a hash that shuffles each level (ties keep candidate order).
-const RANK_KEY_BITS: u32 = 22;
-/// Bits of the hash in a rank sort key (the level takes 4).
-const RANK_HASH_BITS: u32 = RANK_KEY_BITS - 4;
-const _: () = assert!(LOD_LEVELS <= 16);
-
-/// Stable LSD radix sort of `keys` by bits 32 to 32 + [`RANK_KEY_BITS`], in
-/// two passes of 11-bit digits, using `spare` (same length) as the second
-/// buffer; the sorted keys end in `keys`.
-fn radix_sort_rank_keys(keys: &mut [u64], spare: &mut [u64]) {
-    const BITS: u32 = RANK_KEY_BITS / 2;
-    let pass = |src: &[u64], dst: &mut [u64], shift: u32| {
-        let digit = |k: u64| ((k >> shift) & ((1 << BITS) - 1)) as usize;
-        let mut count = [0usize; 1 << BITS];
-        for &k in src {
-            count[digit(k)] += 1;
-        }
-        let mut at = 0;
-        for c in count.iter_mut() {
-            (*c, at) = (at, at + *c);
-        }
-        for &k in src {
-            dst[count[digit(k)]] = k;
-            count[digit(k)] += 1;
-        }
-    };
-    pass(keys, spare, 32);
-    pass(spare, keys, 32 + BITS);
 }
 
 /// The x extent of triangle `t` within the strip y0 <= y <= y1, if any.
@@ -488,10 +486,8 @@ fn select_layout(layout: &mut ArenaLayout, candidates: usize) {
         .add::<u32>(HashGrid::buckets_for(candidates))
         .add::<u32>(candidates)
         .add::<u8>(candidates)
-        .add::<u64>(candidates)
-        .add::<u64>(candidates)
         .add::<Near>(candidates)
-        .add::<Near>(GROUP)
+        .add::<u32>(RANK_KEYS)
         .add::<f32>(4 * GATHER_SLOTS)
         .add::<u32>(GATHER_SLOTS);
 }
@@ -522,10 +518,6 @@ impl Default for Batch {
 
 /// One face at one radius, in tile units: what placing its tile points needs.
 struct Placing {
-    /// Corner 0 and the edges to corners 1 and 2 in the world.
-    a: Vec3,
-    e1: Vec3,
-    e2: Vec3,
     corners: [Vec2; 3],
     /// Twice the signed area a point `p` makes with edge `e` is
     /// `cross_x[e] * p.y - cross_y[e] * p.x - cross_c[e]`: the edge taken
@@ -550,15 +542,11 @@ struct Placing {
 }
 
 impl Placing {
-    fn new(face: &TilePlace, mesh: &Mesh, f: usize, k: f32) -> Self {
+    fn new(face: &TilePlace, k: f32) -> Self {
         let offset = Vec2::from(face.offset);
         let at = |p: [f32; 2]| offset + Vec2::from(p) * k;
         let corners = face.corners.map(at);
-        let [a, b, c] = mesh.corners(f);
         let mut place = Placing {
-            a,
-            e1: b - a,
-            e2: c - a,
             corners,
             cross_x: [0.0; 3],
             cross_y: [0.0; 3],
@@ -624,6 +612,7 @@ impl Placing {
         &self,
         batch: &mut Batch,
         f: u32,
+        squares: &[f32; LOD_LEVELS],
         out: &mut [Candidate],
         n: usize,
     ) -> Result<usize, Error> {
@@ -634,9 +623,9 @@ impl Placing {
             needed: n + len,
             available,
         })?;
-        let mut distance = [0.0f32; BATCH];
+        let mut near = [0u16; BATCH];
         let lanes = len.div_ceil(LANES) * LANES;
-        self.edge_distances(&batch.x[..lanes], &batch.y[..lanes], &mut distance);
+        self.near_levels(&batch.x[..lanes], &batch.y[..lanes], squares, &mut near);
         for (i, c) in out.iter_mut().enumerate() {
             let (x, y) = (batch.x[i], batch.y[i]);
             let (u, v) = (
@@ -644,21 +633,20 @@ impl Placing {
                 self.area(0, x, y) * self.inv_det,
             );
             *c = Candidate {
-                position: (self.a + self.e1 * u + self.e2 * v).into(),
                 face: f,
                 uv: [u, v],
-                level: batch.level[i] as u32,
-                edge_distance: libm::sqrtf(distance[i]),
+                level: batch.level[i] as u16,
+                near_levels: near[i],
             };
         }
         Ok(n + len)
     }
 
-    /// The squares of [`Candidate::edge_distance`] of tile points
-    /// `(xs, ys)` (whole lanes): for each, the smallest disk around it that
-    /// crosses a cut edge, or the far side of a linked neighbour (up to
-    /// there, every point comes from one piece of the stamp).
-    fn edge_distances(&self, xs: &[f32], ys: &[f32], out: &mut [f32]) {
+    /// [`Candidate::near_levels`] of tile points `(xs, ys)` (whole lanes),
+    /// from the smallest disk around each that crosses a cut edge, or the
+    /// far side of a linked neighbour (up to there, every point comes from
+    /// one piece of the stamp), and the squared spacings of the levels.
+    fn near_levels(&self, xs: &[f32], ys: &[f32], squares: &[f32; LOD_LEVELS], out: &mut [u16]) {
         let lanes = xs.chunks_exact(LANES).zip(ys.chunks_exact(LANES));
         for ((x, y), d) in lanes.zip(out.chunks_exact_mut(LANES)) {
             let mut best = [f32::INFINITY; LANES];
@@ -689,18 +677,19 @@ impl Placing {
                     best[l] = if term < best[l] { term } else { best[l] };
                 }
             }
-            d.copy_from_slice(&best);
+            let mut near = [0u16; LANES];
+            for &s2 in squares {
+                for l in 0..LANES {
+                    near[l] += (best[l] < s2) as u16;
+                }
+            }
+            d.copy_from_slice(&near);
         }
     }
 }
 
-/// Edge-pass status of a candidate not yet reached (the LOD pass keeps a
-/// level in the same array).
-const UNDECIDED: u8 = u8::MAX;
-/// A candidate the edge pass keeps.
-const KEPT: u8 = 0;
-/// A candidate found too close to a point of another face.
-const CLASHED: u8 = u8::MAX - 1;
+/// Edge-pass mark of a candidate found too close to a point of another face.
+const CLASHED: u8 = u8::MAX;
 /// Points of other faces one group of tests holds at once; a face with more
 /// neighbours is tested in chunks (unit tests use a tiny buffer so that every
 /// stamp they run takes that path).
@@ -710,38 +699,34 @@ const GATHER: usize = 1024;
 const GATHER: usize = 7;
 
 /// A candidate near its triangle's boundary, copied out of the candidate
-/// list so the grid walks of the edge and LOD passes read small records in
-/// the order they were inserted instead of the whole list.
+/// list so the edge and LOD passes walk small records, one face at a time.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 struct Near {
     position: [f32; 3],
     face: u32,
-    edge_distance: f32,
+    /// [`Candidate::near_levels`].
+    near_levels: u32,
     /// Index in the candidate list.
     index: u32,
 }
 
 impl Near {
-    fn new(c: &Candidate, index: usize) -> Self {
+    /// The record of candidate `c`, at `index`, on a face of frame `frame`
+    /// (see [`face_frame`]).
+    fn new(c: &Candidate, index: usize, [a, e1, e2]: &[Vec3; 3]) -> Self {
         Near {
-            position: c.position,
+            position: (*a + *e1 * c.uv[0] + *e2 * c.uv[1]).into(),
             face: c.face,
-            edge_distance: c.edge_distance,
+            near_levels: c.near_levels as u32,
             index: index as u32,
         }
-    }
-
-    /// The record of candidate `index` if it lies within the disk radius of
-    /// its triangle's boundary (only those can clash in the edge pass).
-    fn near_edge((index, c): (usize, &Candidate)) -> Option<Self> {
-        (c.edge_distance < 1.0).then(|| Near::new(c, index))
     }
 }
 
 /// The points of other faces one face's points are tested against, with
-/// each one's squared clash distance, as flat arrays so the tests run as a
-/// vector loop over contiguous memory.
+/// each one's squared clash distance (edge pass) or weight (LOD pass), as
+/// flat arrays so the tests run as a vector loop over contiguous memory.
 struct Gathered<'a> {
     x: &'a mut [f32],
     y: &'a mut [f32],
@@ -750,13 +735,6 @@ struct Gathered<'a> {
     face: &'a mut [u32],
     len: usize,
 }
-
-/// Records of one face an LOD level tests at once (a face with more is
-/// tested in chunks).
-#[cfg(not(test))]
-const GROUP: usize = 256;
-#[cfg(test)]
-const GROUP: usize = 5;
 
 /// Lanes of the clash test; the gathered arrays are padded to a multiple.
 const LANES: usize = 8;
@@ -787,58 +765,89 @@ impl<'a> Gathered<'a> {
         (self.x[i], self.y[i], self.z[i], self.face[i]) = (p[0], p[1], p[2], face);
     }
 
-    /// Fills the slots past `len` up to whole lanes with points at the
-    /// origin and a clash distance that never clashes (no squared distance
-    /// is below -1), so the test runs on whole lanes only.
+    /// Moves gathered point `i` out of reach of every point.
+    #[inline]
+    fn remove(&mut self, i: usize) {
+        self.x[i] = f32::INFINITY;
+    }
+
+    /// Fills the slots past `len` up to whole lanes with points out of
+    /// reach (at infinity, with a clash distance and a weight of 1), so the
+    /// tests run on whole lanes only.
     #[inline]
     fn pad(&mut self) {
         let (len, end) = (self.len, self.len.div_ceil(LANES) * LANES);
         for a in [&mut *self.x, &mut *self.y, &mut *self.z] {
-            a[len..end].fill(0.0);
+            a[len..end].fill(f32::INFINITY);
         }
-        self.r2[len..end].fill(-1.0);
+        self.r2[len..end].fill(1.0);
     }
 
-    /// Whether `p` is closer to a gathered point than its clash distance
-    /// (after [`pad`](Self::pad)).
+    /// The gathered coordinates and values, in whole lanes (after
+    /// [`pad`](Self::pad)).
     #[inline]
-    fn clashes(&self, p: [f32; 3]) -> bool {
+    fn lanes(&self) -> impl Iterator<Item = (&[f32], &[f32], &[f32], &[f32])> {
         let n = self.len.div_ceil(LANES) * LANES;
         let (xs, ys, zs, rs) = (&self.x[..n], &self.y[..n], &self.z[..n], &self.r2[..n]);
-        // no early exit inside a chunk, so each chunk runs as vector code
         xs.chunks_exact(LANES)
             .zip(ys.chunks_exact(LANES))
             .zip(zs.chunks_exact(LANES).zip(rs.chunks_exact(LANES)))
-            .any(|((x, y), (z, r))| {
-                let mut hit = 0u32;
-                for l in 0..LANES {
-                    let (dx, dy, dz) = (x[l] - p[0], y[l] - p[1], z[l] - p[2]);
-                    hit |= ((dx * dx + dy * dy + dz * dz) < r[l]) as u32;
-                }
-                hit != 0
-            })
+            .map(|((x, y), (z, r))| (x, y, z, r))
+    }
+
+    /// Whether `p` is closer to a gathered point than its clash distance.
+    #[inline]
+    fn clashes(&self, p: [f32; 3]) -> bool {
+        // no early exit inside a chunk, so each chunk runs as vector code
+        self.lanes().any(|(x, y, z, r)| {
+            let mut hit = 0u32;
+            for l in 0..LANES {
+                let (dx, dy, dz) = (x[l] - p[0], y[l] - p[1], z[l] - p[2]);
+                hit |= ((dx * dx + dy * dy + dz * dz) < r[l]) as u32;
+            }
+            hit != 0
+        })
+    }
+
+    /// The smallest squared distance from `p` to a gathered point, times
+    /// that point's weight (infinite when none is in reach).
+    #[inline]
+    fn nearest(&self, p: [f32; 3]) -> f32 {
+        let mut best = [f32::INFINITY; LANES];
+        for (x, y, z, w) in self.lanes() {
+            for l in 0..LANES {
+                let (dx, dy, dz) = (x[l] - p[0], y[l] - p[1], z[l] - p[2]);
+                let d = (dx * dx + dy * dy + dz * dz) * w[l];
+                // a select, not f32::min: it maps to one vector instruction,
+                // and the NaN of a removed point at distance 0 never wins
+                best[l] = if d < best[l] { d } else { best[l] };
+            }
+        }
+        best.into_iter().fold(f32::INFINITY, f32::min)
     }
 }
+
+/// Bits of the hash that orders the candidates within one LOD level (ties
+/// keep candidate order).
+const RANK_HASH_BITS: u32 = 12;
+/// Counters of the rank sort: one per (level, hash) key.
+const RANK_KEYS: usize = LOD_LEVELS << RANK_HASH_BITS;
 
 /// Working memory of the edge pass and the LOD pass, sized for a candidate
 /// bound once and reused by every pass.
 pub struct Scratch<'a> {
     /// Bucket heads of the grid.
     heads: &'a mut [u32],
-    /// Grid links; in the end the rank of each candidate.
+    /// Grid links; in the LOD pass first the candidates that take part, in
+    /// the end the rank keys, then the ranks.
     next: &'a mut [u32],
-    /// Edge-pass status or LOD level of each candidate.
+    /// Edge-pass mark or LOD level of each candidate.
     level: &'a mut [u8],
-    /// Sort keys; during the LOD levels, the u32 lists of records assigned
-    /// and records tried.
-    keys: &'a mut [u64],
-    /// Radix sort buffer; during the LOD levels, two u32 pending lists.
-    spare: &'a mut [u64],
     /// The points of the grid: those the edge pass keeps, in order; in the
-    /// LOD pass, the candidates it re-checks, grouped by tile level.
+    /// LOD pass, the candidates near a boundary, grouped by tile level.
     near: &'a mut [Near],
-    /// The records of one face that one LOD level tests.
-    group: &'a mut [Near],
+    /// Counters of the rank sort.
+    counts: &'a mut [u32],
     gathered: Gathered<'a>,
 }
 
@@ -849,10 +858,8 @@ impl<'a> Scratch<'a> {
             heads: arena.alloc::<u32>(HashGrid::buckets_for(candidates))?,
             next: arena.alloc::<u32>(candidates)?,
             level: arena.alloc::<u8>(candidates)?,
-            keys: arena.alloc::<u64>(candidates)?,
-            spare: arena.alloc::<u64>(candidates)?,
             near: arena.alloc::<Near>(candidates)?,
-            group: arena.alloc::<Near>(GROUP)?,
+            counts: arena.alloc::<u32>(RANK_KEYS)?,
             gathered: Gathered::new(arena)?,
         })
     }
@@ -951,6 +958,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
             previous: None,
             passes: 0,
             degenerate,
+            spacings: lod_spacings(),
+            squares: lod_spacings().map(|s| s * s),
         };
         if !fixed {
             stamper.radius = stamper.predicted_radius();
@@ -1035,7 +1044,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
     }
 
     fn stamp_face(&self, f: usize, out: &mut [Candidate], mut n: usize) -> Result<usize, Error> {
-        let place = Placing::new(&self.places[f], &self.mesh, f, 1.0 / self.radius);
+        let place = Placing::new(&self.places[f], 1.0 / self.radius);
         let mut batch = Batch::default();
         let corners = place.corners;
         let lo_y = corners[0].y.min(corners[1].y).min(corners[2].y);
@@ -1057,71 +1066,44 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let (points, levels) = self.tile.run(wx as usize, wy as usize, len as usize);
                 for (&p, &level) in points.iter().zip(levels) {
                     if batch.len == BATCH {
-                        n = place.emit(&mut batch, f as u32, out, n)?;
+                        n = place.emit(&mut batch, f as u32, &self.squares, out, n)?;
                     }
                     place.test(&mut batch, Vec2::from(p) + shift, level);
                 }
                 cx += len;
             }
         }
-        place.emit(&mut batch, f as u32, out, n)
+        place.emit(&mut batch, f as u32, &self.squares, out, n)
     }
 
-    /// Marks [`CLASHED`] in `status` every point of `group` (points of one
-    /// face) closer than `spacing` times the smaller of the two local disk
-    /// radii to a point of another face in `grid` (indices into `records`).
-    /// Faces whose normals oppose (the two sides of an ear) never clash.
+    /// Gathers into `buf` the points of `grid` (indices into `records`) that
+    /// lie in the box around `group` (points of one face) widened by
+    /// `reach` and belong to another face, and calls `test` each time `buf`
+    /// is full and once at the end if it holds any.
     ///
-    /// The grid is walked once for the whole group, over the box around it,
-    /// where a walk per point would visit the same buckets again and again;
-    /// the points found are tested in a vector loop.
-    fn mark_clashes<I>(
-        &self,
+    /// The grid is walked once for the whole group, where a walk per point
+    /// would visit the same buckets again and again; `test` then runs the
+    /// group against the gathered points in a vector loop.
+    fn gather(
         grid: &HashGrid,
         records: &[Near],
-        group: I,
-        spacing: f32,
-        status: &mut [u8],
+        group: &[Near],
+        reach: f32,
         buf: &mut Gathered,
-    ) where
-        I: Iterator<Item = Near> + Clone,
-    {
-        let mut members = group.clone();
-        let Some(first) = members.next() else {
-            return;
-        };
+        mut test: impl FnMut(&mut Gathered),
+    ) {
         let at = |q: &Near| Vec3::from(q.position);
-        let (lo, hi) = members.fold((at(&first), at(&first)), |(lo, hi), q| {
-            (lo.min(at(&q)), hi.max(at(&q)))
-        });
-        let f = first.face;
-        let face = &self.faces[f as usize];
-        // a hair wider than the largest clash distance, so rounding in that
-        // distance never lets a clash slip outside the box
-        let reach = Vec3::splat(self.local_radius(f) * spacing * 1.0001);
-        let (lo, hi) = (lo - reach, hi + reach);
-        let normal = Vec3::from(face.normal);
-        // the clash distance of each gathered point, or -1 (no clash) for
-        // a face whose normal opposes
-        let clash_distances = |buf: &mut Gathered| {
-            // gathered points come in runs of one face: its distance is reused
-            let (mut last, mut last_r2) = (u32::MAX, 0.0);
-            for (r2, &o) in buf.r2[..buf.len].iter_mut().zip(&buf.face[..buf.len]) {
-                if o != last {
-                    let other = &self.faces[o as usize];
-                    let r = self.radius * spacing / other.scale.max(face.scale);
-                    let facing = Vec3::from(other.normal).dot(normal) > 0.0;
-                    (last, last_r2) = (o, if facing { r * r } else { -1.0 });
-                }
-                *r2 = last_r2;
-            }
-            buf.pad();
-        };
+        let (lo, hi) = group
+            .iter()
+            .fold((at(&group[0]), at(&group[0])), |(lo, hi), q| {
+                (lo.min(at(q)), hi.max(at(q)))
+            });
+        let (lo, hi) = (lo - Vec3::splat(reach), hi + Vec3::splat(reach));
+        let f = group[0].face;
         buf.len = 0;
         for i in grid.in_box(lo, hi) {
             if buf.len == GATHER {
-                clash_distances(buf);
-                Self::test_group(group.clone(), status, buf);
+                test(buf);
                 buf.len = 0;
             }
             let o = &records[i as usize];
@@ -1132,20 +1114,33 @@ impl<'m, 'a> Stamper<'m, 'a> {
             buf.set(o.position, o.face);
             buf.len += keep as usize;
         }
-        clash_distances(buf);
-        Self::test_group(group, status, buf);
+        if buf.len > 0 {
+            test(buf);
+        }
     }
 
-    fn test_group(group: impl Iterator<Item = Near>, status: &mut [u8], buf: &Gathered) {
-        if buf.len == 0 {
-            return;
-        }
-        for q in group {
-            let s = &mut status[q.index as usize];
-            if *s != CLASHED && buf.clashes(q.position) {
-                *s = CLASHED;
+    /// Sets the value of each gathered point to `value` of the larger
+    /// density scale of its face and face `f`, removes the points of faces
+    /// whose normal opposes `f`'s (the two sides of an ear never clash),
+    /// and pads the lanes.
+    fn weigh(&self, buf: &mut Gathered, f: u32, value: impl Fn(f32) -> f32) {
+        let face = &self.faces[f as usize];
+        let normal = Vec3::from(face.normal);
+        // gathered points come in runs of one face: its value is reused
+        let (mut last, mut last_value, mut facing) = (u32::MAX, 0.0, true);
+        for i in 0..buf.len {
+            let o = buf.face[i];
+            if o != last {
+                let other = &self.faces[o as usize];
+                facing = Vec3::from(other.normal).dot(normal) > 0.0;
+                (last, last_value) = (o, value(other.scale.max(face.scale)));
+            }
+            buf.r2[i] = last_value;
+            if !facing {
+                buf.remove(i);
             }
         }
+        buf.pad();
     }
 
     /// The local disk radius at face `f` (larger where the density is lower).
@@ -1159,17 +1154,16 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// front of `cands`. Returns the number kept.
     ///
     /// Points of one triangle and of its linked neighbours are spaced by the
-    /// tile, so only points whose [`Candidate::edge_distance`] is below 1
-    /// take part: this is exact (up to the bend of linked edges) on any
+    /// tile, so only points [`Candidate::near_edge`] take part: this is exact (up to the bend of linked edges) on any
     /// surface whose dihedral angles at cut edges are above 90 degrees and
-    /// whose separate same-facing sheets are a radius apart. A triangle's points are tested
-    /// together, against the kept points of earlier triangles gathered once
-    /// from the grid (see `mark_clashes`).
+    /// whose separate same-facing sheets are a radius apart. A triangle's
+    /// points are tested together, against the kept points of earlier
+    /// triangles gathered once from the grid (see `gather`).
     pub fn prune(&self, cands: &mut [Candidate], scratch: &mut Scratch) -> Result<usize, Error> {
         let n = cands.len();
         scratch.check(n)?;
         let status = &mut scratch.level[..n];
-        status.fill(UNDECIDED);
+        status.fill(0);
         let mut grid = HashGrid::new(scratch.heads, scratch.next, GRID_CELL * self.radius);
         let near = &mut *scratch.near;
         let (mut j, mut inserted) = (0, 0);
@@ -1183,30 +1177,46 @@ impl<'m, 'a> Stamper<'m, 'a> {
             // keeps stay
             let (records, rest) = near.split_at_mut(inserted);
             let mut m = 0;
-            for q in (j..end).zip(&cands[j..end]).filter_map(Near::near_edge) {
-                rest[m] = q;
-                m += 1;
+            let frame = face_frame(&self.mesh, f as usize);
+            for (i, c) in (j..end).zip(&cands[j..end]) {
+                if c.near_edge() {
+                    rest[m] = Near::new(c, i, &frame);
+                    m += 1;
+                }
+            }
+            j = end;
+            if m == 0 {
+                continue;
             }
             let group = &rest[..m];
-            let gathered = &mut scratch.gathered;
-            self.mark_clashes(&grid, records, group.iter().copied(), 1.0, status, gathered);
+            let reach = self.local_radius(f) * 1.0001;
+            let buf = &mut scratch.gathered;
+            Self::gather(&grid, records, group, reach, buf, |buf| {
+                self.weigh(buf, f, |scale| {
+                    let r = self.radius / scale;
+                    r * r
+                });
+                for q in group {
+                    let s = &mut status[q.index as usize];
+                    if *s != CLASHED && buf.clashes(q.position) {
+                        *s = CLASHED;
+                    }
+                }
+            });
             let first = inserted;
             for g in first..first + m {
                 let q = near[g];
-                let s = &mut status[q.index as usize];
-                if *s != CLASHED {
-                    *s = KEPT;
+                if status[q.index as usize] != CLASHED {
                     near[inserted] = q;
                     grid.insert(inserted as u32, Vec3::from(q.position));
                     inserted += 1;
                 }
             }
-            j = end;
         }
         let mut kept = 0;
         for j in 0..n {
             let c = cands[j];
-            if c.edge_distance >= 1.0 || status[j] == KEPT {
+            if !c.near_edge() || status[j] != CLASHED {
                 cands[kept] = c;
                 kept += 1;
             }
@@ -1305,21 +1315,28 @@ impl<'m, 'a> Stamper<'m, 'a> {
         }
         scratch.check(n)?;
         self.assign_levels(cands, scratch, done)?;
-        let finest = (LOD_LEVELS - 1) as u8;
-        let keys = &mut scratch.keys[..n];
-        for (j, key) in keys.iter_mut().enumerate() {
-            let l = scratch.level[j].min(finest) as u64;
+        // a stable counting sort by (level, hash): the slot a candidate
+        // takes in it is its rank
+        let keys = &mut scratch.next[..n];
+        let counts = &mut *scratch.counts;
+        counts.fill(0);
+        for (j, (key, &l)) in keys.iter_mut().zip(&scratch.level[..n]).enumerate() {
             let h = rng::hash(self.seed, j as u64, Purpose::LodOrder, 0) >> (64 - RANK_HASH_BITS);
-            *key = (l << (32 + RANK_HASH_BITS)) | (h << 32) | j as u64;
+            *key = ((l as u32) << RANK_HASH_BITS) | h as u32;
+            counts[*key as usize] += 1;
         }
-        radix_sort_rank_keys(keys, &mut scratch.spare[..n]);
-        let rank_of = &mut scratch.next[..n];
-        for (rank, key) in keys.iter().enumerate() {
-            rank_of[(*key & 0xFFFF_FFFF) as usize] = rank as u32;
+        let mut first = 0;
+        for c in counts.iter_mut() {
+            (*c, first) = (first, first + *c);
+        }
+        for key in keys.iter_mut() {
+            let next = &mut counts[*key as usize];
+            (*key, *next) = (*next, *next + 1);
         }
         done(1.0)?;
+        let ranks = &*keys;
         let mut id = 0;
-        for (c, &rank) in cands.iter().zip(rank_of.iter()) {
+        for (c, &rank) in cands.iter().zip(ranks) {
             if (rank as usize) < m {
                 out[id] = Root {
                     face: c.face,
@@ -1334,17 +1351,25 @@ impl<'m, 'a> Stamper<'m, 'a> {
         Ok(())
     }
 
-    /// Nested LOD levels across triangles: coarse to fine, each candidate
-    /// whose tile level allows it takes level k unless it is closer than the
-    /// level's spacing to a point of another triangle already at level <= k,
-    /// in which case it is tried again at the next level. Candidates are
-    /// visited in index order at every level.
+    /// Nested LOD levels across triangles. A point `q` of tile level `t(q)`
+    /// takes the finest of `t(q)` and, for every point `p` of another
+    /// triangle that comes before it (a coarser tile level, or the same one
+    /// on an earlier triangle) and lies closer than the spacing of `t(q)`,
+    /// the first level whose spacing their distance respects.
     ///
-    /// A candidate whose [`Candidate::edge_distance`] is at least its tile
-    /// level's spacing can conflict with no other triangle at that level or
-    /// any finer one, so it keeps its tile level; the others are copied to
-    /// [`Near`] records, grouped by tile level, that the levels walk, one
-    /// triangle's records at a time.
+    /// Every pair then respects the spacing of every level both are in:
+    /// only the later point of a pair needs to move, and only when it is
+    /// closer than its own level's spacing, since the earlier point's tile
+    /// level is coarser still. The rule reads tile levels only, so each
+    /// level is one query per point, in any order, with no re-checking as
+    /// levels change.
+    ///
+    /// A candidate whose [`Candidate::near_levels`] stop before its tile
+    /// level conflicts with no other triangle at that level or any
+    /// finer one, so it keeps its tile level; the others are copied to
+    /// [`Near`] records grouped by tile level. Level `k` sorts the records
+    /// of levels up to `k` within its spacing of a boundary into a grid and
+    /// tests its own records against it, one triangle at a time.
     fn assign_levels(
         &self,
         cands: &[Candidate],
@@ -1352,108 +1377,71 @@ impl<'m, 'a> Stamper<'m, 'a> {
         done: &mut dyn FnMut(f32) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let n = cands.len();
-        let finest = (LOD_LEVELS - 1) as u8;
-        let spacings: [f32; LOD_LEVELS] =
-            core::array::from_fn(|k| libm::powf(2.0, 0.5 * (finest as usize - k) as f32));
-        let spacing = |k: u8| spacings[k as usize];
+        let finest = LOD_LEVELS - 1;
+        let squares = self.squares;
         let level = &mut scratch.level[..n];
-        let takes_part =
-            |c: &Candidate| (c.level as u8) < finest && c.edge_distance < spacing(c.level as u8);
+        let takes_part = |c: &Candidate| c.level < c.near_levels && (c.level as usize) < finest;
+        let taking = &mut *scratch.next;
         let mut start = [0usize; LOD_LEVELS + 1];
-        for (c, l) in cands.iter().zip(level.iter_mut()) {
+        let mut m = 0;
+        for (j, (c, l)) in cands.iter().zip(level.iter_mut()).enumerate() {
             *l = c.level as u8;
             if takes_part(c) {
                 start[c.level as usize + 1] += 1;
-                *l = finest;
+                taking[m] = j as u32;
+                m += 1;
             }
         }
         for l in 0..LOD_LEVELS {
             start[l + 1] += start[l];
         }
-        let near = &mut scratch.near[..start[LOD_LEVELS]];
         let mut fill = start;
-        for (j, c) in cands.iter().enumerate() {
-            if takes_part(c) {
-                near[fill[c.level as usize]] = Near::new(c, j);
-                fill[c.level as usize] += 1;
+        let mut frame = (u32::MAX, [Vec3::ZERO; 3]);
+        for &j in &taking[..m] {
+            let c = &cands[j as usize];
+            if c.face != frame.0 {
+                frame = (c.face, face_frame(&self.mesh, c.face as usize));
             }
+            scratch.near[fill[c.level as usize]] = Near::new(c, j as usize, &frame.1);
+            fill[c.level as usize] += 1;
         }
-        let near = &*near;
-        let (assigned, tried) =
-            bytemuck::cast_slice_mut::<u64, u32>(&mut scratch.keys[..n]).split_at_mut(n);
-        let (mut pending, mut next_pending) =
-            bytemuck::cast_slice_mut::<u64, u32>(&mut scratch.spare[..n]).split_at_mut(n);
-        let (mut n_pending, mut n_assigned) = (0usize, 0usize);
+        let near = &scratch.near[..m];
         let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
         for k in 0..finest {
-            let s = spacing(k);
-            let fresh = start[k as usize] as u32..start[k as usize + 1] as u32;
-            let most = n_assigned + n_pending + fresh.len();
-            grid.reset(GRID_CELL * self.radius * s, most);
-            // a record farther inside its triangle than the spacing cannot clash
-            for &i in &assigned[..n_assigned] {
-                let q = &near[i as usize];
-                if q.edge_distance < s {
-                    grid.insert(i, Vec3::from(q.position));
+            let s = self.spacings[k];
+            let (coarser, end) = (start[k], start[k + 1]);
+            grid.reset(GRID_CELL * self.radius * s, end);
+            // coarser levels block every other triangle; this level's
+            // records block the triangles after their own, so go in after it
+            for (i, q) in near[..coarser].iter().enumerate() {
+                if (k as u32) < q.near_levels {
+                    grid.insert(i as u32, Vec3::from(q.position));
                 }
             }
-            // the pending records and the fresh ones, merged in index order
-            let (mut a, mut b, mut n_tried) = (0, fresh.start, 0);
-            while a < n_pending || b < fresh.end {
-                let take_pending = b == fresh.end
-                    || (a < n_pending && near[pending[a] as usize].index < near[b as usize].index);
-                tried[n_tried] = if take_pending {
-                    a += 1;
-                    pending[a - 1]
-                } else {
-                    b += 1;
-                    b - 1
-                };
-                n_tried += 1;
-            }
-            let tried = &tried[..n_tried];
-            let mut carried = 0;
-            let mut g = 0;
-            while g < n_tried {
-                let f = near[tried[g] as usize].face;
-                let end = tried[g..]
-                    .iter()
-                    .position(|&m| near[m as usize].face != f)
-                    .map_or(n_tried, |e| g + e);
-                // copied out in chunks, as the group is walked several times
-                let mut c = g;
-                while c < end {
-                    let mut m = 0;
-                    while c < end && m < GROUP {
-                        let q = near[tried[c] as usize];
-                        scratch.group[m] = q;
-                        m += (q.edge_distance < s) as usize;
-                        c += 1;
-                    }
-                    let group = scratch.group[..m].iter().copied();
-                    let gathered = &mut scratch.gathered;
-                    self.mark_clashes(&grid, near, group, s, level, gathered);
-                }
-                for &m in &tried[g..end] {
-                    let q = &near[m as usize];
-                    let l = &mut level[q.index as usize];
-                    if *l == CLASHED {
-                        *l = finest;
-                        next_pending[carried] = m;
-                        carried += 1;
-                    } else {
-                        *l = k;
-                        if q.edge_distance < s {
-                            grid.insert(m, Vec3::from(q.position));
+            let mut first = coarser;
+            for group in near[coarser..end].chunk_by(|a, b| a.face == b.face) {
+                let f = group[0].face;
+                let reach = self.local_radius(f) * s * 1.0001;
+                let buf = &mut scratch.gathered;
+                Self::gather(&grid, near, group, reach, buf, |buf| {
+                    // squared distances in units of the pair's local radius
+                    self.weigh(buf, f, |scale| {
+                        let w = scale / self.radius;
+                        w * w
+                    });
+                    for q in group {
+                        let d = buf.nearest(q.position);
+                        let l = &mut level[q.index as usize];
+                        while (*l as usize) < finest && d < squares[*l as usize] {
+                            *l += 1;
                         }
-                        assigned[n_assigned] = m;
-                        n_assigned += 1;
                     }
+                });
+                for (i, q) in (first..).zip(group) {
+                    grid.insert(i as u32, Vec3::from(q.position));
                 }
-                g = end;
+                first += group.len();
             }
-            core::mem::swap(&mut pending, &mut next_pending);
-            n_pending = carried;
             done((k + 1) as f32 / LOD_LEVELS as f32)?;
         }
         Ok(())
@@ -1655,6 +1643,67 @@ mod tests {
         assert!(roots.iter().enumerate().all(|(i, r)| r.id == i as u32));
     }
 
+    /// Every pair of kept points, on any two triangles, is at least the
+    /// spacing of the finer of their two LOD levels apart (in units of the
+    /// pair's clash distance, up to the bend of linked edges), on a curved
+    /// mesh of many charts with two densities.
+    #[test]
+    fn each_lod_level_keeps_its_spacing_across_triangles() {
+        let m = sphere(16, 32);
+        let mesh = m.mesh();
+        let values: Vec<f32> =
+            m.p.iter()
+                .map(|p| if p[1] < 0.0 { 0.4 } else { 1.0 })
+                .collect();
+        let p = StampParams {
+            density: ScalarMap::PerVertex(Strided::from_slice(&values)),
+            ..params(3000)
+        };
+        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+        let mut arena = Arena::new(&mut buf);
+        let stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
+        let faces = 0..mesh.triangle_count();
+        let bound = stamper.candidate_bound(faces.clone());
+        let mut scratch = Scratch::new(&mut arena, bound).unwrap();
+        let mut cands = vec![Candidate::default(); bound];
+        let n = stamper.stamp_faces(faces, &mut cands).unwrap();
+        let kept = stamper.prune(&mut cands[..n], &mut scratch).unwrap();
+        let cands = &cands[..kept];
+        let mut out = vec![Root::default(); kept];
+        stamper.finish(cands, &mut scratch, &mut out).unwrap();
+        let levels = &scratch.level[..kept];
+        let mut raised = 0;
+        for (c, &l) in cands.iter().zip(levels) {
+            assert!(l as u16 >= c.level && (l as usize) < LOD_LEVELS);
+            raised += (l as u16 > c.level) as usize;
+        }
+        assert!(raised > 0, "no level was raised: nothing to check");
+        let at = |c: &Candidate| {
+            Vec3::from(Near::new(c, 0, &face_frame(&mesh, c.face as usize)).position)
+        };
+        let spacings = lod_spacings();
+        for (i, a) in cands.iter().enumerate() {
+            for (b, &lb) in cands[i + 1..].iter().zip(&levels[i + 1..]) {
+                let (fa, fb) = (
+                    &stamper.faces[a.face as usize],
+                    &stamper.faces[b.face as usize],
+                );
+                if Vec3::from(fa.normal).dot(Vec3::from(fb.normal)) <= 0.0 {
+                    continue;
+                }
+                let k = levels[i].max(lb) as usize;
+                let r = stamper.radius / fa.scale.max(fb.scale);
+                let d = at(a).distance(at(b));
+                assert!(
+                    d >= spacings[k] * r * 0.999,
+                    "levels {} and {lb}: {d} < {} * {r}",
+                    levels[i],
+                    spacings[k]
+                );
+            }
+        }
+    }
+
     #[test]
     fn edge_pass_matches_a_brute_force_scan() {
         let m = graded_plane(12, 30.0);
@@ -1677,9 +1726,13 @@ mod tests {
         let mut cands = vec![Candidate::default(); bound];
         let n = stamper.stamp_faces(faces, &mut cands).unwrap();
         cands.truncate(n);
+        // the position the pass computes, to the bit
+        let at = |c: &Candidate| {
+            Vec3::from(Near::new(c, 0, &face_frame(&mesh, c.face as usize)).position)
+        };
         let mut expect: Vec<Candidate> = Vec::new();
         for c in &cands {
-            let clash = c.edge_distance < 1.0
+            let clash = c.near_edge()
                 && expect.iter().any(|k| {
                     let (fk, fc) = (
                         &stamper.faces[k.face as usize],
@@ -1687,9 +1740,9 @@ mod tests {
                     );
                     let r = stamper.radius / fk.scale.max(fc.scale);
                     k.face != c.face
-                        && k.edge_distance < 1.0
+                        && k.near_edge()
                         && Vec3::from(fk.normal).dot(Vec3::from(fc.normal)) > 0.0
-                        && Vec3::from(k.position).distance_squared(Vec3::from(c.position)) < r * r
+                        && at(k).distance_squared(at(c)) < r * r
                 });
             if !clash {
                 expect.push(*c);
@@ -1758,10 +1811,11 @@ mod tests {
         let faces = 0..mesh.triangle_count();
         let mut cands = vec![Candidate::default(); stamper.candidate_bound(faces.clone())];
         let n = stamper.stamp_faces(faces, &mut cands).unwrap();
+        let at = |c: &Candidate| mesh.point(c.face as usize, c.uv[0], c.uv[1]);
         let mut closest = f32::INFINITY;
         for (i, a) in cands[..n].iter().enumerate() {
             for b in &cands[i + 1..n] {
-                closest = closest.min(Vec3::from(a.position).distance(Vec3::from(b.position)));
+                closest = closest.min(at(a).distance(at(b)));
             }
         }
         assert!(
@@ -1769,7 +1823,9 @@ mod tests {
             "{closest} vs {}",
             stamper.radius
         );
-        assert!(cands[..n].iter().all(|c| c.edge_distance >= 0.0));
+        assert!(cands[..n]
+            .iter()
+            .all(|c| c.near_levels as usize <= LOD_LEVELS));
     }
 
     #[test]
