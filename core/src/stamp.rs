@@ -1655,32 +1655,23 @@ mod tests {
             m.p.iter()
                 .map(|p| if p[1] < 0.0 { 0.4 } else { 1.0 })
                 .collect();
-        let p = StampParams {
-            density: ScalarMap::PerVertex(Strided::from_slice(&values)),
-            ..params(3000)
-        };
-        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
-        let mut arena = Arena::new(&mut buf);
-        let stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
-        let faces = 0..mesh.triangle_count();
-        let bound = stamper.candidate_bound(faces.clone());
-        let mut scratch = Scratch::new(&mut arena, bound).unwrap();
-        let mut cands = vec![Candidate::default(); bound];
-        let n = stamper.stamp_faces(faces, &mut cands).unwrap();
-        let kept = stamper.prune(&mut cands[..n], &mut scratch).unwrap();
-        let cands = &cands[..kept];
-        let mut out = vec![Root::default(); kept];
-        stamper.finish(cands, &mut scratch, &mut out).unwrap();
-        let levels = &scratch.level[..kept];
+        with_candidates(mesh, &values, |stamper, scratch, mut cands| {
+            let kept = stamper.prune(&mut cands, scratch).unwrap();
+            let cands = &cands[..kept];
+            let mut out = vec![Root::default(); kept];
+            stamper.finish(cands, scratch, &mut out).unwrap();
+            check_lod_spacing(stamper, cands, &scratch.level[..kept]);
+        });
+    }
+
+    fn check_lod_spacing(stamper: &Stamper, cands: &[Candidate], levels: &[u8]) {
         let mut raised = 0;
         for (c, &l) in cands.iter().zip(levels) {
             assert!(l as u16 >= c.level && (l as usize) < LOD_LEVELS);
             raised += (l as u16 > c.level) as usize;
         }
         assert!(raised > 0, "no level was raised: nothing to check");
-        let at = |c: &Candidate| {
-            Vec3::from(Near::new(c, 0, &face_frame(&mesh, c.face as usize)).position)
-        };
+        let at = |c: &Candidate| position(&stamper.mesh, c);
         let spacings = lod_spacings();
         for (i, a) in cands.iter().enumerate() {
             for (b, &lb) in cands[i + 1..].iter().zip(&levels[i + 1..]) {
@@ -1704,17 +1695,21 @@ mod tests {
         }
     }
 
-    #[test]
-    fn edge_pass_matches_a_brute_force_scan() {
-        let m = graded_plane(12, 30.0);
-        let mesh = m.mesh();
-        // gray and white faces: clash distances differ per pair
-        let values: Vec<f32> =
-            m.p.iter()
-                .map(|p| if p[1] < 0.4 { 0.3 } else { 1.0 })
-                .collect();
+    /// The position the passes compute for `c`, to the bit.
+    fn position(mesh: &Mesh, c: &Candidate) -> Vec3 {
+        Vec3::from(Near::new(c, 0, &face_frame(mesh, c.face as usize)).position)
+    }
+
+    /// Stamps one pass of 3000 roots on `mesh` with per-vertex density
+    /// `values` and hands the stamper, its scratch and the candidates to
+    /// `check`.
+    fn with_candidates(
+        mesh: Mesh,
+        values: &[f32],
+        check: impl FnOnce(&Stamper, &mut Scratch, Vec<Candidate>),
+    ) {
         let p = StampParams {
-            density: ScalarMap::PerVertex(Strided::from_slice(&values)),
+            density: ScalarMap::PerVertex(Strided::from_slice(values)),
             ..params(3000)
         };
         let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
@@ -1726,10 +1721,23 @@ mod tests {
         let mut cands = vec![Candidate::default(); bound];
         let n = stamper.stamp_faces(faces, &mut cands).unwrap();
         cands.truncate(n);
-        // the position the pass computes, to the bit
-        let at = |c: &Candidate| {
-            Vec3::from(Near::new(c, 0, &face_frame(&mesh, c.face as usize)).position)
-        };
+        check(&stamper, &mut scratch, cands);
+    }
+
+    #[test]
+    fn edge_pass_matches_a_brute_force_scan() {
+        let m = graded_plane(12, 30.0);
+        // gray and white faces: clash distances differ per pair
+        let values: Vec<f32> =
+            m.p.iter()
+                .map(|p| if p[1] < 0.4 { 0.3 } else { 1.0 })
+                .collect();
+        with_candidates(m.mesh(), &values, check_edge_pass);
+    }
+
+    fn check_edge_pass(stamper: &Stamper, scratch: &mut Scratch, mut cands: Vec<Candidate>) {
+        let n = cands.len();
+        let at = |c: &Candidate| position(&stamper.mesh, c);
         let mut expect: Vec<Candidate> = Vec::new();
         for c in &cands {
             let clash = c.near_edge()
@@ -1748,7 +1756,7 @@ mod tests {
                 expect.push(*c);
             }
         }
-        let kept = stamper.prune(&mut cands, &mut scratch).unwrap();
+        let kept = stamper.prune(&mut cands, scratch).unwrap();
         assert!(kept < n, "the pass removed nothing to compare");
         assert_eq!(&cands[..kept], &expect[..]);
     }
