@@ -634,6 +634,10 @@ impl Placing {
                 self.area(2, x, y) * self.inv_det,
                 self.area(0, x, y) * self.inv_det,
             );
+            // a point inside by the edge tests can still round a hair
+            // outside in barycentrics; u + v then sums to at most 1 in f32
+            let u = u.clamp(0.0, 1.0);
+            let v = v.clamp(0.0, 1.0 - u);
             *c = Candidate {
                 face: f,
                 uv: [u, v],
@@ -1557,7 +1561,7 @@ pub fn stamp_with_progress(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testmesh::{graded_plane, sphere};
+    use crate::testmesh::{graded_plane, sphere, TestMesh};
     use crate::Strided;
 
     pub(crate) fn run(mesh: Mesh, params: &StampParams) -> (Vec<Root>, StampReport) {
@@ -1566,6 +1570,10 @@ mod tests {
         let mut arena = Arena::new(&mut buf);
         let (n, report) = stamp(mesh, params, &mut arena, &mut out).unwrap();
         out.truncate(n);
+        // in the triangle, in f32 as a host checks it
+        for r in &out {
+            assert!(r.u >= 0.0 && r.v >= 0.0 && r.u + r.v <= 1.0, "{r:?}");
+        }
         (out, report)
     }
 
@@ -1613,6 +1621,62 @@ mod tests {
                 // is trimmed by rank, so the count is exact
                 assert_eq!(roots.len(), target as usize, "{name}: {report:?}");
             }
+        }
+    }
+
+    /// Barycentrics from the signed areas can round a hair past an edge for
+    /// a point the edge tests take; every root still lies in its triangle.
+    /// The mesh is the C contract test's sphere (a duplicated seam column,
+    /// pole rows of repeated points), where seed 42 once put a root a
+    /// rounding error outside.
+    #[test]
+    fn roots_lie_in_their_triangle_on_a_seamed_sphere() {
+        let (rows, cols) = (24u32, 48u32);
+        let mut m = TestMesh {
+            p: vec![],
+            t: vec![],
+            uv: vec![],
+            n: vec![],
+        };
+        for r in 0..=rows {
+            let th = core::f64::consts::PI * r as f64 / rows as f64;
+            for c in 0..=cols {
+                let ph = core::f64::consts::TAU * (c % cols) as f64 / cols as f64;
+                let st = if r == 0 || r == rows {
+                    0.0
+                } else {
+                    libm::sin(th)
+                };
+                let y = if r == 0 {
+                    1.0
+                } else if r == rows {
+                    -1.0
+                } else {
+                    libm::cos(th)
+                };
+                let p = [st * libm::cos(ph), y, -st * libm::sin(ph)].map(|x| x as f32);
+                m.p.push(p);
+                m.n.push(p);
+                m.uv.push([c as f32 / cols as f32, r as f32 / rows as f32]);
+            }
+        }
+        for r in 0..rows {
+            for c in 0..cols {
+                let a = r * (cols + 1) + c;
+                let (b, d) = (a + 1, a + cols + 1);
+                m.t.push([a, d, d + 1]);
+                m.t.push([a, d + 1, b]);
+            }
+        }
+        for seed in [42, 43] {
+            // `run` checks every root
+            run(
+                m.mesh(),
+                &StampParams {
+                    seed,
+                    ..params(3000)
+                },
+            );
         }
     }
 
