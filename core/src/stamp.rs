@@ -281,8 +281,6 @@ pub struct Stamper<'m, 'a> {
     degenerate: u32,
     /// [`lod_spacings`].
     spacings: [f32; LOD_LEVELS],
-    /// Their squares.
-    squares: [f32; LOD_LEVELS],
 }
 
 /// Smallest `black_scale`: the spacing in black regions is the radius over
@@ -824,8 +822,7 @@ impl<'a> Gathered<'a> {
             for l in 0..LANES {
                 let (dx, dy, dz) = (x[l] - p[0], y[l] - p[1], z[l] - p[2]);
                 let d = (dx * dx + dy * dy + dz * dz) * w[l];
-                // a select, not f32::min: it maps to one vector instruction,
-                // and the NaN of a removed point at distance 0 never wins
+                // a select, not f32::min: it maps to one vector instruction
                 best[l] = if d < best[l] { d } else { best[l] };
             }
         }
@@ -965,7 +962,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
             passes: 0,
             degenerate,
             spacings: lod_spacings(),
-            squares: lod_spacings().map(|s| s * s),
         };
         if !fixed {
             stamper.radius = stamper.predicted_radius();
@@ -1039,17 +1035,26 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// be overwritten too. Pure: safe to run disjoint ranges on different
     /// threads.
     pub fn stamp_faces(&self, faces: Range<usize>, out: &mut [Candidate]) -> Result<usize, Error> {
+        let squares = self.spacings.map(|s| s * s);
         let mut n = 0;
         for f in faces {
             if self.faces[f].scale == 0.0 {
                 continue;
             }
-            n = self.stamp_face(f, out, n)?;
+            n = self.stamp_face(f, &squares, out, n)?;
         }
         Ok(n)
     }
 
-    fn stamp_face(&self, f: usize, out: &mut [Candidate], mut n: usize) -> Result<usize, Error> {
+    /// Stamps triangle `f` into `out` from slot `n` (`squares`: the squared
+    /// LOD spacings); returns the new count.
+    fn stamp_face(
+        &self,
+        f: usize,
+        squares: &[f32; LOD_LEVELS],
+        out: &mut [Candidate],
+        mut n: usize,
+    ) -> Result<usize, Error> {
         let place = Placing::new(&self.places[f], 1.0 / self.radius);
         let mut batch = Batch::default();
         let corners = place.corners;
@@ -1072,14 +1077,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let (points, levels) = self.tile.run(wx as usize, wy as usize, len as usize);
                 for (&p, &level) in points.iter().zip(levels) {
                     if batch.len == BATCH {
-                        n = place.emit(&mut batch, f as u32, &self.squares, out, n)?;
+                        n = place.emit(&mut batch, f as u32, squares, out, n)?;
                     }
                     place.test(&mut batch, Vec2::from(p) + shift, level);
                 }
                 cx += len;
             }
         }
-        place.emit(&mut batch, f as u32, &self.squares, out, n)
+        place.emit(&mut batch, f as u32, squares, out, n)
     }
 
     /// Gathers into `buf` the points of `grid` (indices into `records`) that
@@ -1160,9 +1165,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// front of `cands`. Returns the number kept.
     ///
     /// Points of one triangle and of its linked neighbours are spaced by the
-    /// tile, so only points [`Candidate::near_edge`] take part: this is exact (up to the bend of linked edges) on any
-    /// surface whose dihedral angles at cut edges are above 90 degrees and
-    /// whose separate same-facing sheets are a radius apart. A triangle's
+    /// tile, so only points [`Candidate::near_edge`] take part: this is
+    /// exact (up to the bend of linked edges) on any surface whose dihedral
+    /// angles at cut edges are above 90 degrees and whose separate
+    /// same-facing sheets are a radius apart. A triangle's
     /// points are tested together, against the kept points of earlier
     /// triangles gathered once from the grid (see `gather`).
     pub fn prune(&self, cands: &mut [Candidate], scratch: &mut Scratch) -> Result<usize, Error> {
@@ -1373,9 +1379,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// A candidate whose [`Candidate::near_levels`] stop before its tile
     /// level conflicts with no other triangle at that level or any
     /// finer one, so it keeps its tile level; the others are copied to
-    /// [`Near`] records grouped by tile level. Level `k` sorts the records
-    /// of levels up to `k` within its spacing of a boundary into a grid and
-    /// tests its own records against it, one triangle at a time.
+    /// [`Near`] records grouped by tile level. Level `k` puts the records of
+    /// coarser levels within its spacing of a boundary into a grid, then
+    /// tests its own records against it one triangle at a time, adding each
+    /// triangle's records after its test.
     fn assign_levels(
         &self,
         cands: &[Candidate],
@@ -1384,7 +1391,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
     ) -> Result<(), Error> {
         let n = cands.len();
         let finest = LOD_LEVELS - 1;
-        let squares = self.squares;
+        let squares = self.spacings.map(|s| s * s);
         let level = &mut scratch.level[..n];
         let takes_part = |c: &Candidate| c.level < c.near_levels && (c.level as usize) < finest;
         let taking = &mut *scratch.next;
@@ -1561,7 +1568,7 @@ pub fn stamp_with_progress(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testmesh::{graded_plane, sphere, TestMesh};
+    use crate::testmesh::{graded_plane, seamed_sphere, sphere};
     use crate::Strided;
 
     pub(crate) fn run(mesh: Mesh, params: &StampParams) -> (Vec<Root>, StampReport) {
@@ -1631,43 +1638,7 @@ mod tests {
     /// rounding error outside.
     #[test]
     fn roots_lie_in_their_triangle_on_a_seamed_sphere() {
-        let (rows, cols) = (24u32, 48u32);
-        let mut m = TestMesh {
-            p: vec![],
-            t: vec![],
-            uv: vec![],
-            n: vec![],
-        };
-        for r in 0..=rows {
-            let th = core::f64::consts::PI * r as f64 / rows as f64;
-            for c in 0..=cols {
-                let ph = core::f64::consts::TAU * (c % cols) as f64 / cols as f64;
-                let st = if r == 0 || r == rows {
-                    0.0
-                } else {
-                    libm::sin(th)
-                };
-                let y = if r == 0 {
-                    1.0
-                } else if r == rows {
-                    -1.0
-                } else {
-                    libm::cos(th)
-                };
-                let p = [st * libm::cos(ph), y, -st * libm::sin(ph)].map(|x| x as f32);
-                m.p.push(p);
-                m.n.push(p);
-                m.uv.push([c as f32 / cols as f32, r as f32 / rows as f32]);
-            }
-        }
-        for r in 0..rows {
-            for c in 0..cols {
-                let a = r * (cols + 1) + c;
-                let (b, d) = (a + 1, a + cols + 1);
-                m.t.push([a, d, d + 1]);
-                m.t.push([a, d + 1, b]);
-            }
-        }
+        let m = seamed_sphere(24, 48);
         for seed in [42, 43] {
             // `run` checks every root
             run(
@@ -1885,7 +1856,7 @@ mod tests {
         let faces = 0..mesh.triangle_count();
         let mut cands = vec![Candidate::default(); stamper.candidate_bound(faces.clone())];
         let n = stamper.stamp_faces(faces, &mut cands).unwrap();
-        let at = |c: &Candidate| mesh.point(c.face as usize, c.uv[0], c.uv[1]);
+        let at = |c: &Candidate| position(&mesh, c);
         let mut closest = f32::INFINITY;
         for (i, a) in cands[..n].iter().enumerate() {
             for b in &cands[i + 1..n] {

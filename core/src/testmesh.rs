@@ -118,6 +118,42 @@ pub fn sphere(rows: usize, cols: usize) -> TestMesh {
     }
 }
 
+/// The C contract test's UV sphere: a duplicated seam column, and pole rows
+/// of repeated points (so the pole bands hold `2 * cols` zero-area
+/// triangles), with vertex normals; positions computed in f64 as there.
+pub fn seamed_sphere(rows: u32, cols: u32) -> TestMesh {
+    let mut m = TestMesh {
+        p: vec![],
+        t: vec![],
+        uv: vec![],
+        n: vec![],
+    };
+    for r in 0..=rows {
+        let th = core::f64::consts::PI * r as f64 / rows as f64;
+        let (st, y) = match r {
+            0 => (0.0, 1.0),
+            _ if r == rows => (0.0, -1.0),
+            _ => (libm::sin(th), libm::cos(th)),
+        };
+        for c in 0..=cols {
+            let ph = core::f64::consts::TAU * (c % cols) as f64 / cols as f64;
+            let p = [st * libm::cos(ph), y, -st * libm::sin(ph)].map(|x| x as f32);
+            m.p.push(p);
+            m.n.push(p);
+            m.uv.push([c as f32 / cols as f32, r as f32 / rows as f32]);
+        }
+    }
+    for r in 0..rows {
+        for c in 0..cols {
+            let a = r * (cols + 1) + c;
+            let (b, d) = (a + 1, a + cols + 1);
+            m.t.push([a, d, d + 1]);
+            m.t.push([a, d + 1, b]);
+        }
+    }
+    m
+}
+
 /// Stamps `n` roots with `seed` (heap-backed, for tests).
 pub fn roots(mesh: Mesh, n: u32, seed: u64) -> Vec<crate::Root> {
     let params = crate::StampParams {
