@@ -1036,12 +1036,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// threads.
     pub fn stamp_faces(&self, faces: Range<usize>, out: &mut [Candidate]) -> Result<usize, Error> {
         let squares = self.spacings.map(|s| s * s);
+        // made once: clearing a batch per face costs more than its tests
+        let mut batch = Batch::default();
         let mut n = 0;
         for f in faces {
             if self.faces[f].scale == 0.0 {
                 continue;
             }
-            n = self.stamp_face(f, &squares, out, n)?;
+            n = self.stamp_face(f, &squares, &mut batch, out, n)?;
         }
         Ok(n)
     }
@@ -1052,11 +1054,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
         &self,
         f: usize,
         squares: &[f32; LOD_LEVELS],
+        batch: &mut Batch,
         out: &mut [Candidate],
         mut n: usize,
     ) -> Result<usize, Error> {
         let place = Placing::new(&self.places[f], 1.0 / self.radius);
-        let mut batch = Batch::default();
         let corners = place.corners;
         let lo_y = corners[0].y.min(corners[1].y).min(corners[2].y);
         let hi_y = corners[0].y.max(corners[1].y).max(corners[2].y);
@@ -1077,14 +1079,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let (points, levels) = self.tile.run(wx as usize, wy as usize, len as usize);
                 for (&p, &level) in points.iter().zip(levels) {
                     if batch.len == BATCH {
-                        n = place.emit(&mut batch, f as u32, squares, out, n)?;
+                        n = place.emit(batch, f as u32, squares, out, n)?;
                     }
-                    place.test(&mut batch, Vec2::from(p) + shift, level);
+                    place.test(batch, Vec2::from(p) + shift, level);
                 }
                 cx += len;
             }
         }
-        place.emit(&mut batch, f as u32, squares, out, n)
+        place.emit(batch, f as u32, squares, out, n)
     }
 
     /// Gathers into `buf` the points of `grid` (indices into `records`) that
