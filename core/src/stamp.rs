@@ -1192,11 +1192,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
             let (records, rest) = near.split_at_mut(inserted);
             let mut m = 0;
             let frame = face_frame(&self.mesh, f as usize);
+            // every candidate is written and only those near an edge kept:
+            // a branch on that would mispredict (about one in four is)
             for (i, c) in (j..end).zip(&cands[j..end]) {
-                if c.near_edge() {
-                    rest[m] = Near::new(c, i, &frame);
-                    m += 1;
-                }
+                rest[m] = Near::new(c, i, &frame);
+                m += c.near_edge() as usize;
             }
             j = end;
             if m == 0 {
@@ -1230,10 +1230,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let mut kept = 0;
         for j in 0..n {
             let c = cands[j];
-            if !c.near_edge() || status[j] != CLASHED {
-                cands[kept] = c;
-                kept += 1;
-            }
+            cands[kept] = c;
+            kept += (!c.near_edge() || status[j] != CLASHED) as usize;
         }
         Ok(kept)
     }
@@ -1401,11 +1399,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let mut m = 0;
         for (j, (c, l)) in cands.iter().zip(level.iter_mut()).enumerate() {
             *l = c.level as u8;
-            if takes_part(c) {
-                start[c.level as usize + 1] += 1;
-                taking[m] = j as u32;
-                m += 1;
-            }
+            // branch-free: which candidates take part is close to random
+            let takes = takes_part(c) as usize;
+            start[c.level as usize + 1] += takes;
+            taking[m] = j as u32;
+            m += takes;
         }
         for l in 0..LOD_LEVELS {
             start[l + 1] += start[l];
