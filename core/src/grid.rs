@@ -84,6 +84,17 @@ impl<'a> HashGrid<'a> {
         self.heads[b] = index;
     }
 
+    /// Inserts point `index` at `p` when `keep` holds, without a branch
+    /// (for a condition close to random); otherwise leaves the grid as it
+    /// was (`index` reaches no bucket).
+    #[inline]
+    pub fn insert_if(&mut self, keep: bool, index: u32, p: Vec3) {
+        let b = self.bucket(self.cell_of(p));
+        let head = self.heads[b];
+        self.next[index as usize] = head;
+        self.heads[b] = if keep { index } else { head };
+    }
+
     /// Calls `f` for every point inserted in the cells that overlap the cube
     /// of half-side `radius` around `p` (so every point within `radius`),
     /// stopping early when `f` returns true; returns whether it did.

@@ -1427,9 +1427,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             // coarser levels block every other triangle; this level's
             // records block the triangles after their own, so go in after it
             for (i, q) in near[..coarser].iter().enumerate() {
-                if (k as u32) < q.near_levels {
-                    grid.insert(i as u32, Vec3::from(q.position));
-                }
+                grid.insert_if((k as u32) < q.near_levels, i as u32, q.position.into());
             }
             let mut first = coarser;
             for group in near[coarser..end].chunk_by(|a, b| a.face == b.face) {
