@@ -171,3 +171,23 @@ impl Iterator for InBox<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn insert_if_adds_only_the_points_it_keeps() {
+        let (mut heads, mut next) = ([0u32; 16], [0u32; 8]);
+        let mut grid = HashGrid::new(&mut heads, &mut next, 1.0);
+        let at = |i: u32| Vec3::new(0.25 * i as f32, 0.5, 0.5);
+        for i in 0..8 {
+            grid.insert_if(i % 3 != 1, i, at(i));
+        }
+        let mut found: Vec<u32> = grid.in_box(Vec3::ZERO, Vec3::splat(1.9)).collect();
+        // cells of the box that share a bucket yield its points twice
+        found.sort_unstable();
+        found.dedup();
+        assert_eq!(found, [0, 2, 3, 5, 6]);
+    }
+}
