@@ -1049,7 +1049,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
     }
 
     /// Stamps triangle `f` into `out` from slot `n` (`squares`: the squared
-    /// LOD spacings); returns the new count.
+    /// LOD spacings; `batch`: empty, and left empty); returns the new count.
     fn stamp_face(
         &self,
         f: usize,
