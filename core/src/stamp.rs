@@ -1690,7 +1690,7 @@ mod tests {
             m.p.iter()
                 .map(|p| if p[1] < 0.0 { 0.4 } else { 1.0 })
                 .collect();
-        with_candidates(mesh, &values, |stamper, scratch, mut cands| {
+        with_candidates(mesh, &graded(&values), |stamper, scratch, mut cands| {
             let kept = stamper.prune(&mut cands, scratch).unwrap();
             let cands = &cands[..kept];
             let mut out = vec![Root::default(); kept];
@@ -1735,21 +1735,25 @@ mod tests {
         Vec3::from(Near::new(c, 0, &face_frame(mesh, c.face as usize)).position)
     }
 
+    /// 3000 roots over a per-vertex density map.
+    fn graded(values: &[f32]) -> StampParams<'_> {
+        StampParams {
+            density: ScalarMap::PerVertex(Strided::from_slice(values)),
+            ..params(3000)
+        }
+    }
+
     /// Stamps one pass of 3000 roots on `mesh` with per-vertex density
     /// `values` and hands the stamper, its scratch and the candidates to
     /// `check`.
     fn with_candidates(
         mesh: Mesh,
-        values: &[f32],
+        p: &StampParams,
         check: impl FnOnce(&Stamper, &mut Scratch, Vec<Candidate>),
     ) {
-        let p = StampParams {
-            density: ScalarMap::PerVertex(Strided::from_slice(values)),
-            ..params(3000)
-        };
-        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+        let mut buf = vec![0u8; required_bytes(&mesh, p).unwrap()];
         let mut arena = Arena::new(&mut buf);
-        let stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
+        let stamper = Stamper::new(mesh, p, &mut arena).unwrap().unwrap();
         let faces = 0..mesh.triangle_count();
         let bound = stamper.candidate_bound(faces.clone());
         let mut scratch = Scratch::new(&mut arena, bound).unwrap();
@@ -1767,7 +1771,7 @@ mod tests {
             m.p.iter()
                 .map(|p| if p[1] < 0.4 { 0.3 } else { 1.0 })
                 .collect();
-        with_candidates(m.mesh(), &values, check_edge_pass);
+        with_candidates(m.mesh(), &graded(&values), check_edge_pass);
     }
 
     fn check_edge_pass(stamper: &Stamper, scratch: &mut Scratch, mut cands: Vec<Candidate>) {
@@ -1841,58 +1845,46 @@ mod tests {
         // of any edge, is a point of one Poisson set, and a tile point on a
         // shared edge goes to exactly one of its two faces
         let m = graded_plane(10, 1.0);
-        let mesh = m.mesh();
         // few enough roots that the chart reaches across the whole plane
-        let p = params(2000);
-        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
-        let mut arena = Arena::new(&mut buf);
-        let stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
-        assert!(stamper
-            .places
-            .iter()
-            .all(|t| t.offset == stamper.places[0].offset));
-        let faces = 0..mesh.triangle_count();
-        let mut cands = vec![Candidate::default(); stamper.candidate_bound(faces.clone())];
-        let n = stamper.stamp_faces(faces, &mut cands).unwrap();
-        let at = |c: &Candidate| position(&mesh, c);
-        let mut closest = f32::INFINITY;
-        for (i, a) in cands[..n].iter().enumerate() {
-            for b in &cands[i + 1..n] {
-                closest = closest.min(at(a).distance(at(b)));
+        with_candidates(m.mesh(), &params(2000), |stamper, _, cands| {
+            assert!(stamper
+                .places
+                .iter()
+                .all(|t| t.offset == stamper.places[0].offset));
+            let at = |c: &Candidate| position(&stamper.mesh, c);
+            let mut closest = f32::INFINITY;
+            for (i, a) in cands.iter().enumerate() {
+                for b in &cands[i + 1..] {
+                    closest = closest.min(at(a).distance(at(b)));
+                }
             }
-        }
-        assert!(
-            closest >= stamper.radius * 0.9999,
-            "{closest} vs {}",
-            stamper.radius
-        );
-        assert!(cands[..n]
-            .iter()
-            .all(|c| c.near_levels as usize <= LOD_LEVELS));
+            assert!(
+                closest >= stamper.radius * 0.9999,
+                "{closest} vs {}",
+                stamper.radius
+            );
+            assert!(cands.iter().all(|c| c.near_levels as usize <= LOD_LEVELS));
+        });
     }
 
     #[test]
     fn an_output_of_exactly_the_count_is_enough() {
         let m = sphere(12, 24);
-        let mesh = m.mesh();
-        let p = params(3000);
-        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
-        let mut arena = Arena::new(&mut buf);
-        let stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
-        let faces = 0..mesh.triangle_count();
-        let mut roomy = vec![Candidate::default(); stamper.candidate_bound(faces.clone())];
-        let n = stamper.stamp_faces(faces.clone(), &mut roomy).unwrap();
-        let mut exact = vec![Candidate::default(); n];
-        assert_eq!(stamper.stamp_faces(faces.clone(), &mut exact), Ok(n));
-        assert_eq!(exact[..], roomy[..n]);
-        let mut short = vec![Candidate::default(); n - 1];
-        assert_eq!(
-            stamper.stamp_faces(faces, &mut short),
-            Err(Error::CapacityExceeded {
-                needed: n,
-                available: n - 1
-            })
-        );
+        // stamped once into room for the bound
+        with_candidates(m.mesh(), &params(3000), |stamper, _, roomy| {
+            let (faces, n) = (0..stamper.mesh.triangle_count(), roomy.len());
+            let mut exact = vec![Candidate::default(); n];
+            assert_eq!(stamper.stamp_faces(faces.clone(), &mut exact), Ok(n));
+            assert_eq!(exact, roomy);
+            let mut short = vec![Candidate::default(); n - 1];
+            assert_eq!(
+                stamper.stamp_faces(faces, &mut short),
+                Err(Error::CapacityExceeded {
+                    needed: n,
+                    available: n - 1
+                })
+            );
+        });
     }
 
     #[test]
