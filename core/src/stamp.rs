@@ -39,7 +39,7 @@ use crate::arena::{Arena, ArenaLayout};
 use crate::chart::{self, Unfolded};
 use crate::grid::{floor_i32, HashGrid};
 use crate::rng::{self, Purpose};
-use crate::tile::{Tile, LOD_LEVELS, TILE_SIDE};
+use crate::tile::{Tile, CELL, CELLS, LOD_LEVELS, TILE_SIDE};
 use crate::{Error, Mesh, Root, ScalarMap};
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;
@@ -1062,20 +1062,22 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let corners = place.corners;
         let lo_y = corners[0].y.min(corners[1].y).min(corners[2].y);
         let hi_y = corners[0].y.max(corners[1].y).max(corners[2].y);
-        let side = TILE_SIDE as i32;
-        for cy in floor_i32(lo_y)..=floor_i32(hi_y) {
+        let (side, cell) = (CELLS as i32, CELL as f32);
+        let inv = 1.0 / cell;
+        for cy in floor_i32(lo_y * inv)..=floor_i32(hi_y * inv) {
             let wy = cy.rem_euclid(side);
-            let shift_y = (cy - wy) as f32;
+            let shift_y = (cy - wy) as f32 * cell;
             // only the cells the triangle crosses in this row, not its bounding box
-            let Some((x0, x1)) = row_span(&corners, cy as f32, cy as f32 + 1.0) else {
+            let y0 = cy as f32 * cell;
+            let Some((x0, x1)) = row_span(&corners, y0, y0 + cell) else {
                 continue;
             };
-            let (mut cx, last) = (floor_i32(x0), floor_i32(x1));
+            let (mut cx, last) = (floor_i32(x0 * inv), floor_i32(x1 * inv));
             while cx <= last {
                 // the cells up to the tile's edge are one run of points
                 let wx = cx.rem_euclid(side);
                 let len = (side - wx).min(last - cx + 1);
-                let shift = Vec2::new((cx - wx) as f32, shift_y);
+                let shift = Vec2::new((cx - wx) as f32 * cell, shift_y);
                 let (points, levels) = self.tile.run(wx as usize, wy as usize, len as usize);
                 for (&p, &level) in points.iter().zip(levels) {
                     if batch.len == BATCH {

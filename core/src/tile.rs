@@ -15,6 +15,13 @@ pub const TILE_SIDE: usize = 48;
 pub const LOD_LEVELS: usize = 12;
 
 const SIDE: f32 = TILE_SIDE as f32;
+/// Side of the lookup cells, in units of the disk radius. Placing a
+/// triangle walks the cells it crosses row by row: cells of 2 hold about
+/// three points, so the walk takes half the rows and runs that unit cells
+/// take, for about a fifth more points tested (cheap, branch-free tests).
+pub const CELL: usize = 2;
+/// Lookup cells per tile side.
+pub const CELLS: usize = TILE_SIDE / CELL;
 /// Candidates tried around each active point before it retires (Bridson's k).
 const ATTEMPTS: u32 = 30;
 /// Background grid cells per side during generation: cell diagonal <= 1.
@@ -25,7 +32,7 @@ const MAX_POINTS: usize = (2.0 * TILE_SIDE as f64 * TILE_SIDE as f64 / 1.732_050
 const FAR: f32 = 1.0e6;
 
 /// A periodic Poisson-disk point set of side [`TILE_SIDE`] and spacing 1,
-/// bucketed into unit cells for lookups.
+/// bucketed into cells of side [`CELL`] for lookups.
 pub struct Tile<'a> {
     points: &'a [[f32; 2]],
     levels: &'a [u8],
@@ -38,7 +45,7 @@ impl<'a> Tile<'a> {
         layout
             .add::<[f32; 2]>(MAX_POINTS * 2)
             .add::<u8>(MAX_POINTS)
-            .add::<u32>(TILE_SIDE * TILE_SIDE + 1)
+            .add::<u32>(CELLS * CELLS + 1)
             .add::<[f32; 2]>(GEN_CELLS * GEN_CELLS)
             .add::<u32>(MAX_POINTS);
     }
@@ -48,7 +55,7 @@ impl<'a> Tile<'a> {
         let gen = arena.alloc::<[f32; 2]>(MAX_POINTS)?;
         let points = arena.alloc::<[f32; 2]>(MAX_POINTS)?;
         let levels = arena.alloc::<u8>(MAX_POINTS)?;
-        let cell_start = arena.alloc::<u32>(TILE_SIDE * TILE_SIDE + 1)?;
+        let cell_start = arena.alloc::<u32>(CELLS * CELLS + 1)?;
         let grid = arena.alloc::<[f32; 2]>(GEN_CELLS * GEN_CELLS)?;
         let active = arena.alloc::<u32>(MAX_POINTS)?;
         let n = bridson(seed, gen, grid, active);
@@ -77,12 +84,12 @@ impl<'a> Tile<'a> {
         self.points.len() as f32 / (SIDE * SIDE)
     }
 
-    /// Points of the `len` unit cells (x, y) to (x + len - 1, y) of one row,
+    /// Points of the `len` cells (x, y) to (x + len - 1, y) of one row,
     /// and their LOD levels: cells are stored row by row, so a run of cells
-    /// is one slice. `x + len <= TILE_SIDE`, `y < TILE_SIDE`.
+    /// is one slice. `x + len <= CELLS`, `y < CELLS`.
     #[inline]
     pub fn run(&self, x: usize, y: usize, len: usize) -> (&[[f32; 2]], &[u8]) {
-        let c = y * TILE_SIDE + x;
+        let c = y * CELLS + x;
         let (s, e) = (
             self.cell_start[c] as usize,
             self.cell_start[c + len] as usize,
@@ -224,19 +231,18 @@ fn fits(p: [f32; 2], grid: &[[f32; 2]], h: f32) -> bool {
         .all(|&(dx, dy)| torus_dist2(p, grid[wrap(cy + dy) * GEN_CELLS + wrap(cx + dx)]) >= 1.0)
 }
 
-/// Counting sort of the points into unit cells (stable, so deterministic).
+/// Counting sort of the points into cells (stable, so deterministic).
 fn bucket(src: &[[f32; 2]], dst: &mut [[f32; 2]], cell_start: &mut [u32]) {
-    let cell = |p: [f32; 2]| {
-        (p[1] as usize).min(TILE_SIDE - 1) * TILE_SIDE + (p[0] as usize).min(TILE_SIDE - 1)
-    };
+    let at = |x: f32| (x as usize / CELL).min(CELLS - 1);
+    let cell = |p: [f32; 2]| at(p[1]) * CELLS + at(p[0]);
     cell_start.fill(0);
     for &p in src {
         cell_start[cell(p) + 1] += 1;
     }
-    for c in 0..TILE_SIDE * TILE_SIDE {
+    for c in 0..CELLS * CELLS {
         cell_start[c + 1] += cell_start[c];
     }
-    let mut fill = [0u32; TILE_SIDE * TILE_SIDE];
+    let mut fill = [0u32; CELLS * CELLS];
     for &p in src {
         let c = cell(p);
         dst[(cell_start[c] + fill[c]) as usize] = p;
@@ -255,11 +261,11 @@ fn assign_levels(points: &[[f32; 2]], cell_start: &[u32], levels: &mut [u8]) {
     levels.fill(finest);
     let mut chosen = [0u32; MAX_POINTS];
     let mut n_chosen = 0;
-    let side = TILE_SIDE as isize;
+    let side = CELLS as isize;
     for k in 0..finest {
         let r = libm::powf(2.0, 0.5 * (finest - k) as f32);
         let r2 = r * r;
-        let reach = libm::ceilf(r) as isize;
+        let reach = libm::ceilf(r / CELL as f32) as isize;
         let by_cells = 2 * reach < side;
         for i in 0..points.len() {
             if levels[i] != finest {
@@ -268,7 +274,7 @@ fn assign_levels(points: &[[f32; 2]], cell_start: &[u32], levels: &mut [u8]) {
             let p = points[i];
             let far = |j: usize| torus_dist2(p, points[j]) >= r2;
             let free = if by_cells && (2 * reach + 1).pow(2) < n_chosen as isize {
-                let (cx, cy) = (p[0] as isize, p[1] as isize);
+                let (cx, cy) = (p[0] as isize / CELL as isize, p[1] as isize / CELL as isize);
                 (-reach..=reach).all(|dy| {
                     let row = (cy + dy).rem_euclid(side) * side;
                     (-reach..=reach).all(|dx| {
