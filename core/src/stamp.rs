@@ -1182,7 +1182,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         status.fill(0);
         let mut grid = HashGrid::new(scratch.heads, scratch.next, GRID_CELL * self.radius);
         let near = &mut *scratch.near;
-        let (mut j, mut inserted) = (0, 0);
+        let (mut j, mut inserted, mut kept) = (0, 0, 0);
         while j < n {
             let f = cands[j].face;
             let end = cands[j..]
@@ -1200,40 +1200,40 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 rest[m] = Near::new(c, i, &frame);
                 m += c.near_edge() as usize;
             }
-            j = end;
-            if m == 0 {
-                continue;
-            }
-            let group = &rest[..m];
-            let reach = self.local_radius(f) * 1.0001;
-            let buf = &mut scratch.gathered;
-            Self::gather(&grid, records, group, reach, buf, |buf| {
-                self.weigh(buf, f, |scale| {
-                    let r = self.radius / scale;
-                    r * r
+            if m > 0 {
+                let group = &rest[..m];
+                let reach = self.local_radius(f) * 1.0001;
+                let buf = &mut scratch.gathered;
+                Self::gather(&grid, records, group, reach, buf, |buf| {
+                    self.weigh(buf, f, |scale| {
+                        let r = self.radius / scale;
+                        r * r
+                    });
+                    for q in group {
+                        let s = &mut status[q.index as usize];
+                        if *s != CLASHED && buf.clashes(q.position) {
+                            *s = CLASHED;
+                        }
+                    }
                 });
-                for q in group {
-                    let s = &mut status[q.index as usize];
-                    if *s != CLASHED && buf.clashes(q.position) {
-                        *s = CLASHED;
+                let first = inserted;
+                for g in first..first + m {
+                    let q = near[g];
+                    if status[q.index as usize] != CLASHED {
+                        near[inserted] = q;
+                        grid.insert(inserted as u32, Vec3::from(q.position));
+                        inserted += 1;
                     }
                 }
-            });
-            let first = inserted;
-            for g in first..first + m {
-                let q = near[g];
-                if status[q.index as usize] != CLASHED {
-                    near[inserted] = q;
-                    grid.insert(inserted as u32, Vec3::from(q.position));
-                    inserted += 1;
-                }
             }
-        }
-        let mut kept = 0;
-        for j in 0..n {
-            let c = cands[j];
-            cands[kept] = c;
-            kept += (!c.near_edge() || status[j] != CLASHED) as usize;
+            // later faces leave this face's marks alone: it is compacted now,
+            // while its candidates are still in cache
+            for i in j..end {
+                let c = cands[i];
+                cands[kept] = c;
+                kept += (status[i] != CLASHED) as usize;
+            }
+            j = end;
         }
         Ok(kept)
     }
