@@ -43,7 +43,7 @@ use crate::tile::{Tile, CELL, CELLS, LOD_LEVELS, TILE_SIDE};
 use crate::{Error, Mesh, Root, ScalarMap};
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;
-use glam::{Vec2, Vec3};
+use glam::{BVec4A, Vec2, Vec3, Vec4};
 
 /// Width of the band above the target where the radius correction stops;
 /// the surplus is trimmed by LOD rank.
@@ -527,9 +527,12 @@ struct Placing {
     cross_x: [f32; 3],
     cross_y: [f32; 3],
     cross_c: [f32; 3],
+    /// `cross_x`, `cross_y` and `cross_c` as vectors, so the three edge
+    /// tests of a point run as one vector operation (the fourth lane passes).
+    cross4: [Vec4; 3],
     /// Whether the face takes the points exactly on edge `e` (when it runs
-    /// the edge from its lower vertex).
-    ties: [bool; 3],
+    /// the edge from its lower vertex); the fourth lane is unused.
+    ties: BVec4A,
     inv_len: [f32; 3],
     inv_det: f32,
     /// 1 for a linked edge, 0 for a cut one.
@@ -551,7 +554,8 @@ impl Placing {
             cross_x: [0.0; 3],
             cross_y: [0.0; 3],
             cross_c: [0.0; 3],
-            ties: [false; 3],
+            cross4: [Vec4::ZERO; 3],
+            ties: BVec4A::FALSE,
             inv_len: [0.0; 3],
             inv_det: 1.0 / (corners[1] - corners[0]).perp_dot(corners[2] - corners[0]),
             linked: [0.0; 3],
@@ -559,6 +563,7 @@ impl Placing {
             far_dir: [Vec2::ZERO; 6],
             far_len: [0.0; 6],
         };
+        let mut ties = [false; 3];
         for i in 0..3 {
             let (p, q) = (corners[i], corners[(i + 1) % 3]);
             let forward = face.edges & (64 << i) != 0;
@@ -567,7 +572,7 @@ impl Placing {
             place.cross_x[i] = sign * dir.x;
             place.cross_y[i] = sign * dir.y;
             place.cross_c[i] = sign * dir.perp_dot(from);
-            place.ties[i] = forward;
+            ties[i] = forward;
             place.inv_len[i] = 1.0 / (q - p).length();
             if face.edges & (1 << i) != 0 {
                 place.linked[i] = 1.0;
@@ -580,6 +585,13 @@ impl Placing {
                 }
             }
         }
+        let [x, y, c] = [place.cross_x, place.cross_y, place.cross_c];
+        place.cross4 = [
+            Vec4::new(x[0], x[1], x[2], 0.0),
+            Vec4::new(y[0], y[1], y[2], 0.0),
+            Vec4::new(c[0], c[1], c[2], -1.0),
+        ];
+        place.ties = BVec4A::new(ties[0], ties[1], ties[2], false);
         place
     }
 
@@ -595,11 +607,10 @@ impl Placing {
     /// other point). `batch` must have room.
     #[inline]
     fn test(&self, batch: &mut Batch, p: Vec2, level: u8) {
-        let mut inside = true;
-        for e in 0..3 {
-            let s = self.area(e, p.x, p.y);
-            inside &= (s > 0.0) | ((s == 0.0) & self.ties[e]);
-        }
+        let [cx, cy, cc] = self.cross4;
+        // the same operations in the same order as `area`, so the same bits
+        let s = cx * Vec4::splat(p.y) - cy * Vec4::splat(p.x) - cc;
+        let inside = (s.cmpgt(Vec4::ZERO) | (s.cmpeq(Vec4::ZERO) & self.ties)).all();
         // the caller keeps len below BATCH; the mask spares the bounds checks
         let i = batch.len & (BATCH - 1);
         (batch.x[i], batch.y[i], batch.level[i]) = (p.x, p.y, level);
