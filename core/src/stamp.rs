@@ -727,6 +727,13 @@ struct Near {
 }
 
 impl Near {
+    /// The position, and the face's bits in the fourth lane, in one load.
+    #[inline]
+    fn head(&self) -> Vec4 {
+        let bytes = &bytemuck::bytes_of(self)[..16];
+        Vec4::from_array(bytemuck::pod_read_unaligned(bytes))
+    }
+
     /// The record of candidate `c`, at `index`, on a face of frame `frame`
     /// (see [`face_frame`]).
     fn new(c: &Candidate, index: usize, [a, e1, e2]: &[Vec3; 3]) -> Self {
@@ -1125,6 +1132,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 (lo.min(at(q)), hi.max(at(q)))
             });
         let (lo, hi) = (lo - Vec3::splat(reach), hi + Vec3::splat(reach));
+        // the box test reads a record's position and face as one vector and
+        // looks at the first three lanes
+        let (lo4, hi4) = (lo.extend(0.0), hi.extend(0.0));
         let f = group[0].face;
         buf.len = 0;
         for i in grid.in_box(lo, hi) {
@@ -1133,10 +1143,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 buf.len = 0;
             }
             let o = &records[i as usize];
-            let p = at(o);
+            let p = o.head();
             // every point is written and only those of other faces in the box
             // kept: branches on these tests would mispredict
-            let keep = (o.face != f) & (p.cmpge(lo) & p.cmple(hi)).all();
+            let inside = (p.cmpge(lo4) & p.cmple(hi4)).bitmask() & 7 == 7;
+            let keep = (o.face != f) & inside;
             buf.set(o.position, o.face);
             buf.len += keep as usize;
         }
