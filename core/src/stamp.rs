@@ -535,8 +535,8 @@ struct Placing {
     ties: BVec4A,
     inv_len: [f32; 3],
     inv_det: f32,
-    /// 1 for a linked edge, 0 for a cut one.
-    linked: [f32; 3],
+    /// Whether edge `e` is linked (not cut).
+    linked: [bool; 3],
     /// The far edges of each linked neighbour (from either end of the
     /// shared edge to its third corner): start, unit direction, length.
     far_from: [Vec2; 6],
@@ -558,7 +558,7 @@ impl Placing {
             ties: BVec4A::FALSE,
             inv_len: [0.0; 3],
             inv_det: 1.0 / (corners[1] - corners[0]).perp_dot(corners[2] - corners[0]),
-            linked: [0.0; 3],
+            linked: [false; 3],
             far_from: [Vec2::ZERO; 6],
             far_dir: [Vec2::ZERO; 6],
             far_len: [0.0; 6],
@@ -575,7 +575,7 @@ impl Placing {
             ties[i] = forward;
             place.inv_len[i] = 1.0 / (q - p).length();
             if face.edges & (1 << i) != 0 {
-                place.linked[i] = 1.0;
+                place.linked[i] = true;
                 let w = at(face.across[i]);
                 for (s, end) in [(2 * i, p), (2 * i + 1, q)] {
                     let d = w - end;
@@ -666,30 +666,36 @@ impl Placing {
         for ((x, y), d) in lanes.zip(out.chunks_exact_mut(LANES)) {
             let mut best = [f32::INFINITY; LANES];
             for e in 0..3 {
-                let mut far = [f32::INFINITY; LANES];
-                for s in [2 * e, 2 * e + 1] {
-                    let (fx, fy) = (self.far_from[s].x, self.far_from[s].y);
-                    let (ux, uy, len) = (self.far_dir[s].x, self.far_dir[s].y, self.far_len[s]);
-                    for l in 0..LANES {
-                        let (dx, dy) = (x[l] - fx, y[l] - fy);
-                        let t = dx * ux + dy * uy;
-                        let c = if t < 0.0 { 0.0 } else { t };
-                        let c = if c > len { len } else { c };
-                        let d2 = dx * dx + dy * dy - c * (2.0 * t - c);
-                        far[l] = if d2 < far[l] { d2 } else { far[l] };
-                    }
-                }
                 let (cx, cy, cc) = (self.cross_x[e], self.cross_y[e], self.cross_c[e]);
-                let (inv_len, linked) = (self.inv_len[e], self.linked[e]);
+                let inv_len = self.inv_len[e];
+                let mut term = [0.0; LANES];
                 for l in 0..LANES {
                     let line = (cx * y[l] - cy * x[l] - cc) * inv_len;
-                    let crossed = linked * far[l];
-                    let term = if crossed > line * line {
-                        crossed
-                    } else {
-                        line * line
-                    };
-                    best[l] = if term < best[l] { term } else { best[l] };
+                    term[l] = line * line;
+                }
+                // past a linked edge, the disk must also reach the far side
+                // of the neighbour (a cut edge needs no more: one branch per
+                // edge, the same for every point of the face)
+                if self.linked[e] {
+                    let mut far = [f32::INFINITY; LANES];
+                    for s in [2 * e, 2 * e + 1] {
+                        let (fx, fy) = (self.far_from[s].x, self.far_from[s].y);
+                        let (ux, uy, len) = (self.far_dir[s].x, self.far_dir[s].y, self.far_len[s]);
+                        for l in 0..LANES {
+                            let (dx, dy) = (x[l] - fx, y[l] - fy);
+                            let t = dx * ux + dy * uy;
+                            let c = if t < 0.0 { 0.0 } else { t };
+                            let c = if c > len { len } else { c };
+                            let d2 = dx * dx + dy * dy - c * (2.0 * t - c);
+                            far[l] = if d2 < far[l] { d2 } else { far[l] };
+                        }
+                    }
+                    for l in 0..LANES {
+                        term[l] = if far[l] > term[l] { far[l] } else { term[l] };
+                    }
+                }
+                for l in 0..LANES {
+                    best[l] = if term[l] < best[l] { term[l] } else { best[l] };
                 }
             }
             let mut near = [0u16; LANES];
