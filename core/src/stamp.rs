@@ -290,7 +290,7 @@ pub const MIN_BLACK_SCALE: f32 = 0.1;
 /// Largest target count (ids and ranks are 32-bit; arenas stay addressable).
 pub const MAX_TARGET: u32 = 1 << 28;
 
-fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
+fn validate(mesh: &Mesh, params: &StampParams) -> Result<(), Error> {
     if params.target_count > MAX_TARGET {
         return Err(Error::InvalidArgument("target_count exceeds 2^28"));
     }
@@ -320,9 +320,9 @@ fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
             index: 0,
         });
     }
-    let report = mesh.validate()?;
-    params.density.validate(mesh, "density")?;
-    Ok(report.degenerate_triangles as u32)
+    // degenerate faces are counted and skipped by the face setup
+    mesh.check()?;
+    params.density.validate(mesh, "density")
 }
 
 /// Steps the density takes between black and white when it scales faces.
@@ -332,17 +332,114 @@ fn validate(mesh: &Mesh, params: &StampParams) -> Result<u32, Error> {
 /// density in white regions, 3.1% in black ones).
 pub const DENSITY_STEPS: f32 = 64.0;
 
-/// Scale of a face from its density (0 = no roots).
-fn face_scale(mesh: &Mesh, params: &StampParams, face: usize) -> f32 {
-    if mesh.is_degenerate(face) {
-        return 0.0;
+/// What the setup needs of one face, from one read of its corners.
+struct FaceSetup {
+    face: Face,
+    area: f32,
+    perimeter: f32,
+    degenerate: bool,
+}
+
+impl FaceSetup {
+    /// The same values [`Mesh::area`], [`Mesh::face_normal`] and
+    /// [`Mesh::is_degenerate`] give, bit for bit; the scale is that of the
+    /// density (0 = no roots: bald or degenerate).
+    fn new(mesh: &Mesh, params: &StampParams, f: usize) -> Self {
+        let [i, j, k] = mesh.triangles.get(f);
+        let [a, b, c] = mesh.corners(f);
+        let (e1, e2, e3) = (b - a, c - a, c - b);
+        let cross = e1.cross(e2);
+        let twice_area = cross.length();
+        let size = e1
+            .length_squared()
+            .max(e2.length_squared())
+            .max(e3.length_squared());
+        let degenerate =
+            i == j || j == k || i == k || twice_area.is_nan() || twice_area <= 1e-6 * size;
+        let scale = if degenerate {
+            0.0
+        } else {
+            density_scale(params, params.density.sample(mesh, f, 1.0 / 3.0, 1.0 / 3.0))
+        };
+        FaceSetup {
+            face: Face {
+                normal: cross.normalize_or_zero().into(),
+                scale,
+            },
+            area: 0.5 * twice_area,
+            perimeter: e1.length() + e3.length() + e2.length(),
+            degenerate,
+        }
     }
-    let d = params.density.sample(mesh, face, 1.0 / 3.0, 1.0 / 3.0);
+}
+
+/// Scale of a face of density `d` (0 = no roots).
+fn density_scale(params: &StampParams, d: f32) -> f32 {
     if d < params.bald_below {
         return 0.0;
     }
     let step = libm::roundf(d.clamp(0.0, 1.0) * DENSITY_STEPS) / DENSITY_STEPS;
     params.black_scale + (1.0 - params.black_scale) * step
+}
+
+/// Sums over the faces that size a stamp.
+#[derive(Default)]
+struct FaceSums {
+    /// Area weighted by the squared density scale.
+    area: f64,
+    /// Perimeter of the stamped faces, weighted by the density scale.
+    perimeter: f64,
+    stamped: usize,
+    degenerate: u32,
+}
+
+impl FaceSums {
+    /// Sets up every face of `mesh` (validated), handing each to `keep`.
+    fn of(mesh: &Mesh, params: &StampParams, mut keep: impl FnMut(usize, Face)) -> Self {
+        let mut sums = FaceSums::default();
+        for f in 0..mesh.triangle_count() {
+            let setup = FaceSetup::new(mesh, params, f);
+            let s = setup.face.scale as f64;
+            if s != 0.0 {
+                sums.area += setup.area as f64 * s * s;
+                sums.perimeter += setup.perimeter as f64 * s;
+                sums.stamped += 1;
+            }
+            sums.degenerate += setup.degenerate as u32;
+            keep(f, setup.face);
+        }
+        sums
+    }
+
+    /// Upper bound on the candidates of any pass, for every radius the count
+    /// correction can reach.
+    ///
+    /// The sum of the per-face bounds of [`face_bound`] is bounded by the
+    /// same expression summed before rounding, plus 2 per face, so one walk
+    /// over the faces gives both the scaled area (hence the smallest radius)
+    /// and the bound.
+    fn bound(&self, mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
+        let r_min = if params.radius > 0.0 {
+            params.radius
+        } else {
+            let density = tile_density_lower_bound();
+            let Some(r) = first_radius(self.area, params.target_count, density) else {
+                return Ok(0);
+            };
+            r * min_radius_factor(params.target_count, mesh.triangle_count())
+        } as f64;
+        let dilated = self.area / (r_min * r_min)
+            + 0.5 * self.perimeter / r_min
+            + core::f64::consts::FRAC_PI_4 * self.stamped as f64;
+        // ids, ranks and sort keys are 32-bit
+        let bound = dilated * HEX_PACKING + 2.0 * self.stamped as f64 + 1.0;
+        if bound.is_nan() || bound > 4.0 * MAX_TARGET as f64 {
+            return Err(Error::InvalidArgument(
+                "radius too small for this mesh (over 2^30 candidates)",
+            ));
+        }
+        Ok(bound as usize)
+    }
 }
 
 /// The x extent of triangle `t` within the strip y0 <= y <= y1, if any.
@@ -394,7 +491,7 @@ pub fn max_roots(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
         return candidates_bound(mesh, params);
     }
     validate(mesh, params)?;
-    Ok(if scaled_area(mesh, params) > 0.0 {
+    Ok(if FaceSums::of(mesh, params, |_, _| {}).area > 0.0 {
         params.target_count as usize
     } else {
         0
@@ -404,60 +501,14 @@ pub fn max_roots(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
 /// Upper bound on the candidates of any pass, for every radius the count
 /// correction can reach.
 fn candidates_bound(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
-    Ok(checked_bound(mesh, params)?.0)
-}
-
-/// [`candidates_bound`] and the number of degenerate triangles.
-///
-/// The sum of the per-face bounds of [`face_bound`] is bounded by the same
-/// expression summed before rounding, plus 2 per face, so one walk over the
-/// faces gives both the scaled area (hence the smallest radius) and the bound.
-fn checked_bound(mesh: &Mesh, params: &StampParams) -> Result<(usize, u32), Error> {
-    let degenerate = validate(mesh, params)?;
-    let (mut area, mut perimeter, mut stamped) = (0.0f64, 0.0f64, 0usize);
-    for f in 0..mesh.triangle_count() {
-        let s = face_scale(mesh, params, f) as f64;
-        if s != 0.0 {
-            let (a, p) = area_and_perimeter(mesh, f);
-            area += a as f64 * s * s;
-            perimeter += p as f64 * s;
-            stamped += 1;
-        }
-    }
-    let r_min = if params.radius > 0.0 {
-        params.radius
-    } else {
-        let Some(r) = first_radius(area, params.target_count, tile_density_lower_bound()) else {
-            return Ok((0, degenerate));
-        };
-        r * min_radius_factor(params.target_count, mesh.triangle_count())
-    } as f64;
-    let dilated = area / (r_min * r_min)
-        + 0.5 * perimeter / r_min
-        + core::f64::consts::FRAC_PI_4 * stamped as f64;
-    // ids, ranks and sort keys are 32-bit
-    let bound = dilated * HEX_PACKING + 2.0 * stamped as f64 + 1.0;
-    if bound.is_nan() || bound > 4.0 * MAX_TARGET as f64 {
-        return Err(Error::InvalidArgument(
-            "radius too small for this mesh (over 2^30 candidates)",
-        ));
-    }
-    Ok((bound as usize, degenerate))
+    validate(mesh, params)?;
+    FaceSums::of(mesh, params, |_, _| {}).bound(mesh, params)
 }
 
 /// The tile's density is not known before it is built, only bounded;
 /// sizing with the bound keeps `max_roots` cheap and still an upper bound.
 fn tile_density_lower_bound() -> f32 {
     0.5
-}
-
-fn scaled_area(mesh: &Mesh, params: &StampParams) -> f64 {
-    (0..mesh.triangle_count())
-        .map(|f| {
-            let s = face_scale(mesh, params, f) as f64;
-            mesh.area(f) as f64 * s * s
-        })
-        .sum()
 }
 
 fn first_radius(scaled_area: f64, target: u32, density: f32) -> Option<f32> {
@@ -921,37 +972,29 @@ impl<'m, 'a> Stamper<'m, 'a> {
         params: &StampParams,
         arena: &mut Arena<'a>,
     ) -> Result<Option<Self>, Error> {
-        let degenerate = validate(&mesh, params)?;
-        Self::build(mesh, params, degenerate, arena)
+        validate(&mesh, params)?;
+        Ok(Self::build(mesh, params, arena)?.0)
     }
 
-    /// [`Stamper::new`] on inputs already validated.
+    /// [`Stamper::new`] on inputs already validated, with the face sums.
     fn build(
         mesh: Mesh<'m>,
         params: &StampParams,
-        degenerate: u32,
         arena: &mut Arena<'a>,
-    ) -> Result<Option<Self>, Error> {
+    ) -> Result<(Option<Self>, FaceSums), Error> {
         let tile = Tile::build(params.seed, arena)?;
         let faces = arena.alloc::<Face>(mesh.triangle_count())?;
         let places = arena.alloc::<TilePlace>(mesh.triangle_count())?;
         let laid = arena.alloc::<Unfolded>(mesh.triangle_count())?;
-        let mut area = 0.0f64;
-        for (f, face) in faces.iter_mut().enumerate() {
-            let scale = face_scale(&mesh, params, f);
-            *face = Face {
-                normal: mesh.face_normal(f).into(),
-                scale,
-            };
-            area += mesh.area(f) as f64 * (scale as f64) * (scale as f64);
-        }
+        let sums = FaceSums::of(&mesh, params, |f, face| faces[f] = face);
+        let area = sums.area;
         let fixed = params.radius > 0.0;
         let radius = if fixed {
             params.radius
         } else {
             match first_radius(area, params.target_count, tile.density()) {
                 Some(r) => r,
-                None => return Ok(None),
+                None => return Ok((None, sums)),
             }
         };
         let (scale, normal) = (|f: usize| faces[f].scale, |f: usize| faces[f].normal.into());
@@ -984,13 +1027,13 @@ impl<'m, 'a> Stamper<'m, 'a> {
             radius,
             previous: None,
             passes: 0,
-            degenerate,
+            degenerate: sums.degenerate,
             spacings: lod_spacings(),
         };
         if !fixed {
             stamper.radius = stamper.predicted_radius();
         }
-        Ok(Some(stamper))
+        Ok((Some(stamper), sums))
     }
 
     /// Expected number of points the edge pass removes at radius `r`: each
@@ -1540,19 +1583,30 @@ pub fn stamp_with_progress(
         }
     };
     done(0.0)?;
-    // validated once; the bound holds for every radius the stamper reaches
-    let (bound, degenerate) = checked_bound(&mesh, params)?;
-    let need = bytes_for(&mesh, bound);
-    if arena.remaining() < need {
-        return Err(Error::CapacityExceeded {
-            needed: need,
-            available: arena.remaining(),
-        });
+    validate(&mesh, params)?;
+    let available = arena.remaining();
+    let too_small = |bound| Error::CapacityExceeded {
+        needed: bytes_for(&mesh, bound),
+        available,
+    };
+    // the faces are set up once, for the stamper and the bound (which holds
+    // for every radius the stamper reaches); an arena too small for the
+    // stamper itself is reported with the whole need
+    let (stamper, sums) = match Stamper::build(mesh, params, arena) {
+        Err(Error::CapacityExceeded { .. }) => {
+            let sums = FaceSums::of(&mesh, params, |_, _| {});
+            return Err(too_small(sums.bound(&mesh, params)?));
+        }
+        built => built?,
+    };
+    let bound = sums.bound(&mesh, params)?;
+    if available < bytes_for(&mesh, bound) {
+        return Err(too_small(bound));
     }
-    let Some(mut stamper) = Stamper::build(mesh, params, degenerate, arena)? else {
+    let Some(mut stamper) = stamper else {
         done(1.0)?;
         let report = StampReport {
-            degenerate_triangles: degenerate,
+            degenerate_triangles: sums.degenerate,
             ..StampReport::default()
         };
         return Ok((0, report));
@@ -2023,14 +2077,22 @@ mod tests {
             Err(Error::NonFinite { .. })
         ));
         let mesh = m.mesh();
-        let mut buf = vec![0u8; 100];
-        let mut out = vec![Root::default(); 10];
-        let mut arena = Arena::new(&mut buf);
-        let err = stamp(mesh, &params(100), &mut arena, &mut out).unwrap_err();
-        assert!(matches!(
-            err,
-            Error::CapacityExceeded { available: 100, .. }
-        ));
+        let need = required_bytes(&mesh, &params(100)).unwrap();
+        let mut out = vec![Root::default(); 100];
+        // too small for the stamper itself, and big enough for it but not
+        // for the passes: both report the whole need
+        for size in [100, need - 1] {
+            let mut buf = vec![0u8; size];
+            let mut arena = Arena::new(&mut buf);
+            let err = stamp(mesh, &params(100), &mut arena, &mut out).unwrap_err();
+            assert_eq!(
+                err,
+                Error::CapacityExceeded {
+                    needed: need,
+                    available: size
+                }
+            );
+        }
         assert!(out.iter().all(|r| *r == Root::default()));
         let mut p = params(100);
         p.black_scale = 0.0;
