@@ -1044,16 +1044,17 @@ impl<'m, 'a> Stamper<'m, 'a> {
     fn predicted_loss(&self, r: f32) -> f64 {
         let k = 0.5 / r;
         let mut loss = 0.0f32;
-        let stamped = self
-            .faces
-            .iter()
-            .zip(self.places)
-            .filter(|(f, _)| f.scale != 0.0);
-        for (_, place) in stamped {
-            // a linked edge loses nothing: both sides are one piece of the stamp
-            for i in (0..3).filter(|&i| place.edges & (1 << i) == 0) {
+        // branch-free: a linked edge (both sides are one piece of the stamp)
+        // and an unstamped face's edges (zero length) add exactly 0
+        for place in self.places {
+            for i in 0..3 {
                 let x = place.edge(i).length() * k;
-                loss += x * x / (x + EDGE_LOSS_KNEE);
+                let cut = place.edges & (1 << i) == 0;
+                loss += if cut {
+                    x * x / (x + EDGE_LOSS_KNEE)
+                } else {
+                    0.0
+                };
             }
         }
         EDGE_LOSS as f64 * loss as f64
