@@ -24,8 +24,6 @@ pub const CELL: usize = 2;
 pub const CELLS: usize = TILE_SIDE / CELL;
 /// Candidates tried around each active point before it retires (Bridson's k).
 const ATTEMPTS: u32 = 30;
-/// Draws [`annulus_offset`] makes before it gives up on a candidate.
-const ANNULUS_DRAWS: u32 = 64;
 /// Background grid cells per side during generation: cell diagonal <= 1.
 const GEN_CELLS: usize = 68;
 /// An upper bound on points at unit spacing on the torus (hexagonal packing).
@@ -167,10 +165,12 @@ fn bridson(seed: u64, points: &mut [[f32; 2]], grid: &mut [[f32; 2]], active: &m
         let centre = points[active[slot] as usize];
         let mut placed = false;
         for _ in 0..ATTEMPTS {
-            let Some([dx, dy]) = annulus_offset(&mut next) else {
-                continue;
-            };
-            let p = [wrap_coord(centre[0] + dx), wrap_coord(centre[1] + dy)];
+            let angle = next() * core::f32::consts::TAU;
+            let radius = libm::sqrtf(1.0 + 3.0 * next());
+            let p = [
+                wrap_coord(centre[0] + radius * libm::cosf(angle)),
+                wrap_coord(centre[1] + radius * libm::sinf(angle)),
+            ];
             if n < points.len() && fits(p, grid, h) {
                 points[n] = p;
                 grid[cell_of(p)] = p;
@@ -187,19 +187,6 @@ fn bridson(seed: u64, points: &mut [[f32; 2]], grid: &mut [[f32; 2]], active: &m
         }
     }
     n
-}
-
-/// Draws in the square around the origin until the point falls in the
-/// annulus 1 <= d < 2, which gives Bridson's uniform candidate without
-/// trigonometry (59% of draws land in it); `None` after [`ANNULUS_DRAWS`]
-/// misses, a chance under 10^-24.
-fn annulus_offset(next: &mut impl FnMut() -> f32) -> Option<[f32; 2]> {
-    (0..ANNULUS_DRAWS).find_map(|_| {
-        let (dx, dy) = (4.0 * next() - 2.0, 4.0 * next() - 2.0);
-        (1.0..4.0)
-            .contains(&(dx * dx + dy * dy))
-            .then_some([dx, dy])
-    })
 }
 
 /// Whether `p` is at least 1 from every point in the 5x5 generation cells
