@@ -20,6 +20,19 @@ pub struct Mesh<'a> {
     pub normals: Option<Strided<'a, [f32; 3]>>,
 }
 
+/// One read of a face's corners (see [`Mesh::shape`]).
+#[derive(Clone, Copy, Debug)]
+pub struct FaceShape {
+    /// Corner 0 to 1, corner 0 to 2, corner 1 to 2.
+    pub edges: [Vec3; 3],
+    /// The cross product of the first two edges: along the normal, twice
+    /// the area long.
+    pub cross: Vec3,
+    /// The face repeats a vertex or its area is negligible next to its
+    /// edge lengths.
+    pub degenerate: bool,
+}
+
 /// What [`Mesh::validate`] found.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MeshReport {
@@ -164,18 +177,31 @@ impl<'a> Mesh<'a> {
     /// True when `face` repeats a vertex or its area is negligible next to
     /// its edge lengths (relative test, so it does not depend on the units).
     pub fn is_degenerate(&self, face: usize) -> bool {
+        self.shape(face).degenerate
+    }
+
+    /// The edges of `face`, their cross product and whether the face is
+    /// degenerate, from one read of its corners: [`area`](Self::area),
+    /// [`face_normal`](Self::face_normal) and
+    /// [`is_degenerate`](Self::is_degenerate) derive from these, bit for bit.
+    #[inline]
+    pub fn shape(&self, face: usize) -> FaceShape {
         let [i, j, k] = self.triangles.get(face);
-        if i == j || j == k || i == k {
-            return true;
-        }
         let [a, b, c] = self.corners(face);
-        let (e1, e2) = (b - a, c - a);
-        let scale = e1
+        let edges = [b - a, c - a, c - b];
+        let cross = edges[0].cross(edges[1]);
+        let twice_area = cross.length();
+        let size = edges[0]
             .length_squared()
-            .max(e2.length_squared())
-            .max((c - b).length_squared());
-        let twice_area = e1.cross(e2).length();
-        twice_area.is_nan() || twice_area <= 1e-6 * scale
+            .max(edges[1].length_squared())
+            .max(edges[2].length_squared());
+        let degenerate =
+            i == j || j == k || i == k || twice_area.is_nan() || twice_area <= 1e-6 * size;
+        FaceShape {
+            edges,
+            cross,
+            degenerate,
+        }
     }
 
     /// Unit geometric normal of `face` (zero for a degenerate face).

@@ -341,34 +341,25 @@ struct FaceSetup {
 }
 
 impl FaceSetup {
-    /// The same values [`Mesh::area`], [`Mesh::face_normal`] and
-    /// [`Mesh::is_degenerate`] give, bit for bit; the scale is that of the
-    /// density (0 = no roots: bald or degenerate).
+    /// The area, normal and degeneracy [`Mesh::shape`] gives, the
+    /// perimeter, and the scale of the density (0 = no roots: bald or
+    /// degenerate).
     fn new(mesh: &Mesh, params: &StampParams, f: usize) -> Self {
-        let [i, j, k] = mesh.triangles.get(f);
-        let [a, b, c] = mesh.corners(f);
-        let (e1, e2, e3) = (b - a, c - a, c - b);
-        let cross = e1.cross(e2);
-        let twice_area = cross.length();
-        let size = e1
-            .length_squared()
-            .max(e2.length_squared())
-            .max(e3.length_squared());
-        let degenerate =
-            i == j || j == k || i == k || twice_area.is_nan() || twice_area <= 1e-6 * size;
-        let scale = if degenerate {
+        let shape = mesh.shape(f);
+        let [e1, e2, e3] = shape.edges;
+        let scale = if shape.degenerate {
             0.0
         } else {
             density_scale(params, params.density.sample(mesh, f, 1.0 / 3.0, 1.0 / 3.0))
         };
         FaceSetup {
             face: Face {
-                normal: cross.normalize_or_zero().into(),
+                normal: shape.cross.normalize_or_zero().into(),
                 scale,
             },
-            area: 0.5 * twice_area,
+            area: 0.5 * shape.cross.length(),
             perimeter: e1.length() + e3.length() + e2.length(),
-            degenerate,
+            degenerate: shape.degenerate,
         }
     }
 }
