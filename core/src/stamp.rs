@@ -561,17 +561,14 @@ impl Default for Batch {
 /// One face at one radius, in tile units: what placing its tile points needs.
 struct Placing {
     corners: [Vec2; 3],
-    /// Twice the signed area a point `p` makes with edge `e` is
-    /// `cross_x[e] * p.y - cross_y[e] * p.x - cross_c[e]`: the edge taken
-    /// from its lower-numbered vertex, and negated (exactly) when the face
-    /// runs it the other way. The two faces on a linked edge compute the
-    /// same area bit for bit, so a tile point on it goes to exactly one.
-    cross_x: [f32; 3],
-    cross_y: [f32; 3],
-    cross_c: [f32; 3],
-    /// `cross_x`, `cross_y` and `cross_c` as vectors, so the three edge
-    /// tests of a point run as one vector operation (the fourth lane passes).
-    cross4: [Vec4; 3],
+    /// `[x, y, c]`: twice the signed area a point `p` makes with edge `e`
+    /// is `x[e] * p.y - y[e] * p.x - c[e]`, the edge taken from its
+    /// lower-numbered vertex and negated (exactly) when the face runs it the
+    /// other way. The two faces on a linked edge compute the same area bit
+    /// for bit, so a tile point on it goes to exactly one. Lanes are edges,
+    /// so a point's three tests run as one vector operation; the fourth
+    /// lane always passes.
+    cross: [Vec4; 3],
     /// Whether the face takes the points exactly on edge `e` (when it runs
     /// the edge from its lower vertex); the fourth lane is unused.
     ties: BVec4A,
@@ -593,10 +590,7 @@ impl Placing {
         let corners = face.corners.map(at);
         let mut place = Placing {
             corners,
-            cross_x: [0.0; 3],
-            cross_y: [0.0; 3],
-            cross_c: [0.0; 3],
-            cross4: [Vec4::ZERO; 3],
+            cross: [Vec4::ZERO; 3],
             ties: BVec4A::FALSE,
             inv_len: [0.0; 3],
             inv_det: 1.0 / (corners[1] - corners[0]).perp_dot(corners[2] - corners[0]),
@@ -605,15 +599,17 @@ impl Placing {
             far_dir: [Vec2::ZERO; 6],
             far_len: [0.0; 6],
         };
-        let mut ties = [false; 3];
+        // built as arrays (writing a vector's lanes one by one is slower);
+        // the fourth lane's area is 1, so it always passes
+        let (mut cross, mut ties) = ([[0.0; 4], [0.0; 4], [0.0, 0.0, 0.0, -1.0]], [false; 3]);
         for i in 0..3 {
             let (p, q) = (corners[i], corners[(i + 1) % 3]);
             let forward = face.edges & (64 << i) != 0;
             let (from, to) = if forward { (p, q) } else { (q, p) };
             let (dir, sign) = (to - from, if forward { 1.0 } else { -1.0 });
-            place.cross_x[i] = sign * dir.x;
-            place.cross_y[i] = sign * dir.y;
-            place.cross_c[i] = sign * dir.perp_dot(from);
+            cross[0][i] = sign * dir.x;
+            cross[1][i] = sign * dir.y;
+            cross[2][i] = sign * dir.perp_dot(from);
             ties[i] = forward;
             place.inv_len[i] = 1.0 / (q - p).length();
             if face.edges & (1 << i) != 0 {
@@ -627,21 +623,16 @@ impl Placing {
                 }
             }
         }
-        let [x, y, c] = [place.cross_x, place.cross_y, place.cross_c];
-        place.cross4 = [
-            Vec4::new(x[0], x[1], x[2], 0.0),
-            Vec4::new(y[0], y[1], y[2], 0.0),
-            Vec4::new(c[0], c[1], c[2], -1.0),
-        ];
+        place.cross = cross.map(Vec4::from_array);
         place.ties = BVec4A::new(ties[0], ties[1], ties[2], false);
         place
     }
 
-    /// Twice the signed area tile point `(x, y)` makes with edge `e`
-    /// (positive inside).
+    /// [`cross`](Self::cross) as arrays, for code that reads it by edge
+    /// (a vector read by a varying lane is slower).
     #[inline]
-    fn area(&self, e: usize, x: f32, y: f32) -> f32 {
-        self.cross_x[e] * y - self.cross_y[e] * x - self.cross_c[e]
+    fn cross_by_edge(&self) -> [[f32; 4]; 3] {
+        self.cross.map(<[f32; 4]>::from)
     }
 
     /// Adds tile point `p` to `batch` when it lies inside the face (the
@@ -649,8 +640,9 @@ impl Placing {
     /// other point). `batch` must have room.
     #[inline]
     fn test(&self, batch: &mut Batch, p: Vec2, level: u8) {
-        let [cx, cy, cc] = self.cross4;
-        // the same operations in the same order as `area`, so the same bits
+        let [cx, cy, cc] = self.cross;
+        // the same operations in the same order as `emit`'s barycentrics,
+        // so the same bits
         let s = cx * Vec4::splat(p.y) - cy * Vec4::splat(p.x) - cc;
         let inside = (s.cmpgt(Vec4::ZERO) | (s.cmpeq(Vec4::ZERO) & self.ties)).all();
         // the caller keeps len below BATCH; the mask spares the bounds checks
@@ -679,12 +671,12 @@ impl Placing {
         let mut near = [0u16; BATCH];
         let lanes = len.div_ceil(LANES) * LANES;
         self.near_levels(&batch.x[..lanes], &batch.y[..lanes], squares, &mut near);
+        let [cx, cy, cc] = self.cross_by_edge();
         for (i, c) in out.iter_mut().enumerate() {
             let (x, y) = (batch.x[i], batch.y[i]);
-            let (u, v) = (
-                self.area(2, x, y) * self.inv_det,
-                self.area(0, x, y) * self.inv_det,
-            );
+            // twice the signed area with edge e
+            let area = |e: usize| cx[e] * y - cy[e] * x - cc[e];
+            let (u, v) = (area(2) * self.inv_det, area(0) * self.inv_det);
             // a point inside by the edge tests can still round a hair
             // outside in barycentrics; u + v then sums to at most 1 in f32
             let u = u.clamp(0.0, 1.0);
@@ -704,11 +696,12 @@ impl Placing {
     /// far side of a linked neighbour (up to there, every point comes from
     /// one piece of the stamp), and the squared spacings of the levels.
     fn near_levels(&self, xs: &[f32], ys: &[f32], squares: &[f32; LOD_LEVELS], out: &mut [u16]) {
+        let [cross_x, cross_y, cross_c] = self.cross_by_edge();
         let lanes = xs.chunks_exact(LANES).zip(ys.chunks_exact(LANES));
         for ((x, y), d) in lanes.zip(out.chunks_exact_mut(LANES)) {
             let mut best = [f32::INFINITY; LANES];
             for e in 0..3 {
-                let (cx, cy, cc) = (self.cross_x[e], self.cross_y[e], self.cross_c[e]);
+                let (cx, cy, cc) = (cross_x[e], cross_y[e], cross_c[e]);
                 let inv_len = self.inv_len[e];
                 let mut term = [0.0; LANES];
                 for l in 0..LANES {
