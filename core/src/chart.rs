@@ -95,20 +95,26 @@ pub fn unfold(
     let heap = arena.alloc::<u64>(3 * faces)?;
     let stamped = |f: usize| scale(f) != 0.0;
     match_edges(mesh, &stamped, start, entries, twin);
-    for (f, u) in out.iter_mut().enumerate() {
+    // the chart of each face, where the growth looks it up: a small array
+    // stays in cache where the laid-out faces would not (the edge entries
+    // are done with, and have room)
+    let chart_of = &mut bytemuck::cast_slice_mut::<u64, u32>(entries)[..faces];
+    for (f, (u, c)) in out.iter_mut().zip(chart_of.iter_mut()).enumerate() {
+        *c = f as u32;
         if stamped(f) {
-            u.chart = NONE;
+            (u.chart, *c) = (NONE, NONE);
             u.edges = (0..3).fold(0, |e, i| e | ((twin[3 * f + i] != NONE) as u32) << (3 + i));
         }
     }
     let mut heap = Heap { keys: heap, len: 0 };
     for seed in 0..faces {
-        if !stamped(seed) || out[seed].chart != NONE {
+        if chart_of[seed] != NONE {
             continue;
         }
         out[seed].corners = seed_corners(mesh, seed, scale(seed));
         out[seed].across = [[0.0; 2]; 3];
         out[seed].chart = seed as u32;
+        chart_of[seed] = seed as u32;
         for i in 0..3 {
             heap.push_edge(mesh, twin, 3 * seed + i);
         }
@@ -116,7 +122,7 @@ pub fn unfold(
             let (f, i) = (h / 3, h % 3);
             let t = twin[h] as usize;
             let (g, j) = (t / 3, t % 3);
-            if out[g].chart != NONE || scale(g) != scale(f) {
+            if chart_of[g] != NONE || scale(g) != scale(f) {
                 continue;
             }
             if normal(f).dot(normal(g)) < MIN_NORMAL_DOT {
@@ -136,12 +142,13 @@ pub fn unfold(
             out[g].corners = corners;
             out[g].across = across;
             out[g].chart = seed as u32;
+            chart_of[g] = seed as u32;
             out[g].edges |= 1 << j;
             out[f].across[i] = w.into();
             out[f].edges |= 1 << i;
             for k in [(j + 1) % 3, (j + 2) % 3] {
                 let o = twin[3 * g + k];
-                if o != NONE && out[o as usize / 3].chart == NONE {
+                if o != NONE && chart_of[o as usize / 3] == NONE {
                     heap.push_edge(mesh, twin, 3 * g + k);
                 }
             }
@@ -250,7 +257,12 @@ fn unfold_across(
     a2 + (x * t + right * h) * scale
 }
 
-/// A binary max-heap of border half-edges keyed by (edge length, index).
+/// Children of a heap node: a 4-ary heap is half as deep as a binary one,
+/// and a node's children share a cache line.
+const ARITY: usize = 4;
+
+/// A max-heap of border half-edges keyed by (edge length, index). Keys are
+/// distinct, so any heap pops them in the same order.
 struct Heap<'a> {
     keys: &'a mut [u64],
     len: usize,
@@ -265,13 +277,14 @@ impl Heap<'_> {
         let c = mesh.corners(h / 3);
         let length = (c[(h + 1) % 3] - c[h % 3]).length();
         // a positive float's bits order like the float
+        let key = (length.to_bits() as u64) << 32 | h as u64;
         let mut k = self.len;
-        self.keys[k] = (length.to_bits() as u64) << 32 | h as u64;
         self.len += 1;
-        while k > 0 && self.keys[(k - 1) / 2] < self.keys[k] {
-            self.keys.swap(k, (k - 1) / 2);
-            k = (k - 1) / 2;
+        while k > 0 && self.keys[(k - 1) / ARITY] < key {
+            self.keys[k] = self.keys[(k - 1) / ARITY];
+            k = (k - 1) / ARITY;
         }
+        self.keys[k] = key;
     }
 
     fn pop(&mut self) -> Option<usize> {
@@ -280,23 +293,27 @@ impl Heap<'_> {
         }
         let top = self.keys[0];
         self.len -= 1;
-        self.keys[0] = self.keys[self.len];
+        let key = self.keys[self.len];
         let mut k = 0;
         loop {
-            let (l, r) = (2 * k + 1, 2 * k + 2);
-            let mut m = k;
-            if l < self.len && self.keys[l] > self.keys[m] {
-                m = l;
-            }
-            if r < self.len && self.keys[r] > self.keys[m] {
-                m = r;
-            }
-            if m == k {
+            let first = ARITY * k + 1;
+            if first >= self.len {
                 break;
             }
-            self.keys.swap(k, m);
-            k = m;
+            let children = &self.keys[first..(first + ARITY).min(self.len)];
+            let (mut m, mut largest) = (0, children[0]);
+            for (c, &child) in children.iter().enumerate().skip(1) {
+                if child > largest {
+                    (m, largest) = (c, child);
+                }
+            }
+            if largest <= key {
+                break;
+            }
+            self.keys[k] = largest;
+            k = first + m;
         }
+        self.keys[k] = key;
         Some((top & 0xFFFF_FFFF) as usize)
     }
 }

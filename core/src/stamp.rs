@@ -901,7 +901,7 @@ pub struct Scratch<'a> {
     /// Bucket heads of the grid.
     heads: &'a mut [u32],
     /// Grid links; in the LOD pass first the candidates that take part, in
-    /// the end the rank keys, then the ranks.
+    /// the end the rank keys.
     next: &'a mut [u32],
     /// Edge-pass mark or LOD level of each candidate.
     level: &'a mut [u8],
@@ -1399,14 +1399,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
         for c in counts.iter_mut() {
             (*c, first) = (first, first + *c);
         }
-        for key in keys.iter_mut() {
-            let next = &mut counts[*key as usize];
-            (*key, *next) = (*next, *next + 1);
-        }
         done(1.0)?;
-        let ranks = &*keys;
+        // the slot a candidate takes is its rank; they are handed out in
+        // candidate order, which is also the output's
         let mut id = 0;
-        for (c, &rank) in cands.iter().zip(ranks) {
+        for (c, &key) in cands.iter().zip(&*keys) {
+            let next = &mut counts[key as usize];
+            let rank = *next;
+            *next += 1;
             if (rank as usize) < m {
                 out[id] = Root {
                     face: c.face,
