@@ -1,0 +1,1048 @@
+//! Poisson stamping of hair roots (paper section 2.3), with the edge
+//! violations removed and a nested LOD order.
+//!
+//! Every triangle is laid flat, scaled by its density, rotated and translated
+//! inside a periodic Poisson tile, and takes the tile points that fall inside
+//! it. Where the paper places each triangle at random on its own, neighbouring
+//! triangles that bend by less than [`chart::MAX_BEND_DEGREES`] and share a
+//! density step are unfolded together into charts (see [`chart`]), and each
+//! chart takes one random rotation and offset (keyed by its first triangle):
+//! across the edges inside a chart the points come from one continuous piece
+//! of the tile, so they need no repair. Then:
+//! 1. **Edge pass.** Points of different triangles closer than the disk radius
+//!    (in 3D) are resolved by dropping the later one, in face order. Only
+//!    points whose disk reaches a cut edge, or past a linked neighbour, take
+//!    part (27% of them at 1M roots on the creature, 69% with a placement per
+//!    triangle). Across a linked edge that bends by `a`, the tile's spacing
+//!    shrinks by at most `cos(a / 2)` in 3D (0.99905 at 5 degrees).
+//! 2. **Count.** The radius is derived so the *expected* number of stamped
+//!    points equals the target: for a uniform random placement in a periodic
+//!    tile of density `rho` points per `r^2`, a triangle of flattened area `A`
+//!    scaled by `s` receives `rho * A * s^2 / r^2` points on average, hence
+//!    `r = sqrt(rho * sum(A_i s_i^2) / N)`. The edge pass removes a
+//!    mesh-dependent share, which a model fitted to the measured loss per
+//!    length of cut edge predicts for the first pass; the measured count then
+//!    corrects the radius until the count is within [`COUNT_TOLERANCE`] of
+//!    the target (dense stamps usually need no correction). (The paper's
+//!    `0.35 / (sqrt(N) * A_max_normalized)` is not dimensionally a length.)
+//! 3. **LOD.** Each tile point carries a nested level. Across triangles, a
+//!    point moves to the first level whose spacing it respects from every
+//!    point of another triangle that comes before it (a coarser tile level,
+//!    or the same level on an earlier triangle); the rule reads tile levels
+//!    only, so it needs one query per point and level and no re-checking.
+//!    The rank is a counting sort by (level, hash of the index).
+//!
+//! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
+//! spread it over threads; the result is bitwise identical for any split.
+
+mod lod;
+mod near;
+mod place;
+mod prune;
+mod scratch;
+mod sizing;
+
+use crate::arena::{Arena, ArenaLayout};
+use crate::chart::{self, Unfolded};
+use crate::tile::{Tile, LOD_LEVELS, TILE_SIDE};
+use crate::{Error, Mesh, Root, ScalarMap};
+use bytemuck::{Pod, Zeroable};
+use core::ops::Range;
+use glam::Vec3;
+use place::{ChartFrame, TilePlace};
+pub use scratch::Scratch;
+use sizing::*;
+pub use sizing::{max_roots, required_bytes, DENSITY_STEPS};
+
+/// Width of the band above the target where the radius correction stops;
+/// the surplus is trimmed by LOD rank.
+pub const COUNT_TOLERANCE: f32 = 0.02;
+/// Grid cells of the edge and LOD passes, in disk radii (times the level's
+/// spacing): larger cells mean fewer buckets per face's query box but more
+/// points per bucket; 5 measured best against 3, 4, 6 and 8 on the creature
+/// at 1M roots.
+const GRID_CELL: f32 = 5.0;
+/// Points the edge pass removes per disk radius of cut edge (an edge whose
+/// two faces are not laid out together, see [`chart`]), and the edge
+/// length (in radii) below which the loss falls off: a fit of the measured
+/// loss over creature meshes of 16K to 262K triangles and 10K to 3M roots.
+/// On the default creature every count from 10K to 1M lands in the count
+/// band in one pass; elsewhere the first pass misses by up to 3.5% at 100K
+/// roots and more, and by more at 10K on dense meshes. The model only picks
+/// the first radius; the measured count corrects the rest.
+const EDGE_LOSS: f32 = 0.13;
+/// See [`EDGE_LOSS`].
+const EDGE_LOSS_KNEE: f32 = 0.12;
+/// How far a chart reaches from its first corner, in disk radii: two
+/// tiles. Charts cut at the reach add edges to check; a larger reach saves
+/// little more (27.0% of the points take part in the edge pass at 1M roots
+/// on the creature, 29.1% at one tile, 25.6% unbounded).
+const CHART_REACH: f32 = 2.0 * TILE_SIDE as f32;
+/// Fixed-point steps of the first radius.
+const PREDICTION_STEPS: u32 = 4;
+/// Passes that correct the radius from the measured count.
+const SECANT_PASSES: u32 = 5;
+/// Passes after which the stamp is accepted whatever its count.
+const MAX_PASSES: u32 = 16;
+/// Lowest radius, relative to the first estimate, a correction may reach
+/// (bounds the candidate memory).
+const MIN_RADIUS_FACTOR: f32 = 0.7;
+/// The same for sparse stamps (fewer than 4 roots per triangle), where the
+/// edge pass removes up to half the points; their candidate memory is small.
+const MIN_RADIUS_FACTOR_SPARSE: f32 = 0.45;
+
+fn min_radius_factor(target: u32, faces: usize) -> f32 {
+    if (target as usize) < 4 * faces {
+        MIN_RADIUS_FACTOR_SPARSE
+    } else {
+        MIN_RADIUS_FACTOR
+    }
+}
+
+/// Stamping parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct StampParams<'a> {
+    /// Number of roots wanted on the whole mesh (ignored when `radius` is set).
+    pub target_count: u32,
+    /// A fixed disk radius instead of a count: 0 derives the radius from
+    /// `target_count`; a positive value stamps at that spacing and keeps
+    /// every root (the paper's setting, where darker maps give fewer roots).
+    pub radius: f32,
+    /// Seed of every random choice; same seed, same roots.
+    pub seed: u64,
+    /// Grayscale density in `[0, 1]`, sampled at each triangle's centroid.
+    pub density: ScalarMap<'a>,
+    /// Triangle scale for black (density 0); white is 1, gray interpolates
+    /// linearly. The paper's "black = half size" is 0.5.
+    pub black_scale: f32,
+    /// Triangles whose density is below this value get no roots (bald
+    /// regions such as faces and palms). 0 disables it.
+    pub bald_below: f32,
+}
+
+impl Default for StampParams<'_> {
+    fn default() -> Self {
+        StampParams {
+            target_count: 0,
+            radius: 0.0,
+            seed: 0,
+            density: ScalarMap::Constant(1.0),
+            black_scale: 0.5,
+            bald_below: 1.0 / 512.0,
+        }
+    }
+}
+
+/// What stamping did, for logs and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StampReport {
+    /// Final disk radius (the minimum 3D spacing in white regions).
+    pub radius: f32,
+    /// Points taken from the stamp in the last pass.
+    pub candidates: u32,
+    /// Points the edge pass removed in the last pass.
+    pub pruned: u32,
+    /// Surplus roots trimmed by LOD rank to land exactly on the target.
+    pub trimmed: u32,
+    /// Degenerate triangles skipped.
+    pub degenerate_triangles: u32,
+    /// Stamping passes run (radius corrections + 1).
+    pub passes: u32,
+}
+
+/// A stamped point before the edge pass: where it is and which tile level it had.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Candidate {
+    /// Triangle index.
+    pub face: u32,
+    /// Barycentric coordinates on the triangle.
+    pub uv: [f32; 2],
+    /// LOD level inherited from the tile (0 = coarsest).
+    pub level: u16,
+    /// How many LOD levels, coarsest first, have a spacing (in units of the
+    /// local disk radius) that reaches from the point past a cut edge of its
+    /// triangle or the far side of a linked neighbour. Within that distance
+    /// every point comes from the same piece of the tile, so only at those
+    /// levels can the point conflict with points of other triangles;
+    /// [`LOD_LEVELS`] means even the disk radius reaches (the point takes
+    /// part in the edge pass).
+    pub near_levels: u16,
+}
+
+impl Candidate {
+    /// Whether the disk radius reaches past the triangle's boundary, so that
+    /// the point takes part in the edge pass.
+    #[inline]
+    pub fn near_edge(&self) -> bool {
+        self.near_levels as usize == LOD_LEVELS
+    }
+}
+
+/// The spacing of each LOD level in units of the disk radius: `sqrt(2)`
+/// between levels, 1 at the finest.
+fn lod_spacings() -> [f32; LOD_LEVELS] {
+    core::array::from_fn(|k| libm::powf(2.0, 0.5 * (LOD_LEVELS - 1 - k) as f32))
+}
+
+/// Corner 0 of face `f` and its edges to corners 1 and 2: a point at
+/// barycentric `(u, v)` lies at `a + e1 * u + e2 * v`.
+#[inline]
+fn face_frame(mesh: &Mesh, f: usize) -> [Vec3; 3] {
+    let [a, b, c] = mesh.corners(f);
+    [a, b - a, c - a]
+}
+
+/// Per-face data the edge and LOD passes read for every point they test.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+struct Face {
+    normal: [f32; 3],
+    /// 0 for a skipped (degenerate or bald) face.
+    scale: f32,
+}
+/// The stamping state for one mesh and parameter set: the tile, per-face
+/// scales and the current radius.
+pub struct Stamper<'m, 'a> {
+    mesh: Mesh<'m>,
+    seed: u64,
+    target: u32,
+    tile: Tile<'a>,
+    faces: &'a [Face],
+    places: &'a [TilePlace],
+    scaled_area: f64,
+    first_radius: f32,
+    radius: f32,
+    /// The radius was given: one pass, every root kept.
+    fixed: bool,
+    /// Radius and kept count of the previous pass, for the secant.
+    previous: Option<(f32, usize)>,
+    passes: u32,
+    degenerate: u32,
+    /// [`lod_spacings`].
+    spacings: [f32; LOD_LEVELS],
+}
+
+/// Smallest `black_scale`: the spacing in black regions is the radius over
+/// it, and the grid queries grow with its cube.
+pub const MIN_BLACK_SCALE: f32 = 0.1;
+
+/// Largest target count (ids and ranks are 32-bit; arenas stay addressable).
+pub const MAX_TARGET: u32 = 1 << 28;
+
+fn validate(mesh: &Mesh, params: &StampParams) -> Result<(), Error> {
+    if params.target_count > MAX_TARGET {
+        return Err(Error::InvalidArgument("target_count exceeds 2^28"));
+    }
+    if !params.radius.is_finite() {
+        return Err(Error::NonFinite {
+            what: "radius",
+            index: 0,
+        });
+    }
+    if params.radius < 0.0 {
+        return Err(Error::InvalidArgument(
+            "radius must be 0 (use the count) or positive",
+        ));
+    }
+    if !params.black_scale.is_finite() {
+        return Err(Error::NonFinite {
+            what: "black_scale",
+            index: 0,
+        });
+    }
+    if !(MIN_BLACK_SCALE..=1.0).contains(&params.black_scale) {
+        return Err(Error::InvalidArgument("black_scale must be in [0.1, 1]"));
+    }
+    if !params.bald_below.is_finite() {
+        return Err(Error::NonFinite {
+            what: "bald_below",
+            index: 0,
+        });
+    }
+    // degenerate faces are counted and skipped by the face setup
+    mesh.check()?;
+    params.density.validate(mesh, "density")
+}
+
+impl<'m, 'a> Stamper<'m, 'a> {
+    /// Adds the bytes [`Stamper::new`] takes from the arena.
+    pub fn layout(layout: &mut ArenaLayout, mesh: &Mesh) {
+        Tile::layout(layout);
+        layout
+            .add::<Face>(mesh.triangle_count())
+            .add::<TilePlace>(mesh.triangle_count())
+            .add::<Unfolded>(mesh.triangle_count());
+        chart::layout(layout, mesh);
+    }
+
+    /// Validates the inputs, builds the tile and the per-face data, and picks
+    /// the first radius. Returns `Ok(None)` when there is nothing to stamp
+    /// (target 0, or every face bald or degenerate).
+    pub fn new(
+        mesh: Mesh<'m>,
+        params: &StampParams,
+        arena: &mut Arena<'a>,
+    ) -> Result<Option<Self>, Error> {
+        validate(&mesh, params)?;
+        Ok(Self::build(mesh, params, arena)?.0)
+    }
+
+    /// [`Stamper::new`] on inputs already validated, with the face sums.
+    fn build(
+        mesh: Mesh<'m>,
+        params: &StampParams,
+        arena: &mut Arena<'a>,
+    ) -> Result<(Option<Self>, FaceSums), Error> {
+        let tile = Tile::build(params.seed, arena)?;
+        let faces = arena.alloc::<Face>(mesh.triangle_count())?;
+        let places = arena.alloc::<TilePlace>(mesh.triangle_count())?;
+        let laid = arena.alloc::<Unfolded>(mesh.triangle_count())?;
+        let sums = FaceSums::of(&mesh, params, |f, face| faces[f] = face);
+        let area = sums.area;
+        let fixed = params.radius > 0.0;
+        let radius = if fixed {
+            params.radius
+        } else {
+            match first_radius(area, params.target_count, tile.density()) {
+                Some(r) => r,
+                None => return Ok((None, sums)),
+            }
+        };
+        let (scale, normal) = (|f: usize| faces[f].scale, |f: usize| faces[f].normal.into());
+        chart::unfold(&mesh, scale, normal, CHART_REACH * radius, arena, laid)?;
+        // a chart's first face comes before its others: its frame is made
+        // once, kept in its slot, and read by the others
+        for f in 0..faces.len() {
+            places[f] = if faces[f].scale == 0.0 {
+                TilePlace::default()
+            } else {
+                let chart = laid[f].chart as usize;
+                let frame = if chart == f {
+                    ChartFrame::new(params.seed, chart)
+                } else {
+                    places[chart].frame()
+                };
+                TilePlace::new(&mesh, f, &laid[f], frame)
+            };
+        }
+        let mut stamper = Stamper {
+            mesh,
+            seed: params.seed,
+            target: params.target_count,
+            tile,
+            faces,
+            places,
+            scaled_area: area,
+            first_radius: radius,
+            fixed,
+            radius,
+            previous: None,
+            passes: 0,
+            degenerate: sums.degenerate,
+            spacings: lod_spacings(),
+        };
+        if !fixed {
+            stamper.radius = stamper.predicted_radius();
+        }
+        Ok((Some(stamper), sums))
+    }
+
+    /// Expected number of points the edge pass removes at radius `r`: each
+    /// face's half of an edge of length `l` (scaled by density, `x = l / 2r`)
+    /// loses `EDGE_LOSS * x^2 / (x + EDGE_LOSS_KNEE)` points. Long edges lose
+    /// a fixed number per radius of length; short ones less, as their faces
+    /// hold fewer points.
+    fn predicted_loss(&self, r: f32) -> f64 {
+        let k = 0.5 / r;
+        let mut loss = 0.0f32;
+        // branch-free: a linked edge (both sides are one piece of the stamp)
+        // and an unstamped face's edges (zero length) add exactly 0
+        for place in self.places {
+            for i in 0..3 {
+                let x = place.edge(i).length() * k;
+                let cut = place.edges & (1 << i) == 0;
+                loss += if cut {
+                    x * x / (x + EDGE_LOSS_KNEE)
+                } else {
+                    0.0
+                };
+            }
+        }
+        EDGE_LOSS as f64 * loss as f64
+    }
+
+    /// The radius whose stamp is expected to keep the middle of the count
+    /// band after the edge pass, so that most stamps need one pass: the
+    /// fixed point of `r = sqrt(rho * area / (aim + loss(r)))`, which
+    /// converges fast as the loss moves slowly with `r`.
+    fn predicted_radius(&self) -> f32 {
+        let aim = self.target as f64 * (1.0 + 0.5 * COUNT_TOLERANCE as f64);
+        let stamped = self.first_radius as f64 * self.first_radius as f64 * self.target as f64;
+        let floor = self.first_radius * min_radius_factor(self.target, self.mesh.triangle_count());
+        let mut r = self.first_radius;
+        for _ in 0..PREDICTION_STEPS {
+            r = (libm::sqrt(stamped / (aim + self.predicted_loss(r))) as f32).max(floor);
+        }
+        r
+    }
+
+    /// Current disk radius.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
+    /// Sum of triangle areas weighted by squared density scale.
+    pub fn scaled_area(&self) -> f64 {
+        self.scaled_area
+    }
+
+    /// Upper bound on the candidates [`stamp_faces`](Self::stamp_faces) writes
+    /// for `faces`, valid for every radius the correction can reach.
+    pub fn candidate_bound(&self, faces: Range<usize>) -> usize {
+        let r_min = if self.fixed {
+            self.radius
+        } else {
+            self.first_radius * min_radius_factor(self.target, self.mesh.triangle_count())
+        };
+        faces
+            .map(|f| face_bound(&self.mesh, f, self.faces[f].scale, r_min))
+            .sum()
+    }
+
+    /// The local disk radius at face `f` (larger where the density is lower).
+    #[inline]
+    fn local_radius(&self, f: u32) -> f32 {
+        self.radius / self.faces[f as usize].scale
+    }
+
+    /// Feeds back the count of the last pass. Returns true when it is close
+    /// enough to the target; otherwise adjusts the radius for another pass.
+    pub fn converged(&mut self, candidates: usize, kept: usize) -> bool {
+        self.passes += 1;
+        if self.fixed {
+            return true;
+        }
+        let target = self.target as f32;
+        let excess = (kept as f32 - target) / target;
+        if (0.0..=COUNT_TOLERANCE).contains(&excess) || kept == 0 || self.passes >= MAX_PASSES {
+            return true;
+        }
+        let aim = target as f64 * (1.0 + 0.5 * COUNT_TOLERANCE as f64);
+        let r1 = self.radius as f64;
+        let corrected = if self.passes < SECANT_PASSES {
+            match self.previous {
+                // a secant in log-log space through the last two passes
+                Some((r0, k0)) if r0 != self.radius && k0 != kept && k0 > 0 => {
+                    let slope = libm::log(kept as f64 / k0 as f64) / libm::log(r1 / r0 as f64);
+                    (r1 * libm::pow(aim / kept as f64, 1.0 / slope)) as f32
+                }
+                // Stamped points scale like 1/r^2 and the edge pass removes a
+                // share proportional to r (boundary length over area), so
+                // kept(r) = c / r^2 * (1 - f * r / r1) with c and f measured
+                // at the current radius r1. Aim inside the band [target,
+                // target * (1 + tolerance)]; `finish` trims the surplus.
+                _ => {
+                    let c = candidates as f64 * r1 * r1;
+                    let f = 1.0 - kept as f64 / candidates.max(1) as f64;
+                    let b = c * f / r1;
+                    ((-b + libm::sqrt(b * b + 4.0 * aim * c)) / (2.0 * aim)) as f32
+                }
+            }
+        } else if excess > 0.0 {
+            // small counts move in steps: accept any surplus, trim it
+            return true;
+        } else {
+            self.radius * 0.97
+        };
+        let floor = self.first_radius * min_radius_factor(self.target, self.mesh.triangle_count());
+        let clamped = corrected.max(floor);
+        self.previous = Some((self.radius, kept));
+        if clamped == self.radius {
+            return true;
+        }
+        self.radius = clamped;
+        false
+    }
+
+    /// Roots [`finish`](Self::finish) writes for `kept` candidates: the
+    /// target, or all of them when the stamp fell short.
+    pub fn output_count(&self, kept: usize) -> usize {
+        if self.fixed {
+            return kept;
+        }
+        kept.min(self.target as usize)
+    }
+
+    fn report(&self, candidates: usize, kept: usize) -> StampReport {
+        StampReport {
+            radius: self.radius,
+            candidates: candidates as u32,
+            pruned: (candidates - kept) as u32,
+            trimmed: (kept - self.output_count(kept)) as u32,
+            degenerate_triangles: self.degenerate,
+            passes: self.passes,
+        }
+    }
+}
+
+/// Stamps roots on `mesh` into `out` (capacity from [`max_roots`]) using an
+/// arena of [`required_bytes`]. Returns the number of roots written and a report.
+///
+/// Nothing is written to `out` unless the call succeeds.
+pub fn stamp(
+    mesh: Mesh,
+    params: &StampParams,
+    arena: &mut Arena,
+    out: &mut [Root],
+) -> Result<(usize, StampReport), Error> {
+    stamp_with_progress(mesh, params, arena, out, &mut |_| true)
+}
+
+/// Faces stamped between two progress reports.
+const PROGRESS_FACES: usize = 8192;
+/// Share of the progress the stamping passes take (the LOD levels and the
+/// ranks take the rest): pass `i` ends at `PASSES_SHARE * (1 - 2^-(i+1))`,
+/// as the number of passes is not known in advance.
+const PASSES_SHARE: f32 = 0.6;
+
+/// [`stamp`], calling `progress` with the share of the work done, in
+/// `[0, 1]`, never decreasing, every few thousand triangles and after each
+/// stage (the last call, with 1, comes before `out` is written). Returning
+/// `false` cancels: the call returns [`Error::Cancelled`] having written
+/// nothing to `out`. The calls do not change the result.
+pub fn stamp_with_progress(
+    mesh: Mesh,
+    params: &StampParams,
+    arena: &mut Arena,
+    out: &mut [Root],
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<(usize, StampReport), Error> {
+    let mut done = |fraction: f32| {
+        if progress(fraction) {
+            Ok(())
+        } else {
+            Err(Error::Cancelled)
+        }
+    };
+    done(0.0)?;
+    validate(&mesh, params)?;
+    let available = arena.remaining();
+    let too_small = |bound| Error::CapacityExceeded {
+        needed: bytes_for(&mesh, bound),
+        available,
+    };
+    // the faces are set up once, for the stamper and the bound (which holds
+    // for every radius the stamper reaches); an arena too small for the
+    // stamper itself is reported with the whole need
+    let (stamper, sums) = match Stamper::build(mesh, params, arena) {
+        Err(Error::CapacityExceeded { .. }) => {
+            let sums = FaceSums::of(&mesh, params, |_, _| {});
+            return Err(too_small(sums.bound(&mesh, params)?));
+        }
+        built => built?,
+    };
+    let bound = sums.bound(&mesh, params)?;
+    if available < bytes_for(&mesh, bound) {
+        return Err(too_small(bound));
+    }
+    let Some(mut stamper) = stamper else {
+        done(1.0)?;
+        let report = StampReport {
+            degenerate_triangles: sums.degenerate,
+            ..StampReport::default()
+        };
+        return Ok((0, report));
+    };
+    let faces = mesh.triangle_count();
+    let mut scratch = Scratch::new(arena, bound)?;
+    let cands = arena.alloc::<Candidate>(bound)?;
+    let mut pass_start = 0.0;
+    loop {
+        let pass_end = PASSES_SHARE - 0.5 * (PASSES_SHARE - pass_start);
+        let placed_end = pass_start + 0.4 * (pass_end - pass_start);
+        let mut n = 0;
+        for first in (0..faces).step_by(PROGRESS_FACES) {
+            let last = (first + PROGRESS_FACES).min(faces);
+            n += stamper.stamp_faces(first..last, &mut cands[n..])?;
+            done(pass_start + (placed_end - pass_start) * last as f32 / faces as f32)?;
+        }
+        let kept = stamper.prune(&mut cands[..n], &mut scratch)?;
+        done(pass_end)?;
+        if stamper.converged(n, kept) {
+            let m = stamper.output_count(kept);
+            if out.len() < m {
+                return Err(Error::OutputTooSmall {
+                    needed: m,
+                    available: out.len(),
+                });
+            }
+            let mut finishing = |share: f32| done(pass_end + (1.0 - pass_end) * share);
+            stamper.finish_reporting(
+                &cands[..kept],
+                &mut scratch,
+                &mut out[..m],
+                &mut finishing,
+            )?;
+            return Ok((m, stamper.report(n, kept)));
+        }
+        pass_start = pass_end;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::near::Near;
+    use super::*;
+    use crate::testmesh::{graded_plane, seamed_sphere, sphere};
+    use crate::Strided;
+
+    pub(crate) fn run(mesh: Mesh, params: &StampParams) -> (Vec<Root>, StampReport) {
+        let mut buf = vec![0u8; required_bytes(&mesh, params).unwrap()];
+        let mut out = vec![Root::default(); max_roots(&mesh, params).unwrap()];
+        let mut arena = Arena::new(&mut buf);
+        let (n, report) = stamp(mesh, params, &mut arena, &mut out).unwrap();
+        out.truncate(n);
+        // in the triangle, in f32 as a host checks it
+        for r in &out {
+            assert!(r.u >= 0.0 && r.v >= 0.0 && r.u + r.v <= 1.0, "{r:?}");
+        }
+        (out, report)
+    }
+
+    /// Minimum 3D distance between same-side roots (normals not opposed).
+    fn min_spacing(mesh: &Mesh, roots: &[Root]) -> f32 {
+        let pts: Vec<(Vec3, Vec3)> = roots
+            .iter()
+            .map(|r| {
+                (
+                    mesh.point(r.face as usize, r.u, r.v),
+                    mesh.face_normal(r.face as usize),
+                )
+            })
+            .collect();
+        let mut best = f32::INFINITY;
+        for (i, a) in pts.iter().enumerate() {
+            for b in &pts[i + 1..] {
+                if a.1.dot(b.1) > 0.0 {
+                    best = best.min(a.0.distance(b.0));
+                }
+            }
+        }
+        best
+    }
+
+    fn params(target: u32) -> StampParams<'static> {
+        StampParams {
+            target_count: target,
+            seed: 11,
+            ..StampParams::default()
+        }
+    }
+
+    #[test]
+    fn count_hits_target_on_uniform_and_graded_meshes() {
+        for (name, m) in [
+            ("sphere", sphere(24, 48)),
+            ("graded 1e4", graded_plane(40, 100.0)),
+            ("coarse plane", graded_plane(2, 1.0)),
+            ("two triangles", graded_plane(1, 1.0)),
+        ] {
+            for target in [10u32, 30, 100, 500, 3000, 20000] {
+                let (roots, report) = run(m.mesh(), &params(target));
+                // the stamp lands in [target, target * 1.02] and the surplus
+                // is trimmed by rank, so the count is exact
+                assert_eq!(roots.len(), target as usize, "{name}: {report:?}");
+            }
+        }
+    }
+
+    /// Barycentrics from the signed areas can round a hair past an edge for
+    /// a point the edge tests take; every root still lies in its triangle.
+    /// The mesh is the C contract test's sphere (a duplicated seam column,
+    /// pole rows of repeated points), where seed 42 once put a root a
+    /// rounding error outside.
+    #[test]
+    fn roots_lie_in_their_triangle_on_a_seamed_sphere() {
+        let m = seamed_sphere(24, 48);
+        for seed in [42, 43] {
+            // `run` checks every root
+            run(
+                m.mesh(),
+                &StampParams {
+                    seed,
+                    ..params(3000)
+                },
+            );
+        }
+    }
+
+    #[test]
+    fn no_two_roots_closer_than_the_radius_and_lod_prefixes_spread() {
+        let m = sphere(16, 32);
+        let mesh = m.mesh();
+        let (roots, report) = run(mesh, &params(4000));
+        let min = min_spacing(&mesh, &roots);
+        assert!(
+            min >= report.radius * 0.999,
+            "min {min} < r {}",
+            report.radius
+        );
+        let n = roots.len();
+        for frac in [2usize, 4, 16] {
+            let prefix: Vec<Root> = roots
+                .iter()
+                .copied()
+                .filter(|r| (r.rank as usize) < n / frac)
+                .collect();
+            let spacing = min_spacing(&mesh, &prefix);
+            // a Poisson set of n/frac roots has spacing ~ r * sqrt(frac)
+            let expect = report.radius * libm::sqrtf(frac as f32);
+            assert!(spacing >= 0.5 * expect, "1/{frac}: {spacing} vs {expect}");
+        }
+        let mut ranks: Vec<u32> = roots.iter().map(|r| r.rank).collect();
+        ranks.sort_unstable();
+        assert!(ranks.iter().enumerate().all(|(i, &r)| r == i as u32));
+        assert!(roots.iter().enumerate().all(|(i, r)| r.id == i as u32));
+    }
+
+    /// Every pair of kept points, on any two triangles, is at least the
+    /// spacing of the finer of their two LOD levels apart (in units of the
+    /// pair's clash distance, up to the bend of linked edges), on a curved
+    /// mesh of many charts with two densities.
+    #[test]
+    fn each_lod_level_keeps_its_spacing_across_triangles() {
+        let m = sphere(16, 32);
+        let mesh = m.mesh();
+        let values: Vec<f32> =
+            m.p.iter()
+                .map(|p| if p[1] < 0.0 { 0.4 } else { 1.0 })
+                .collect();
+        with_candidates(mesh, &graded(&values), |stamper, scratch, mut cands| {
+            let kept = stamper.prune(&mut cands, scratch).unwrap();
+            let cands = &cands[..kept];
+            let mut out = vec![Root::default(); kept];
+            stamper.finish(cands, scratch, &mut out).unwrap();
+            check_lod_spacing(stamper, cands, &scratch.level[..kept]);
+        });
+    }
+
+    fn check_lod_spacing(stamper: &Stamper, cands: &[Candidate], levels: &[u8]) {
+        let mut raised = 0;
+        for (c, &l) in cands.iter().zip(levels) {
+            assert!(l as u16 >= c.level && (l as usize) < LOD_LEVELS);
+            raised += (l as u16 > c.level) as usize;
+        }
+        assert!(raised > 0, "no level was raised: nothing to check");
+        let at = |c: &Candidate| position(&stamper.mesh, c);
+        let spacings = lod_spacings();
+        for (i, a) in cands.iter().enumerate() {
+            for (b, &lb) in cands[i + 1..].iter().zip(&levels[i + 1..]) {
+                let (fa, fb) = (
+                    &stamper.faces[a.face as usize],
+                    &stamper.faces[b.face as usize],
+                );
+                if Vec3::from(fa.normal).dot(Vec3::from(fb.normal)) <= 0.0 {
+                    continue;
+                }
+                let k = levels[i].max(lb) as usize;
+                let r = stamper.radius / fa.scale.max(fb.scale);
+                let d = at(a).distance(at(b));
+                assert!(
+                    d >= spacings[k] * r * 0.999,
+                    "levels {} and {lb}: {d} < {} * {r}",
+                    levels[i],
+                    spacings[k]
+                );
+            }
+        }
+    }
+
+    /// The position the passes compute for `c`, to the bit.
+    fn position(mesh: &Mesh, c: &Candidate) -> Vec3 {
+        Vec3::from(Near::new(c, 0, &face_frame(mesh, c.face as usize)).position)
+    }
+
+    /// 3000 roots over a per-vertex density map.
+    fn graded(values: &[f32]) -> StampParams<'_> {
+        StampParams {
+            density: ScalarMap::PerVertex(Strided::from_slice(values)),
+            ..params(3000)
+        }
+    }
+
+    /// Stamps one pass of 3000 roots on `mesh` with per-vertex density
+    /// `values` and hands the stamper, its scratch and the candidates to
+    /// `check`.
+    fn with_candidates(
+        mesh: Mesh,
+        p: &StampParams,
+        check: impl FnOnce(&Stamper, &mut Scratch, Vec<Candidate>),
+    ) {
+        let mut buf = vec![0u8; required_bytes(&mesh, p).unwrap()];
+        let mut arena = Arena::new(&mut buf);
+        let stamper = Stamper::new(mesh, p, &mut arena).unwrap().unwrap();
+        let faces = 0..mesh.triangle_count();
+        let bound = stamper.candidate_bound(faces.clone());
+        let mut scratch = Scratch::new(&mut arena, bound).unwrap();
+        let mut cands = vec![Candidate::default(); bound];
+        let n = stamper.stamp_faces(faces, &mut cands).unwrap();
+        cands.truncate(n);
+        check(&stamper, &mut scratch, cands);
+    }
+
+    #[test]
+    fn edge_pass_matches_a_brute_force_scan() {
+        let m = graded_plane(12, 30.0);
+        // gray and white faces: clash distances differ per pair
+        let values: Vec<f32> =
+            m.p.iter()
+                .map(|p| if p[1] < 0.4 { 0.3 } else { 1.0 })
+                .collect();
+        with_candidates(m.mesh(), &graded(&values), check_edge_pass);
+    }
+
+    fn check_edge_pass(stamper: &Stamper, scratch: &mut Scratch, mut cands: Vec<Candidate>) {
+        let n = cands.len();
+        let at = |c: &Candidate| position(&stamper.mesh, c);
+        let mut expect: Vec<Candidate> = Vec::new();
+        for c in &cands {
+            let clash = c.near_edge()
+                && expect.iter().any(|k| {
+                    let (fk, fc) = (
+                        &stamper.faces[k.face as usize],
+                        &stamper.faces[c.face as usize],
+                    );
+                    let r = stamper.radius / fk.scale.max(fc.scale);
+                    k.face != c.face
+                        && k.near_edge()
+                        && Vec3::from(fk.normal).dot(Vec3::from(fc.normal)) > 0.0
+                        && at(k).distance_squared(at(c)) < r * r
+                });
+            if !clash {
+                expect.push(*c);
+            }
+        }
+        let kept = stamper.prune(&mut cands, scratch).unwrap();
+        assert!(kept < n, "the pass removed nothing to compare");
+        assert_eq!(&cands[..kept], &expect[..]);
+    }
+
+    #[test]
+    fn progress_rises_to_one_and_a_false_return_cancels_with_nothing_written() {
+        let m = graded_plane(30, 10.0);
+        let mesh = m.mesh();
+        let p = params(6000);
+        let (reference, report) = run(mesh, &p);
+        let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+        let mut out = vec![Root::default(); max_roots(&mesh, &p).unwrap()];
+        let mut seen = Vec::new();
+        let (n, again) =
+            stamp_with_progress(mesh, &p, &mut Arena::new(&mut buf), &mut out, &mut |f| {
+                seen.push(f);
+                true
+            })
+            .unwrap();
+        assert_eq!((&out[..n], again), (&reference[..], report));
+        assert!(seen.windows(2).all(|w| w[0] <= w[1]), "{seen:?}");
+        assert_eq!((seen[0], *seen.last().unwrap()), (0.0, 1.0));
+        // placement chunks, the edge pass and every LOD level report
+        assert!(seen.len() >= LOD_LEVELS + 2, "{seen:?}");
+        for stop in [1, seen.len() / 2, seen.len()] {
+            let mut calls = 0;
+            let mut untouched = vec![Root::default(); out.len()];
+            let result = stamp_with_progress(
+                mesh,
+                &p,
+                &mut Arena::new(&mut buf),
+                &mut untouched,
+                &mut |_| {
+                    calls += 1;
+                    calls != stop
+                },
+            );
+            assert_eq!(result, Err(Error::Cancelled));
+            assert_eq!(calls, stop);
+            assert!(untouched.iter().all(|r| *r == Root::default()));
+        }
+    }
+
+    #[test]
+    fn a_flat_chart_is_one_piece_of_the_tile() {
+        // a flat plane unfolds onto itself: every candidate, on either side
+        // of any edge, is a point of one Poisson set, and a tile point on a
+        // shared edge goes to exactly one of its two faces
+        let m = graded_plane(10, 1.0);
+        // few enough roots that the chart reaches across the whole plane
+        with_candidates(m.mesh(), &params(2000), |stamper, _, cands| {
+            assert!(stamper
+                .places
+                .iter()
+                .all(|t| t.offset == stamper.places[0].offset));
+            let at = |c: &Candidate| position(&stamper.mesh, c);
+            let mut closest = f32::INFINITY;
+            for (i, a) in cands.iter().enumerate() {
+                for b in &cands[i + 1..] {
+                    closest = closest.min(at(a).distance(at(b)));
+                }
+            }
+            assert!(
+                closest >= stamper.radius * 0.9999,
+                "{closest} vs {}",
+                stamper.radius
+            );
+            assert!(cands.iter().all(|c| c.near_levels as usize <= LOD_LEVELS));
+        });
+    }
+
+    #[test]
+    fn an_output_of_exactly_the_count_is_enough() {
+        let m = sphere(12, 24);
+        // stamped once into room for the bound
+        with_candidates(m.mesh(), &params(3000), |stamper, _, roomy| {
+            let (faces, n) = (0..stamper.mesh.triangle_count(), roomy.len());
+            let mut exact = vec![Candidate::default(); n];
+            assert_eq!(stamper.stamp_faces(faces.clone(), &mut exact), Ok(n));
+            assert_eq!(exact, roomy);
+            let mut short = vec![Candidate::default(); n - 1];
+            assert_eq!(
+                stamper.stamp_faces(faces, &mut short),
+                Err(Error::CapacityExceeded {
+                    needed: n,
+                    available: n - 1
+                })
+            );
+        });
+    }
+
+    #[test]
+    fn identical_for_any_face_chunking() {
+        let m = graded_plane(30, 10.0);
+        let mesh = m.mesh();
+        let p = params(6000);
+        let (reference, _) = run(mesh, &p);
+        for chunks in [2usize, 7, 64] {
+            let mut buf = vec![0u8; required_bytes(&mesh, &p).unwrap()];
+            let mut arena = Arena::new(&mut buf);
+            let mut stamper = Stamper::new(mesh, &p, &mut arena).unwrap().unwrap();
+            let faces = mesh.triangle_count();
+            let bound = stamper.candidate_bound(0..faces);
+            let mut scratch = Scratch::new(&mut arena, bound).unwrap();
+            let mut cands = vec![Candidate::default(); bound];
+            let kept = loop {
+                let mut n = 0;
+                for c in 0..chunks {
+                    let range = c * faces / chunks..(c + 1) * faces / chunks;
+                    let mut part =
+                        vec![Candidate::default(); stamper.candidate_bound(range.clone())];
+                    let k = stamper.stamp_faces(range, &mut part).unwrap();
+                    cands[n..n + k].copy_from_slice(&part[..k]);
+                    n += k;
+                }
+                let kept = stamper.prune(&mut cands[..n], &mut scratch).unwrap();
+                if stamper.converged(n, kept) {
+                    break kept;
+                }
+            };
+            let mut out = vec![Root::default(); stamper.output_count(kept)];
+            stamper
+                .finish(&cands[..kept], &mut scratch, &mut out)
+                .unwrap();
+            assert_eq!(out.len(), reference.len(), "{chunks} chunks: count");
+            let first = out.iter().zip(&reference).position(|(a, b)| a != b);
+            assert!(
+                first.is_none(),
+                "{chunks} chunks differ at {first:?}: {:?} vs {:?}",
+                first.map(|i| out[i]),
+                first.map(|i| reference[i])
+            );
+        }
+    }
+
+    #[test]
+    fn density_map_scales_and_bald_regions_stay_bald() {
+        let m = graded_plane(20, 1.0);
+        let mesh = m.mesh();
+        // left half black, right half white
+        let values: Vec<f32> =
+            m.p.iter()
+                .map(|p| if p[0] < 0.5 { 0.0 } else { 1.0 })
+                .collect();
+        let mut p = params(4000);
+        p.density = ScalarMap::PerVertex(Strided::from_slice(&values));
+        let (roots, _) = run(mesh, &p);
+        assert!(roots
+            .iter()
+            .all(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.44));
+        p.bald_below = 0.0;
+        let (roots, _) = run(mesh, &p);
+        let left = roots
+            .iter()
+            .filter(|r| mesh.point(r.face as usize, r.u, r.v).x < 0.45)
+            .count();
+        let right = roots
+            .iter()
+            .filter(|r| mesh.point(r.face as usize, r.u, r.v).x > 0.55)
+            .count();
+        // black = half size: a quarter of the density
+        let ratio = left as f32 / right as f32;
+        assert!((ratio - 0.25).abs() < 0.05, "left/right = {ratio}");
+    }
+
+    #[test]
+    fn a_fixed_radius_keeps_every_root_and_its_spacing() {
+        let m = sphere(16, 32);
+        let mesh = m.mesh();
+        let (white, report) = run(mesh, &params(3000));
+        let fixed = |density: ScalarMap<'static>| StampParams {
+            radius: report.radius,
+            density,
+            bald_below: 0.0,
+            ..params(0)
+        };
+        let (same, r2) = run(mesh, &fixed(ScalarMap::Constant(1.0)));
+        assert_eq!((r2.trimmed, r2.passes), (0, 1));
+        assert!(min_spacing(&mesh, &same) >= report.radius * 0.999);
+        // uniform gray 0.5 with black = half size: scale 0.75, density 0.5625
+        let (gray, _) = run(mesh, &fixed(ScalarMap::Constant(0.5)));
+        let ratio = gray.len() as f32 / same.len() as f32;
+        assert!((ratio - 0.5625).abs() < 0.05, "gray/white = {ratio}");
+        assert!(white.len() == 3000 && (same.len() as f32 / 3000.0 - 1.0).abs() < 0.06);
+    }
+
+    #[test]
+    fn rejects_bad_input_before_writing() {
+        let m = sphere(8, 16);
+        let mut bad = m.p.clone();
+        bad[3][1] = f32::NAN;
+        let mesh = Mesh::new(Strided::from_slice(&bad), Strided::from_slice(&m.t));
+        assert!(matches!(
+            required_bytes(&mesh, &params(100)),
+            Err(Error::NonFinite { .. })
+        ));
+        let mesh = m.mesh();
+        let need = required_bytes(&mesh, &params(100)).unwrap();
+        let mut out = vec![Root::default(); 100];
+        // too small for the stamper itself, and big enough for it but not
+        // for the passes: both report the whole need
+        for size in [100, need - 1] {
+            let mut buf = vec![0u8; size];
+            let mut arena = Arena::new(&mut buf);
+            let err = stamp(mesh, &params(100), &mut arena, &mut out).unwrap_err();
+            assert_eq!(
+                err,
+                Error::CapacityExceeded {
+                    needed: need,
+                    available: size
+                }
+            );
+        }
+        assert!(out.iter().all(|r| *r == Root::default()));
+        let mut p = params(100);
+        p.black_scale = 0.0;
+        assert!(matches!(
+            required_bytes(&mesh, &p),
+            Err(Error::InvalidArgument(_))
+        ));
+    }
+}
