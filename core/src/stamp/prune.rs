@@ -27,7 +27,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
         scratch.check(n)?;
         let status = &mut scratch.level[..n];
         status.fill(0);
-        let mut grid = HashGrid::new(scratch.heads, scratch.next, GRID_CELL * self.radius);
+        // the table is sized for every candidate of every pass, several
+        // times the points that go in
+        let mut grid =
+            HashGrid::new(scratch.heads, scratch.next, GRID_CELL * self.radius).in_blocks();
         let near = &mut *scratch.near;
         let (mut j, mut inserted, mut kept) = (0, 0, 0);
         while j < n {
