@@ -27,10 +27,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
         scratch.check(n)?;
         let status = &mut scratch.level[..n];
         status.fill(0);
-        // the table is sized for every candidate of every pass, several
-        // times the points that go in
-        let mut grid =
-            HashGrid::new(scratch.heads, scratch.next, GRID_CELL * self.radius).in_blocks();
+        // a bucket per candidate, several per point that goes in: blocks of
+        // cells then rarely share a bucket, and the table clears fast
+        let buckets = HashGrid::buckets_for(2 * n).min(scratch.heads.len());
+        let heads = &mut scratch.heads[..buckets];
+        let mut grid = HashGrid::new(heads, scratch.next, GRID_CELL * self.radius).in_blocks();
         let near = &mut *scratch.near;
         let (mut j, mut inserted, mut kept) = (0, 0, 0);
         while j < n {
