@@ -140,7 +140,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
             fill[c.level as usize] += 1;
         }
         let near = &scratch.near[..m];
-        let mut grid = HashGrid::new(scratch.heads, scratch.next, self.radius);
+        // no level holds more than the records: the rest of the table is
+        // never read, nor cleared
+        let buckets = HashGrid::buckets_for(m).min(scratch.heads.len());
+        let mut grid = HashGrid::new(&mut scratch.heads[..buckets], scratch.next, self.radius);
         for k in 0..finest {
             let s = self.spacings[k];
             let (coarser, end) = (start[k], start[k + 1]);
