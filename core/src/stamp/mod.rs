@@ -57,11 +57,16 @@ pub use sizing::{max_roots, required_bytes, DENSITY_STEPS};
 /// Width of the band above the target where the radius correction stops;
 /// the surplus is trimmed by LOD rank.
 pub const COUNT_TOLERANCE: f32 = 0.02;
-/// Grid cells of the edge and LOD passes, in disk radii (times the level's
-/// spacing): larger cells mean fewer buckets per face's query box but more
-/// points per bucket; 5 measured best against 3, 4, 6 and 8 on the creature
-/// at 1M roots.
+/// Grid cells of the LOD passes, in disk radii times the level's spacing:
+/// larger cells mean fewer buckets per face's query box but more points per
+/// bucket; 5 measured best against 3, 4, 6 and 8 on the creature at 1M
+/// roots.
 const GRID_CELL: f32 = 5.0;
+/// Grid cells of the edge pass, in disk radii. Its table is laid out in
+/// blocks of cells ([`HashGrid::in_blocks`](crate::grid::HashGrid::in_blocks)),
+/// which makes a bucket cheaper to visit, so larger cells pay: 6 measured
+/// best against 3, 4, 5, 7, 8 and 10 on the creature at 1M roots.
+const EDGE_GRID_CELL: f32 = 6.0;
 /// Points the edge pass removes per disk radius of cut edge (an edge whose
 /// two faces are not laid out together, see [`chart`]), and the edge
 /// length (in radii) below which the loss falls off: a fit of the measured

@@ -2,7 +2,7 @@
 //! closer than the disk radius.
 
 use super::near::Near;
-use super::{face_frame, Candidate, Scratch, Stamper, GRID_CELL};
+use super::{face_frame, Candidate, Scratch, Stamper, EDGE_GRID_CELL};
 use crate::grid::HashGrid;
 use crate::Error;
 use glam::Vec3;
@@ -31,7 +31,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         // cells then rarely share a bucket, and the table clears fast
         let buckets = HashGrid::buckets_for(2 * n).min(scratch.heads.len());
         let heads = &mut scratch.heads[..buckets];
-        let mut grid = HashGrid::new(heads, scratch.next, GRID_CELL * self.radius).in_blocks();
+        let mut grid = HashGrid::new(heads, scratch.next, EDGE_GRID_CELL * self.radius).in_blocks();
         let near = &mut *scratch.near;
         let (mut j, mut inserted, mut kept) = (0, 0, 0);
         while j < n {
