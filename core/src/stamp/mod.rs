@@ -35,6 +35,11 @@
 //! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
 //! spread it over threads; the result is bitwise identical for any split.
 
+// The driver, the stamper's state and its radius live here; the stages
+// each have a module: `sizing` (face setup and memory bounds), `place`
+// (tile points into candidates), `prune` (the edge pass), `lod` (levels
+// and ranks), with the records and buffers the passes share in `near` and
+// `scratch`.
 mod lod;
 mod near;
 mod place;
