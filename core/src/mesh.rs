@@ -33,6 +33,21 @@ pub struct FaceShape {
     pub degenerate: bool,
 }
 
+impl FaceShape {
+    /// The face's area: the same bits as [`Mesh::area`].
+    #[inline]
+    pub fn area(&self) -> f32 {
+        0.5 * self.cross.length()
+    }
+
+    /// The face's perimeter, edges in corner order (0 to 1, 1 to 2, 2 to 0).
+    #[inline]
+    pub fn perimeter(&self) -> f32 {
+        let [e01, e02, e12] = self.edges;
+        e01.length() + e12.length() + e02.length()
+    }
+}
+
 /// What [`Mesh::validate`] found.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MeshReport {

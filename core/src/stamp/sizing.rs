@@ -28,7 +28,6 @@ impl FaceSetup {
     /// degenerate).
     pub(super) fn new(mesh: &Mesh, params: &StampParams, f: usize) -> Self {
         let shape = mesh.shape(f);
-        let [e1, e2, e3] = shape.edges;
         let scale = if shape.degenerate {
             0.0
         } else {
@@ -39,8 +38,8 @@ impl FaceSetup {
                 normal: shape.cross.normalize_or_zero().into(),
                 scale,
             },
-            area: 0.5 * shape.cross.length(),
-            perimeter: e1.length() + e3.length() + e2.length(),
+            area: shape.area(),
+            perimeter: shape.perimeter(),
             degenerate: shape.degenerate,
         }
     }
@@ -121,7 +120,8 @@ pub(super) fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize 
     if scale == 0.0 {
         return 0;
     }
-    let (area, perimeter) = area_and_perimeter(mesh, face);
+    let shape = mesh.shape(face);
+    let (area, perimeter) = (shape.area(), shape.perimeter());
     let k = scale / r;
     let dilated = area * k * k + 0.5 * perimeter * k + core::f32::consts::FRAC_PI_4;
     // saturating: a radius tiny next to the face is reported by the caller
@@ -130,13 +130,6 @@ pub(super) fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize 
 
 /// Points per unit area of the densest packing at unit spacing (2 / sqrt 3).
 pub(super) const HEX_PACKING: f64 = 1.154_700_6;
-
-/// Area and perimeter of `face`.
-pub(super) fn area_and_perimeter(mesh: &Mesh, face: usize) -> (f32, f32) {
-    let [a, b, c] = mesh.corners(face);
-    let perimeter = (b - a).length() + (c - b).length() + (a - c).length();
-    (mesh.area(face), perimeter)
-}
 
 /// Upper bound on the roots [`stamp`](super::stamp) writes: the target (surplus stamps
 /// are trimmed by LOD rank), or 0 when every face is bald or degenerate;
