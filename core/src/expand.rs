@@ -1043,6 +1043,22 @@ mod tests {
         ]
     }
 
+    /// Strand `i`'s groom with every shaping value set (no clump): bend,
+    /// a kink whose phase turns with `i`, and a sideways lift.
+    fn styled(i: usize) -> StrandGroom {
+        StrandGroom {
+            length: 0.9,
+            root_radius: 0.002,
+            tip_radius: 0.0005,
+            bend: 0.2,
+            kink_amplitude: 0.05,
+            kink_frequency: 3.0,
+            kink_phase: [libm::cosf(i as f32), libm::sinf(i as f32)],
+            lift: [0.1 * libm::sinf(i as f32), 0.0],
+            ..StrandGroom::default()
+        }
+    }
+
     fn raw(n: usize) -> ExpandParams {
         ExpandParams {
             points_per_strand: n,
@@ -1122,14 +1138,8 @@ mod tests {
         let grooms: Vec<StrandGroom> = (0..s.strands.len())
             .map(|i| StrandGroom {
                 length: 0.8 + 0.001 * i as f32,
-                root_radius: 0.002,
-                tip_radius: 0.0005,
-                bend: 0.2,
-                kink_amplitude: 0.05,
-                kink_frequency: 3.0,
-                kink_phase: [libm::cosf(i as f32), libm::sinf(i as f32)],
                 clump: 0.3,
-                lift: [0.1 * libm::sinf(i as f32), 0.0],
+                ..styled(i)
             })
             .collect();
         let params = ExpandParams {
@@ -1262,15 +1272,8 @@ mod tests {
         let b = s.bind(&BindParams::default());
         let grooms: Vec<StrandGroom> = (0..s.strands.len())
             .map(|i| StrandGroom {
-                length: 0.9,
-                root_radius: 0.002,
-                tip_radius: 0.0005,
-                bend: 0.2,
-                kink_amplitude: 0.05,
-                kink_frequency: 3.0,
-                kink_phase: [libm::cosf(i as f32), libm::sinf(i as f32)],
                 lift: [0.1 * libm::sinf(i as f32), 0.05],
-                ..StrandGroom::default()
+                ..styled(i)
             })
             .collect();
         let params = raw(CVS);
