@@ -93,6 +93,17 @@ fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32;
     expand_from(m, &guides, g, params).unwrap()
 }
 
+/// An arena sized by `pelage_expand_query` for `guides` guides on `m`, and
+/// the control points per curve.
+fn expand_arena(m: &CreatureMesh, guides: usize, params: &PelageExpandParams) -> (Vec<u8>, usize) {
+    let (mut bytes, mut per) = (0usize, 0usize);
+    assert_eq!(
+        pelage_expand_query(guides, m.positions.len(), params, &mut bytes, &mut per),
+        PelageStatus::Ok
+    );
+    (vec![0u8; bytes], per)
+}
+
 /// `g`'s strands expanded from `guides` (g's guides, possibly stored
 /// otherwise), or the failing status with the output left untouched.
 fn expand_from(
@@ -101,18 +112,7 @@ fn expand_from(
     g: &Groom,
     params: &PelageExpandParams,
 ) -> Result<Vec<[f32; 4]>, PelageStatus> {
-    let (mut bytes, mut per) = (0usize, 0usize);
-    assert_eq!(
-        pelage_expand_query(
-            g.guide_roots.len(),
-            m.positions.len(),
-            params,
-            &mut bytes,
-            &mut per
-        ),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
+    let (mut arena, per) = expand_arena(m, g.guide_roots.len(), params);
     let mut out = vec![[0.0f32; 4]; g.strands.len() * per];
     let mut counts = vec![0u32; g.strands.len()];
     let call = ExpandCall {
@@ -543,18 +543,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     params.points_per_strand = 16;
     params.end_points = PelageEndPoints::Pinned as u32;
     params.orphan_length = 0.05;
-    let (mut ebytes, mut per) = (0, 0);
-    assert_eq!(
-        pelage_expand_query(
-            sim.strands.len(),
-            m.positions.len(),
-            &params,
-            &mut ebytes,
-            &mut per
-        ),
-        PelageStatus::Ok
-    );
-    let mut earena = vec![0u8; ebytes];
+    let (mut earena, per) = expand_arena(&m, sim.strands.len(), &params);
     let mut out = vec![[0.0f32; 4]; render.len() * per];
     let call = ExpandCall {
         mesh: &d,
@@ -698,15 +687,7 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
     let mut broken = g.bindings.clone();
     broken[5].guides[0] = 1 << 20;
     let params = pelage_expand_params_defaults();
-    let (mut bytes, mut per) = (0, 0);
-    pelage_expand_query(
-        g.guide_roots.len(),
-        m.positions.len(),
-        &params,
-        &mut bytes,
-        &mut per,
-    );
-    let mut earena = vec![0u8; bytes];
+    let (mut earena, per) = expand_arena(&m, g.guide_roots.len(), &params);
     let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
     let mut call = ExpandCall {
         mesh: &d,
@@ -770,18 +751,7 @@ fn interleaved_outputs_and_host_records_are_checked() {
     assert_eq!(s, PelageStatus::InvalidArgument);
     // groom and binding records read back from a file are checked too
     let params = pelage_expand_params_defaults();
-    let (mut bytes, mut per) = (0, 0);
-    assert_eq!(
-        pelage_expand_query(
-            g.guide_roots.len(),
-            m.positions.len(),
-            &params,
-            &mut bytes,
-            &mut per
-        ),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
+    let (mut arena, per) = expand_arena(&m, g.guide_roots.len(), &params);
     let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
     let good = guides_desc(&g.guide_roots, &g.guide_points);
     let mut run = |bindings: &[PelageStrandBinding], grooms: &[PelageStrandGroom]| {
