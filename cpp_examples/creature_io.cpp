@@ -289,7 +289,7 @@ std::vector<PelageStrandBinding> bind(const Mesh& mesh, const PelageGuidesDesc& 
                                       size_t count, const PelageBindParams& params, PelageBindInfo* info) {
   const PelageMeshDesc desc = mesh.desc();
   size_t arena_bytes = 0;
-  check(pelage_bind_query(guides.guide_count, &arena_bytes), "pelage_bind_query");
+  check(pelage_bind_query(&desc, guides.guide_count, &arena_bytes), "pelage_bind_query");
   std::vector<unsigned char> arena(arena_bytes);
   std::vector<PelageStrandBinding> bindings(count);
   check(pelage_bind(&desc, &guides, strands, count, &params, arena.data(), arena.size(), bindings.data(),

@@ -21,7 +21,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 4
+#define PELAGE_VERSION_MINOR 5
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
@@ -408,10 +408,11 @@ const char *pelage_last_error(void);
 // Thread safety: may be called from any thread at any time.
 struct PelageBindParams pelage_bind_params_defaults(void);
 
-// Arena bytes pelage_bind needs for `guide_count` guides.
+// Arena bytes pelage_bind needs for `rest_mesh` (validated) and
+// `guide_count` guides.
 //
 // Thread safety: may be called from any thread at any time.
-enum PelageStatus pelage_bind_query(size_t guide_count, size_t *arena_bytes);
+enum PelageStatus pelage_bind_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, size_t *arena_bytes);
 
 // Binds `strand_count` strands to guides on the rest pose (rest mesh, rest
 // guides): neighbour guides by root distance, excluding guides facing away,

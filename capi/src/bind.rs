@@ -92,14 +92,20 @@ pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
     }
 }
 
-/// Arena bytes pelage_bind needs for `guide_count` guides.
+/// Arena bytes pelage_bind needs for `rest_mesh` (validated) and
+/// `guide_count` guides.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
-pub extern "C" fn pelage_bind_query(guide_count: usize, arena_bytes: *mut usize) -> PelageStatus {
+pub extern "C" fn pelage_bind_query(
+    rest_mesh: *const PelageMeshDesc,
+    guide_count: usize,
+    arena_bytes: *mut usize,
+) -> PelageStatus {
     ffi_boundary! {
+        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
         let out = req_mut(arena_bytes, "arena_bytes")?;
-        *out = bind::required_bytes(guide_count);
+        *out = bind::required_bytes(&mesh, guide_count)?;
         Ok(())
     }
 }

@@ -51,7 +51,7 @@ pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
 /// Major version of the library this header belongs to.
 pub const PELAGE_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const PELAGE_VERSION_MINOR: u32 = 4;
+pub const PELAGE_VERSION_MINOR: u32 = 5;
 /// Patch version.
 pub const PELAGE_VERSION_PATCH: u32 = 0;
 

@@ -12,6 +12,7 @@
 //! skin a guide leaves the set by sliding past `d_next`, never by a jump.
 
 use crate::arena::{Arena, ArenaLayout};
+use crate::body::Body;
 use crate::grid::HashGrid;
 use crate::guides::Guides;
 use crate::rng::{self, Purpose};
@@ -28,6 +29,15 @@ pub const NO_GUIDE: u32 = u32::MAX;
 const SPACING_RANK: usize = 3;
 /// Local spacing never exceeds this multiple of the mean spacing (bounds the search).
 const MAX_SPACING_RATIO: f32 = 3.0;
+/// A guide is hidden from a strand when the body lies across the path
+/// between their roots, each end lifted off the skin along its normal by
+/// this fraction of the roots' distance: the guide grows on another part
+/// (a finger's pad seen through the next finger).
+const LIFT: f32 = 0.25;
+/// Only roots whose normals are further apart than this (a dot product;
+/// 37 degrees) can be hidden from each other: closer normals lie on one
+/// sheet of skin, and the path test costs about half a microsecond.
+const HIDDEN_DOT: f32 = 0.8;
 
 /// Binding parameters.
 #[derive(Clone, Copy, Debug)]
@@ -123,6 +133,8 @@ pub struct GuideIndex<'a> {
     normal: &'a [[f32; 3]],
     region: &'a [u32],
     grid: HashGrid<'a>,
+    /// The rest mesh as a solid, for the paths from strands to guides.
+    body: Body<'a>,
     /// The first search radius: the largest local spacing.
     reach: f32,
     report: BindReport,
@@ -199,6 +211,11 @@ impl<const N: usize> Nearest<N> {
         }
     }
 
+    /// Whether [`push`](Self::push) would keep `(d2, g)`.
+    fn takes(&self, d2: f32, g: u32) -> bool {
+        self.len < N || (d2, g) < self.items[N - 1]
+    }
+
     /// Inserts keeping order; ties break on guide index so results never
     /// depend on grid traversal order. The grid may report a guide twice
     /// (two cells sharing a bucket); the second report is ignored.
@@ -219,14 +236,17 @@ impl<const N: usize> Nearest<N> {
 }
 
 impl<'a> GuideIndex<'a> {
-    /// Adds the arena bytes [`GuideIndex::new`] needs for `guides` guides.
-    pub fn layout(layout: &mut ArenaLayout, guides: usize) {
+    /// Adds the arena bytes [`GuideIndex::new`] needs for `guides` guides
+    /// on `mesh` (validates the mesh).
+    pub fn layout(layout: &mut ArenaLayout, mesh: &Mesh, guides: usize) -> Result<(), Error> {
+        layout.add::<u8>(Body::required_bytes(mesh)?);
         layout
             .add::<[f32; 3]>(guides)
             .add::<[f32; 3]>(guides)
             .add::<u32>(guides)
             .add::<u32>(HashGrid::buckets_for(guides))
             .add::<u32>(guides);
+        Ok(())
     }
 
     /// Validates the rest mesh, rest guides and parameters and indexes the guides.
@@ -239,6 +259,7 @@ impl<'a> GuideIndex<'a> {
         check(params, mesh)?;
         let area = mesh.validate()?.area;
         guides.validate(mesh)?;
+        let body = Body::new(mesh, arena)?;
         let n = guides.len();
         let position = arena.alloc::<[f32; 3]>(n)?;
         let normal = arena.alloc::<[f32; 3]>(n)?;
@@ -262,6 +283,7 @@ impl<'a> GuideIndex<'a> {
             normal,
             region,
             grid,
+            body,
             reach: MAX_SPACING_RATIO * mean_spacing,
             report: BindReport {
                 orphans: 0,
@@ -328,9 +350,13 @@ impl<'a> GuideIndex<'a> {
                 let gn = Vec3::from(self.normal[gi]);
                 let open = gate(d, d2, n, gn, params);
                 if open > 0.0 {
-                    let d2 = d2 / (open * open);
-                    if d2 < radius * radius {
-                        near.push(d2, g);
+                    let gated = d2 / (open * open);
+                    if gated < radius * radius && near.takes(gated, g) {
+                        let lift = LIFT * libm::sqrtf(d2);
+                        let (from, to) = (p + n * lift, p + d + gn * lift);
+                        if gn.dot(n) >= HIDDEN_DOT || !self.body.blocks(from, to) {
+                            near.push(gated, g);
+                        }
                     }
                 }
                 false
@@ -396,11 +422,12 @@ impl<'a> GuideIndex<'a> {
     }
 }
 
-/// Arena bytes [`bind`] needs for `guides` guides.
-pub fn required_bytes(guides: usize) -> usize {
+/// Arena bytes [`bind`] needs for `guides` guides on `mesh` (validates
+/// the mesh).
+pub fn required_bytes(mesh: &Mesh, guides: usize) -> Result<usize, Error> {
     let mut layout = ArenaLayout::new();
-    GuideIndex::layout(&mut layout, guides);
-    layout.bytes()
+    GuideIndex::layout(&mut layout, mesh, guides)?;
+    Ok(layout.bytes())
 }
 
 /// Binds every strand (rest mesh, rest guides) into `out`.
@@ -460,7 +487,7 @@ mod tests {
             points: Strided::from_slice(pts),
             layout: CvLayout::Fixed(4),
         };
-        let mut buf = vec![0u8; required_bytes(g.len())];
+        let mut buf = vec![0u8; required_bytes(&m.mesh(), g.len()).unwrap_or(0)];
         let mut out = vec![StrandBinding::default(); strands.len()];
         let report = bind(
             &m.mesh(),
@@ -495,6 +522,74 @@ mod tests {
             let w: f32 = bind.weights[..bind.count as usize].iter().sum();
             assert!((w - 1.0).abs() < 1e-5);
         }
+    }
+
+    /// A floor (normal +z) running into a ramp (normal (-1, 0, 1) / sqrt 2)
+    /// at x = 0.6, and a small closed tetrahedron centred on `block`.
+    fn floor_ramp_and_block(block: [f32; 3]) -> TestMesh {
+        let mut p = vec![
+            [0.0, 0.0, 0.0],
+            [0.6, 0.0, 0.0],
+            [0.6, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.8, 0.0, 0.2],
+            [0.8, 1.0, 0.2],
+        ];
+        let s = 0.012;
+        for d in [
+            [1.0, 1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+        ] {
+            p.push([0, 1, 2].map(|k| block[k] + s * d[k]));
+        }
+        let t = vec![
+            [0, 1, 2],
+            [0, 2, 3],
+            [1, 4, 5],
+            [1, 5, 2],
+            [6, 7, 8],
+            [6, 9, 7],
+            [6, 8, 9],
+            [7, 9, 8],
+        ];
+        TestMesh {
+            uv: vec![[0.0; 2]; p.len()],
+            p,
+            t,
+            n: vec![],
+        }
+    }
+
+    #[test]
+    fn a_guide_behind_another_part_of_the_body_is_hidden() {
+        let root = |face, u, v| Root {
+            face,
+            u,
+            v,
+            ..Root::default()
+        };
+        // the strand at (0.5, 0.5) on the floor, three guides 0.2 away on
+        // it and the nearest, 0.16 away, on the ramp at (0.65, 0.5, 0.05)
+        let strands = [root(0, 1.0 / 3.0, 0.5)];
+        let g = [
+            root(1, 0.5, 0.0),
+            root(0, 0.8 / 1.5, 0.3),
+            root(0, 0.2 / 1.5, 0.7),
+            root(3, 0.25, 0.25),
+        ];
+        let uses_ramp = |block| {
+            let m = floor_ramp_and_block(block);
+            let pts = straight_guides(&m.mesh(), &g, 4, 0.05);
+            let (b, _) = run(&m, &g, &pts, &strands, &BindParams::default()).unwrap();
+            assert!(b[0].count >= 3);
+            b[0].guides[..b[0].count as usize].contains(&3)
+        };
+        // far away, the block hides nothing; on the path between the roots,
+        // lifted off the skin, it hides the ramp's guide
+        assert!(uses_ramp([5.0, 0.5, 0.06]));
+        assert!(!uses_ramp([0.561, 0.5, 0.059]));
     }
 
     #[test]

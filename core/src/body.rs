@@ -279,6 +279,57 @@ impl<'a> Body<'a> {
         }
     }
 
+    /// True when the segment from `a` to `b` meets a triangle of the body.
+    /// Walks the cells the segment passes through, in order.
+    pub fn blocks(&self, a: Vec3, b: Vec3) -> bool {
+        let shape = &self.shape;
+        let (from, to) = (
+            (a - shape.origin) * shape.inv_cell,
+            (b - shape.origin) * shape.inv_cell,
+        );
+        let d = to - from;
+        let mut cell = shape.cell_of(a);
+        let last = shape.cell_of(b);
+        let mut step = [0i32; 3];
+        let (mut next, mut delta) = ([f32::INFINITY; 3], [f32::INFINITY; 3]);
+        for k in 0..3 {
+            if d[k] != 0.0 {
+                step[k] = if d[k] > 0.0 { 1 } else { -1 };
+                let edge = (cell[k] + (d[k] > 0.0) as i32) as f32;
+                next[k] = (edge - from[k]) / d[k];
+                delta[k] = 1.0 / libm::fabsf(d[k]);
+            }
+        }
+        // the cells between the two ends: a bound that rounding cannot
+        // stretch, and that a NaN end makes zero
+        let cells = (0..3)
+            .map(|k| last[k].abs_diff(cell[k]) as usize)
+            .sum::<usize>();
+        for _ in 0..=cells.min(3 * MAX_DIM as usize) {
+            let within = (0..3).all(|k| cell[k] >= 0 && (cell[k] as usize) < shape.dims[k]);
+            if within {
+                let c = shape.index(cell[0] as usize, cell[1] as usize, cell[2] as usize);
+                let refs = &self.refs[self.start[c] as usize..self.start[c + 1] as usize];
+                if refs
+                    .iter()
+                    .any(|&t| meets(&self.corners[t as usize], a, b - a))
+                {
+                    return true;
+                }
+            }
+            let k = if next[0] <= next[1] && next[0] <= next[2] {
+                0
+            } else if next[1] <= next[2] {
+                1
+            } else {
+                2
+            };
+            cell[k] += step[k];
+            next[k] += delta[k];
+        }
+        false
+    }
+
     /// Walks the row of `cell` along +x from `p` to the first cell already
     /// classified inside or outside (or off the grid, outside), and returns
     /// whether `p` is inside: that cell's class flipped by each crossing.
@@ -303,6 +354,25 @@ impl<'a> Body<'a> {
         }
         odd
     }
+}
+
+/// Whether the segment `a + t * d`, `t` in `[0, 1]`, meets triangle `t`
+/// (Moller-Trumbore; a segment in the triangle's plane does not).
+#[inline]
+fn meets(t: &[[f32; 3]; 3], a: Vec3, d: Vec3) -> bool {
+    let [p, q, r] = t.map(Vec3::from);
+    let (e1, e2) = (q - p, r - p);
+    let h = d.cross(e2);
+    let det = e1.dot(h);
+    if det == 0.0 {
+        return false;
+    }
+    let s = (a - p) / det;
+    let u = s.dot(h);
+    let w = s.cross(e1);
+    let v = d.dot(w);
+    let along = e2.dot(w);
+    u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)
 }
 
 /// Where the ray from `p` along x crosses triangle `t` (its x), if the ray's
@@ -354,6 +424,36 @@ mod tests {
     fn build<'a>(mesh: &Mesh, buf: &'a mut Vec<u8>) -> Body<'a> {
         *buf = vec![0u8; Body::required_bytes(mesh).unwrap()];
         Body::new(mesh, &mut Arena::new(buf)).unwrap()
+    }
+
+    #[test]
+    fn a_segment_is_blocked_where_it_meets_the_surface() {
+        let m = sphere(24, 48);
+        let mesh = m.mesh();
+        let mut buf = vec![];
+        let body = build(&mesh, &mut buf);
+        let v = |x, y, z| Vec3::new(x, y, z);
+        // through the sphere, into it, and out of it, along and across axes
+        assert!(body.blocks(v(-2.0, 0.1, 0.2), v(2.0, 0.1, 0.2)));
+        assert!(body.blocks(v(0.3, -1.5, 1.5), v(-0.2, 0.1, -0.1)));
+        assert!(body.blocks(v(0.1, 0.2, 0.3), v(1.3, 1.2, -1.1)));
+        // past it, short of it, and wholly inside it
+        assert!(!body.blocks(v(-2.0, 1.2, 0.0), v(2.0, 1.2, 0.0)));
+        assert!(!body.blocks(v(1.5, 1.5, 1.5), v(0.7, 0.7, 0.7)));
+        assert!(!body.blocks(v(-0.5, 0.1, 0.2), v(0.5, -0.1, 0.0)));
+        // a point and a segment with a NaN end meet nothing
+        assert!(!body.blocks(v(1.5, 0.0, 0.0), v(1.5, 0.0, 0.0)));
+        assert!(!body.blocks(v(-2.0, 0.0, 0.0), v(f32::NAN, 0.0, 0.0)));
+        // every chord between two points just outside opposite sides
+        for i in 0..2000u64 {
+            let r = |c| rng::unit(3, i, Purpose::Uniform, c) * 2.0 - 1.0;
+            let dir = v(r(0), r(1), r(2)).normalize_or_zero();
+            if dir == Vec3::ZERO {
+                continue;
+            }
+            assert!(body.blocks(dir * 1.01, -dir * 1.01), "{dir}");
+            assert!(!body.blocks(dir * 1.01, dir * 1.5), "{dir}");
+        }
     }
 
     #[test]

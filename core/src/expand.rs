@@ -979,7 +979,11 @@ mod tests {
         }
 
         fn bind(&self, params: &BindParams) -> Vec<StrandBinding> {
-            let mut buf = vec![0u8; crate::bind::required_bytes(self.guide_roots.len())];
+            let mut buf = vec![
+                0u8;
+                crate::bind::required_bytes(&self.m.mesh(), self.guide_roots.len())
+                    .unwrap()
+            ];
             let mut out = vec![StrandBinding::default(); self.strands.len()];
             bind(
                 &self.m.mesh(),

@@ -269,7 +269,7 @@ mod tests {
         };
         let strands = roots(mesh, 3000, 2);
         let mut bindings = vec![StrandBinding::default(); strands.len()];
-        let mut buf = vec![0u8; crate::bind::required_bytes(guide_roots.len())];
+        let mut buf = vec![0u8; crate::bind::required_bytes(&mesh, guide_roots.len()).unwrap()];
         let params = BindParams::default();
         bind(
             &mesh,

@@ -79,7 +79,7 @@ fn main() {
         layout: CvLayout::Fixed(CVS),
     };
     let params = BindParams::default();
-    let mut arena = vec![0u8; bind::required_bytes(guide_roots.len())];
+    let mut arena = vec![0u8; bind::required_bytes(&mesh, guide_roots.len()).unwrap()];
     let mut bindings = vec![StrandBinding::default(); hairs.len()];
     let t_bind = time(3, || {
         bind::bind(

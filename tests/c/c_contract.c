@@ -212,6 +212,14 @@ static void bad_mesh_(int line, const char *name, const PelageMeshDesc *mesh, co
   free(roots);
 
   if (evaluate) {
+    size_t bind_bytes;
+    FILL(&bind_bytes, sizeof bind_bytes);
+    snprintf(what, sizeof what, "%s: pelage_bind_query", name);
+    expect_(__FILE__, line, what, pelage_bind_query(mesh, 100, &bind_bytes), want);
+    if (!untouched(&bind_bytes, sizeof bind_bytes)) {
+      ++g_failures, fprintf(stderr, "%s:%d: %s wrote its outputs\n", __FILE__, line, what);
+    }
+
     const size_t bytes = g_count * 12;
     float *pos = malloc(bytes), *nrm = malloc(bytes);
     REQUIRE(pos && nrm);
@@ -932,7 +940,7 @@ static void test_interp_success(void) {
 
   /* bind */
   g_in.bind_params = pelage_bind_params_defaults();
-  EXPECT(PELAGE_STATUS_OK, pelage_bind_query(g_in.guide_count, &g_in.bind_arena_bytes));
+  EXPECT(PELAGE_STATUS_OK, pelage_bind_query(&g_in.mesh, g_in.guide_count, &g_in.bind_arena_bytes));
   CHECK(g_in.bind_arena_bytes > 0);
   g_in.bind_arena = malloc(g_in.bind_arena_bytes);
   g_in.bindings = malloc(g_in.strand_count * sizeof *g_in.bindings);
@@ -1128,7 +1136,10 @@ static void test_interp_success(void) {
 
 static void test_interp_null_pointers(void) {
   const size_t n = g_in.strand_count;
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_query(g_in.guide_count, NULL));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_query(&g_in.mesh, g_in.guide_count, NULL));
+  size_t bind_bytes = 0;
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_query(NULL, g_in.guide_count, &bind_bytes));
+  CHECK(bind_bytes == 0);
 
   /* pelage_bind: every pointer argument, and the pointers inside the descriptors */
   PelageGuidesDesc guides = g_in.guides;

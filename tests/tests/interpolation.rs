@@ -49,7 +49,7 @@ fn groom_on_threads(
     };
     let mut bytes = 0usize;
     assert_eq!(
-        pelage_bind_query(guide_roots.len(), &mut bytes),
+        pelage_bind_query(&d, guide_roots.len(), &mut bytes),
         PelageStatus::Ok
     );
     let mut arena = vec![0u8; bytes];
@@ -510,7 +510,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     let render = stamp_roots(mesh, 50_000, 3);
     let mut bytes = 0;
     assert_eq!(
-        pelage_bind_query(sim.strands.len(), &mut bytes),
+        pelage_bind_query(&d, sim.strands.len(), &mut bytes),
         PelageStatus::Ok
     );
     let mut arena = vec![0u8; bytes];
