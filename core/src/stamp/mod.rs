@@ -49,7 +49,7 @@ mod sizing;
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::chart::{self, Unfolded};
-use crate::tile::{Tile, LOD_LEVELS, TILE_SIDE};
+use crate::tile::{LOD_LEVELS, TILE, TILE_SIDE};
 use crate::{Error, Mesh, Root, ScalarMap};
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;
@@ -211,13 +211,12 @@ struct Face {
     /// 0 for a skipped (degenerate or bald) face.
     scale: f32,
 }
-/// The stamping state for one mesh and parameter set: the tile, per-face
-/// scales and the current radius.
+/// The stamping state for one mesh and parameter set: per-face scales and
+/// placements in the tile, and the current radius.
 pub struct Stamper<'m, 'a> {
     mesh: Mesh<'m>,
     seed: u64,
     target: u32,
-    tile: Tile<'a>,
     faces: &'a [Face],
     places: &'a [TilePlace],
     scaled_area: f64,
@@ -278,7 +277,6 @@ fn validate(mesh: &Mesh, params: &StampParams) -> Result<(), Error> {
 impl<'m, 'a> Stamper<'m, 'a> {
     /// Adds the bytes [`Stamper::new`] takes from the arena.
     pub fn layout(layout: &mut ArenaLayout, mesh: &Mesh) {
-        Tile::layout(layout);
         layout
             .add::<Face>(mesh.triangle_count())
             .add::<TilePlace>(mesh.triangle_count())
@@ -304,7 +302,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
         params: &StampParams,
         arena: &mut Arena<'a>,
     ) -> Result<(Option<Self>, FaceSums), Error> {
-        let tile = Tile::build(params.seed, arena)?;
         let faces = arena.alloc::<Face>(mesh.triangle_count())?;
         let places = arena.alloc::<TilePlace>(mesh.triangle_count())?;
         let laid = arena.alloc::<Unfolded>(mesh.triangle_count())?;
@@ -314,7 +311,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let radius = if fixed {
             params.radius
         } else {
-            match first_radius(area, params.target_count, tile.density()) {
+            match first_radius(area, params.target_count, TILE.density()) {
                 Some(r) => r,
                 None => return Ok((None, sums)),
             }
@@ -340,7 +337,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
             mesh,
             seed: params.seed,
             target: params.target_count,
-            tile,
             faces,
             places,
             scaled_area: area,

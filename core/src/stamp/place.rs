@@ -6,7 +6,7 @@ use super::{Candidate, Stamper};
 use crate::chart::Unfolded;
 use crate::grid::floor_i32;
 use crate::rng::{self, Purpose};
-use crate::tile::{CELL, CELLS, LOD_LEVELS, TILE_SIDE};
+use crate::tile::{CELL, CELLS, LOD_LEVELS, TILE, TILE_SIDE};
 use crate::{Error, Mesh};
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;
@@ -366,7 +366,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let wx = cx.rem_euclid(side);
                 let len = (side - wx).min(last - cx + 1);
                 let shift = Vec2::new((cx - wx) as f32 * cell, shift_y);
-                let (points, levels) = self.tile.run(wx as usize, wy as usize, len as usize);
+                let (points, levels) = TILE.run(wx as usize, wy as usize, len as usize);
                 for (&p, &level) in points.iter().zip(levels) {
                     if batch.len == BATCH {
                         n = place.emit(batch, f as u32, squares, out, n)?;

@@ -5,6 +5,7 @@ use super::{
     min_radius_factor, validate, Candidate, Face, Scratch, StampParams, Stamper, MAX_TARGET,
 };
 use crate::arena::ArenaLayout;
+use crate::tile::TILE;
 use crate::{Error, Mesh};
 
 /// Steps the density takes between black and white when it scales faces.
@@ -94,8 +95,7 @@ impl FaceSums {
         let r_min = if params.radius > 0.0 {
             params.radius
         } else {
-            let density = tile_density_lower_bound();
-            let Some(r) = first_radius(self.area, params.target_count, density) else {
+            let Some(r) = first_radius(self.area, params.target_count, TILE.density()) else {
                 return Ok(0);
             };
             r * min_radius_factor(params.target_count, mesh.triangle_count())
@@ -151,12 +151,6 @@ pub fn max_roots(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
 pub(super) fn candidates_bound(mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
     validate(mesh, params)?;
     FaceSums::of(mesh, params, |_, _| {}).bound(mesh, params)
-}
-
-/// The tile's density is not known before it is built, only bounded;
-/// sizing with the bound keeps `max_roots` cheap and still an upper bound.
-pub(super) fn tile_density_lower_bound() -> f32 {
-    0.5
 }
 
 pub(super) fn first_radius(scaled_area: f64, target: u32, density: f32) -> Option<f32> {

@@ -96,7 +96,7 @@ mod tests {
 
     #[test]
     fn tile_is_a_periodic_poisson_set_with_nested_levels() {
-            let all: Vec<([f32; 2], u8)> = TILE.points().collect();
+        let all: Vec<([f32; 2], u8)> = TILE.points().collect();
         assert!(
             TILE.density() > 0.55 && TILE.density() < 0.8,
             "{}",

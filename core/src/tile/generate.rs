@@ -1,27 +1,18 @@
-//! The Poisson stamp: a periodic 2D Poisson-disk tile (Bridson's algorithm)
-//! with a nested LOD level per point.
+//! Generating the tile: Bridson's algorithm on the torus, the points
+//! bucketed into lookup cells, and their nested LOD levels.
 //!
-//! The paper's stamp is a rectangle big enough to hold any triangle. A
-//! periodic tile does the same job for triangles of any size (they wrap
-//! around it) and keeps the stamp small enough to stay in cache.
+//! The build script includes this file and bakes its result into the crate,
+//! so a stamp pays nothing for its tile; the crate's tests include it too,
+//! to check the baked tile against a fresh run.
 
-use crate::arena::{Arena, ArenaLayout};
+use super::shape::{CELL, CELLS, LOD_LEVELS, TILE_SIDE};
 use crate::rng::{self, Purpose};
-use crate::Error;
 
-/// Tile side, in units of the disk radius.
-pub const TILE_SIDE: usize = 48;
-/// Number of nested LOD levels; level `k` has spacing `sqrt(2)^(LOD_LEVELS - 1 - k)`.
-pub const LOD_LEVELS: usize = 12;
+/// Seed of the tile's random draws. Every stamp uses this one tile, as the
+/// paper uses one stamp: the stamp's seed moves each chart's window in it.
+pub const SEED: u64 = 1;
 
 const SIDE: f32 = TILE_SIDE as f32;
-/// Side of the lookup cells, in units of the disk radius. Placing a
-/// triangle walks the cells it crosses row by row: cells of 2 hold about
-/// three points, so the walk takes half the rows and runs that unit cells
-/// take, for about a fifth more points tested (cheap, branch-free tests).
-pub const CELL: usize = 2;
-/// Lookup cells per tile side.
-pub const CELLS: usize = TILE_SIDE / CELL;
 /// Candidates tried around each active point before it retires (Bridson's k).
 const ATTEMPTS: u32 = 30;
 /// Background grid cells per side during generation: cell diagonal <= 1.
@@ -31,75 +22,31 @@ const MAX_POINTS: usize = (2.0 * TILE_SIDE as f64 * TILE_SIDE as f64 / 1.732_050
 /// Coordinate of an empty generation cell: far from the tile on any wrap.
 const FAR: f32 = 1.0e6;
 
-/// A periodic Poisson-disk point set of side [`TILE_SIDE`] and spacing 1,
-/// bucketed into cells of side [`CELL`] for lookups.
-pub struct Tile<'a> {
-    points: &'a [[f32; 2]],
-    levels: &'a [u8],
-    cell_start: &'a [u32],
+/// A generated tile: the points ordered by lookup cell (row by row), their
+/// LOD levels, and where each cell's points start (one entry per cell,
+/// plus the end).
+pub struct Generated {
+    pub points: Vec<[f32; 2]>,
+    pub levels: Vec<u8>,
+    pub cell_start: Vec<u32>,
 }
 
-impl<'a> Tile<'a> {
-    /// Adds the arena bytes [`Tile::build`] needs to `layout`.
-    pub fn layout(layout: &mut ArenaLayout) {
-        layout
-            .add::<[f32; 2]>(MAX_POINTS * 2)
-            .add::<u8>(MAX_POINTS)
-            .add::<u32>(CELLS * CELLS + 1)
-            .add::<[f32; 2]>(GEN_CELLS * GEN_CELLS)
-            .add::<u32>(MAX_POINTS);
-    }
-
-    /// Generates the tile for `seed` (same seed, same tile, on any machine).
-    pub fn build(seed: u64, arena: &mut Arena<'a>) -> Result<Self, Error> {
-        let gen = arena.alloc::<[f32; 2]>(MAX_POINTS)?;
-        let points = arena.alloc::<[f32; 2]>(MAX_POINTS)?;
-        let levels = arena.alloc::<u8>(MAX_POINTS)?;
-        let cell_start = arena.alloc::<u32>(CELLS * CELLS + 1)?;
-        let grid = arena.alloc::<[f32; 2]>(GEN_CELLS * GEN_CELLS)?;
-        let active = arena.alloc::<u32>(MAX_POINTS)?;
-        let n = bridson(seed, gen, grid, active);
-        bucket(&gen[..n], points, cell_start);
-        let points = &points[..n];
-        assign_levels(points, cell_start, &mut levels[..n]);
-        Ok(Tile {
-            points,
-            levels: &levels[..n],
-            cell_start,
-        })
-    }
-
-    /// Number of points in the tile.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True when the tile holds no point (never, once built).
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
-
-    /// Points per unit area (the disk radius is the unit).
-    pub fn density(&self) -> f32 {
-        self.points.len() as f32 / (SIDE * SIDE)
-    }
-
-    /// Points of the `len` cells (x, y) to (x + len - 1, y) of one row,
-    /// and their LOD levels: cells are stored row by row, so a run of cells
-    /// is one slice. `x + len <= CELLS`, `y < CELLS`.
-    #[inline]
-    pub fn run(&self, x: usize, y: usize, len: usize) -> (&[[f32; 2]], &[u8]) {
-        let c = y * CELLS + x;
-        let (s, e) = (
-            self.cell_start[c] as usize,
-            self.cell_start[c + len] as usize,
-        );
-        (&self.points[s..e], &self.levels[s..e])
-    }
-
-    /// All points with their LOD levels.
-    pub fn points(&self) -> impl Iterator<Item = ([f32; 2], u8)> + '_ {
-        self.points.iter().copied().zip(self.levels.iter().copied())
+/// The tile for `seed` (same seed, same tile, on any machine: the draws are
+/// counter-based and the float operations are IEEE or `libm`'s).
+pub fn generate(seed: u64) -> Generated {
+    let mut gen = vec![[0.0; 2]; MAX_POINTS];
+    let mut grid = vec![[0.0; 2]; GEN_CELLS * GEN_CELLS];
+    let mut active = vec![0; MAX_POINTS];
+    let n = bridson(seed, &mut gen, &mut grid, &mut active);
+    let mut points = vec![[0.0; 2]; n];
+    let mut cell_start = vec![0; CELLS * CELLS + 1];
+    bucket(&gen[..n], &mut points, &mut cell_start);
+    let mut levels = vec![0; n];
+    assign_levels(&points, &cell_start, &mut levels);
+    Generated {
+        points,
+        levels,
+        cell_start,
     }
 }
 
@@ -116,7 +63,7 @@ fn wrap_delta(d: f32) -> f32 {
 }
 
 #[inline]
-fn torus_dist2(a: [f32; 2], b: [f32; 2]) -> f32 {
+pub fn torus_dist2(a: [f32; 2], b: [f32; 2]) -> f32 {
     let dx = wrap_delta(a[0] - b[0]);
     let dy = wrap_delta(a[1] - b[1]);
     dx * dx + dy * dy
@@ -292,47 +239,5 @@ fn assign_levels(points: &[[f32; 2]], cell_start: &[u32], levels: &mut [u8]) {
                 n_chosen += 1;
             }
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn with_tile(f: impl FnOnce(&Tile)) {
-        let mut layout = ArenaLayout::new();
-        Tile::layout(&mut layout);
-        let mut buf = [0u8; 200_000];
-        assert!(layout.bytes() <= buf.len());
-        let mut arena = Arena::new(&mut buf);
-        let tile = Tile::build(42, &mut arena).unwrap();
-        f(&tile);
-    }
-
-    #[test]
-    fn tile_is_a_periodic_poisson_set_with_nested_levels() {
-        with_tile(|tile| {
-            let all: Vec<([f32; 2], u8)> = tile.points().collect();
-            assert!(
-                tile.density() > 0.55 && tile.density() < 0.8,
-                "{}",
-                tile.density()
-            );
-            for (i, &(a, la)) in all.iter().enumerate() {
-                for &(b, lb) in &all[i + 1..] {
-                    let d2 = torus_dist2(a, b);
-                    assert!(d2 >= 0.999, "points too close: {d2}");
-                    let k = la.max(lb);
-                    let r = libm::powf(2.0, 0.5 * (LOD_LEVELS - 1 - k as usize) as f32);
-                    assert!(d2 >= r * r * 0.999, "level {k} spacing violated");
-                }
-            }
-            let finest = all
-                .iter()
-                .filter(|p| p.1 as usize == LOD_LEVELS - 1)
-                .count();
-            let share = finest as f32 / all.len() as f32;
-            assert!(share > 0.3 && share < 0.7, "finest level holds {share}");
-        });
     }
 }
