@@ -33,6 +33,7 @@
 #include <cstring>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -475,19 +476,30 @@ int main(int argc, char** argv) try {
     {
       // The parity test itself: just off the surface along the face normal,
       // every 1000th root is outside on the outside and inside on the inside.
-      size_t samples = 0, right = 0;
+      // As in parity(), a side where the two directions disagree is a ray
+      // grazing an edge: not counted, and rare.
+      size_t samples = 0, right = 0, grazing = 0;
       for (size_t i = 0; i < n; i += 1000, ++samples) {
         const uint32_t* t = &mesh.indices[3 * size_t(roots[i].face)];
         const V3 a = at3(mesh.positions, t[0]), b = at3(mesh.positions, t[1]), c = at3(mesh.positions, t[2]);
         const V3 nf = normalize(cross(b - a, c - a));
         const float* q = &pts[4 * per * i];
         const V3 p{q[0], q[1], q[2]};
-        right += crossings(body, p + 2e-4f * nf, kParityDir) % 2 == 0 &&
-                 crossings(body, p - 2e-4f * nf, kParityDir) % 2 == 1;
+        const auto odd = [&](V3 x) {
+          return std::pair{crossings(body, x, kParityDir) % 2, crossings(body, x, kConfirmDir) % 2};
+        };
+        const auto out = odd(p + 2e-4f * nf), in = odd(p - 2e-4f * nf);
+        if (out.first != out.second || in.first != in.second) {
+          ++grazing;
+          continue;
+        }
+        right += out.first == 0 && in.first == 1;
       }
-      std::printf("  parity check: root +- 2e-4 x face normal classified outside / inside for %zu of %zu roots\n",
-                  right, samples);
-      expect(right == samples, "the parity test tells inside from outside next to the surface");
+      std::printf("  parity check: root +- 2e-4 x face normal classified outside / inside for %zu of %zu roots "
+                  "(%zu grazing, not counted)\n",
+                  right, samples, grazing);
+      expect(right + grazing == samples && grazing <= samples / 100,
+             "the parity test tells inside from outside next to the surface");
     }
     const ParityResult pr = parity(body, pts, n, per, opt.every);
     const double parity_s = clock.seconds();
