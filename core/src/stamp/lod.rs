@@ -11,6 +11,8 @@ use glam::Vec3;
 /// Bits of the hash that orders the candidates within one LOD level (ties
 /// keep candidate order).
 pub(super) const RANK_HASH_BITS: u32 = 12;
+/// 2^64 over the golden ratio, odd.
+const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 /// Counters of the rank sort: one per (level, hash) key.
 pub(super) const RANK_KEYS: usize = LOD_LEVELS << RANK_HASH_BITS;
 
@@ -53,8 +55,13 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let keys = &mut scratch.next[..n];
         let counts = &mut *scratch.counts;
         counts.fill(0);
+        // Fibonacci hashing of the candidate index, offset by the seed: the
+        // keys of consecutive candidates (neighbours on one face) step by
+        // the golden ratio around the key range, so they land far apart in
+        // the order, and any run of keys takes candidates from all over
+        let offset = rng::hash(self.seed, 0, Purpose::LodOrder, 0);
         for (j, (key, &l)) in keys.iter_mut().zip(&scratch.level[..n]).enumerate() {
-            let h = rng::hash(self.seed, j as u64, Purpose::LodOrder, 0) >> (64 - RANK_HASH_BITS);
+            let h = offset.wrapping_add(j as u64).wrapping_mul(GOLDEN) >> (64 - RANK_HASH_BITS);
             *key = ((l as u32) << RANK_HASH_BITS) | h as u32;
             counts[*key as usize] += 1;
         }
