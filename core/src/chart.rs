@@ -98,14 +98,22 @@ pub fn unfold(
     // the chart of each face, where the growth looks it up: a small array
     // stays in cache where the laid-out faces would not (the edge entries
     // are done with, and have room)
-    let chart_of = &mut bytemuck::cast_slice_mut::<u64, u32>(entries)[..faces];
+    let (chart_of, rest) = bytemuck::cast_slice_mut::<u64, u32>(entries).split_at_mut(faces);
+    // the half-edges' lengths, in one pass in face order: the growth reads
+    // them in its own order, where the corners would be scattered reads
+    let length = bytemuck::cast_slice_mut::<u32, f32>(&mut rest[..3 * faces]);
     for (f, (u, c)) in out.iter_mut().zip(chart_of.iter_mut()).enumerate() {
         *c = f as u32;
         if stamped(f) {
             (u.chart, *c) = (NONE, NONE);
             u.edges = (0..3).fold(0, |e, i| e | ((twin[3 * f + i] != NONE) as u32) << (3 + i));
+            let corners = mesh.corners(f);
+            for i in 0..3 {
+                length[3 * f + i] = (corners[(i + 1) % 3] - corners[i]).length();
+            }
         }
     }
+    let length = &*length;
     let mut heap = Heap { keys: heap, len: 0 };
     for seed in 0..faces {
         if chart_of[seed] != NONE {
@@ -116,7 +124,7 @@ pub fn unfold(
         out[seed].chart = seed as u32;
         chart_of[seed] = seed as u32;
         for i in 0..3 {
-            heap.push_edge(mesh, twin, 3 * seed + i);
+            heap.push_edge(length, twin, 3 * seed + i);
         }
         while let Some(h) = heap.pop() {
             let (f, i) = (h / 3, h % 3);
@@ -128,7 +136,7 @@ pub fn unfold(
             if normal(f).dot(normal(g)) < MIN_NORMAL_DOT {
                 continue;
             }
-            let w = unfold_across(mesh, &out[f], f, i, g, j, scale(f));
+            let w = unfold_across(mesh, &out[f], f, i, length[h], g, j, scale(f));
             if w.length() > reach {
                 continue;
             }
@@ -149,7 +157,7 @@ pub fn unfold(
             for k in [(j + 1) % 3, (j + 2) % 3] {
                 let o = twin[3 * g + k];
                 if o != NONE && chart_of[o as usize / 3] == NONE {
-                    heap.push_edge(mesh, twin, 3 * g + k);
+                    heap.push_edge(length, twin, 3 * g + k);
                 }
             }
         }
@@ -230,12 +238,14 @@ fn seed_corners(mesh: &Mesh, f: usize, scale: f32) -> [[f32; 2]; 3] {
 }
 
 /// The third corner of `g`, laid flat across edge `i` of `f` (which is edge
-/// `j` of `g`, run the other way), in `f`'s chart plane.
+/// `j` of `g`, run the other way, and `length` long), in `f`'s chart plane.
+#[allow(clippy::too_many_arguments)]
 fn unfold_across(
     mesh: &Mesh,
     laid: &Unfolded,
     f: usize,
     i: usize,
+    length: f32,
     g: usize,
     j: usize,
     scale: f32,
@@ -243,7 +253,8 @@ fn unfold_across(
     let corners = mesh.corners(f);
     let (a, b) = (corners[i], corners[(i + 1) % 3]);
     let w: Vec3 = mesh.corners(g)[(j + 2) % 3];
-    let along = (b - a).normalize();
+    // normalize() in the same operations, with the length already known
+    let along = (b - a) * (1.0 / length);
     let d = w - a;
     let t = d.dot(along);
     let h = (d - along * t).length();
@@ -269,15 +280,14 @@ struct Heap<'a> {
 }
 
 impl Heap<'_> {
-    /// Pushes half-edge `h` if it has a twin (a border edge can link to nothing).
-    fn push_edge(&mut self, mesh: &Mesh, twin: &[u32], h: usize) {
+    /// Pushes half-edge `h` of `length` if it has a twin (a border edge
+    /// can link to nothing).
+    fn push_edge(&mut self, length: &[f32], twin: &[u32], h: usize) {
         if twin[h] == NONE {
             return;
         }
-        let c = mesh.corners(h / 3);
-        let length = (c[(h + 1) % 3] - c[h % 3]).length();
         // a positive float's bits order like the float
-        let key = (length.to_bits() as u64) << 32 | h as u64;
+        let key = (length[h].to_bits() as u64) << 32 | h as u64;
         let mut k = self.len;
         self.len += 1;
         while k > 0 && self.keys[(k - 1) / ARITY] < key {
