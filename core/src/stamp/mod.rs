@@ -599,6 +599,7 @@ pub fn stamp_with_progress(
 #[cfg(test)]
 mod tests {
     use super::near::Near;
+    use super::sizing::HEX_PACKING;
     use super::*;
     use crate::testmesh::{graded_plane, seamed_sphere, sphere};
     use crate::Strided;
@@ -993,6 +994,40 @@ mod tests {
         // black = half size: a quarter of the density
         let ratio = left as f32 / right as f32;
         assert!((ratio - 0.25).abs() < 0.05, "left/right = {ratio}");
+    }
+
+    /// Oler's bound holds for every face, from radii far larger than the
+    /// faces to far smaller, where it comes within the tile's packing density.
+    #[test]
+    fn no_face_takes_more_points_than_its_bound() {
+        for m in [graded_plane(12, 100.0), sphere(12, 24)] {
+            let mesh = m.mesh();
+            for radius in [0.5, 0.05, 0.01, 0.002] {
+                let params = StampParams {
+                    radius,
+                    seed: 5,
+                    ..StampParams::default()
+                };
+                let mut buf = vec![0u8; required_bytes(&mesh, &params).unwrap()];
+                let mut arena = Arena::new(&mut buf);
+                let stamper = Stamper::new(mesh, &params, &mut arena).unwrap().unwrap();
+                let faces = mesh.triangle_count();
+                let mut out = vec![Candidate::default(); stamper.candidate_bound(0..faces)];
+                let (mut taken, mut bound) = (0, 0);
+                for f in 0..faces {
+                    let b = stamper.candidate_bound(f..f + 1);
+                    let n = stamper.stamp_faces(f..f + 1, &mut out).unwrap();
+                    assert!(n <= b, "face {f} at radius {radius}: {n} > {b}");
+                    (taken, bound) = (taken + n, bound + b);
+                }
+                let share = taken as f32 / bound as f32;
+                let packing = TILE.density() / HEX_PACKING as f32;
+                assert!(
+                    radius > 0.005 || share > 0.9 * packing,
+                    "{taken} of {bound} at {radius}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -87,10 +87,9 @@ impl FaceSums {
     /// Upper bound on the candidates of any pass, for every radius the count
     /// correction can reach.
     ///
-    /// The sum of the per-face bounds of [`face_bound`] is bounded by the
-    /// same expression summed before rounding, plus 2 per face, so one walk
-    /// over the faces gives both the scaled area (hence the smallest radius)
-    /// and the bound.
+    /// The per-face bounds of [`face_bound`] are affine in a face's area and
+    /// perimeter before rounding down, so one walk over the faces gives both
+    /// the scaled area (hence the smallest radius) and their sum.
     pub(super) fn bound(&self, mesh: &Mesh, params: &StampParams) -> Result<usize, Error> {
         let r_min = if params.radius > 0.0 {
             params.radius
@@ -100,11 +99,12 @@ impl FaceSums {
             };
             r * min_radius_factor(params.target_count, mesh.triangle_count())
         } as f64;
-        let dilated = self.area / (r_min * r_min)
-            + 0.5 * self.perimeter / r_min
-            + core::f64::consts::FRAC_PI_4 * self.stamped as f64;
+        let bound = oler(
+            self.area / (r_min * r_min),
+            self.perimeter / r_min,
+            self.stamped,
+        ) + 1.0;
         // ids, ranks and sort keys are 32-bit
-        let bound = dilated * HEX_PACKING + 2.0 * self.stamped as f64 + 1.0;
         if bound.is_nan() || bound > 4.0 * MAX_TARGET as f64 {
             return Err(Error::InvalidArgument(
                 "radius too small for this mesh (over 2^30 candidates)",
@@ -114,18 +114,27 @@ impl FaceSums {
     }
 }
 
-/// Upper bound on the points a face can take at radius `r` (hexagonal
-/// packing of the face dilated by r/2).
+/// Oler's bound on the points a distance 1 apart in `faces` convex sets of
+/// total area `area` and perimeter `perimeter`: `2 / sqrt(3)` per unit of
+/// area, one per two units of perimeter, and one per set. The stamp's
+/// points are a distance 1 apart in the tile up to rounding, which the
+/// margins cover (a thousandth of the area and perimeter terms, a hundredth
+/// of a point per face).
+fn oler(area: f64, perimeter: f64, faces: usize) -> f64 {
+    (HEX_PACKING * area + 0.5 * perimeter) * 1.001 + 1.01 * faces as f64
+}
+
+/// Upper bound on the points a face can take at radius `r`: Oler's bound
+/// for the face in the tile.
 pub(super) fn face_bound(mesh: &Mesh, face: usize, scale: f32, r: f32) -> usize {
     if scale == 0.0 {
         return 0;
     }
     let shape = mesh.shape(face);
-    let (area, perimeter) = (shape.area(), shape.perimeter());
-    let k = scale / r;
-    let dilated = area * k * k + 0.5 * perimeter * k + core::f32::consts::FRAC_PI_4;
+    let k = (scale / r) as f64;
+    let bound = oler(shape.area() as f64 * k * k, shape.perimeter() as f64 * k, 1);
     // saturating: a radius tiny next to the face is reported by the caller
-    (dilated as f64 * HEX_PACKING).min(usize::MAX as f64 / 4.0) as usize + 2
+    bound.min(usize::MAX as f64 / 4.0) as usize
 }
 
 /// Points per unit area of the densest packing at unit spacing (2 / sqrt 3).
