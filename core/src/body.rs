@@ -280,42 +280,53 @@ impl<'a> Body<'a> {
     }
 
     /// True when the segment from `a` to `b` meets a triangle of the body.
-    /// Walks the cells the segment passes through, in order.
+    /// Walks the grid cells the segment passes through, in order, from
+    /// where it enters the grid to where it leaves it.
     pub fn blocks(&self, a: Vec3, b: Vec3) -> bool {
         let shape = &self.shape;
         let (from, to) = (
             (a - shape.origin) * shape.inv_cell,
             (b - shape.origin) * shape.inv_cell,
         );
-        let d = to - from;
-        let mut cell = shape.cell_of(a);
-        let last = shape.cell_of(b);
-        let mut step = [0i32; 3];
-        let (mut next, mut delta) = ([f32::INFINITY; 3], [f32::INFINITY; 3]);
-        for k in 0..3 {
-            if d[k] != 0.0 {
-                step[k] = if d[k] > 0.0 { 1 } else { -1 };
-                let edge = (cell[k] + (d[k] > 0.0) as i32) as f32;
-                next[k] = (edge - from[k]) / d[k];
-                delta[k] = 1.0 / libm::fabsf(d[k]);
-            }
+        if !(from.is_finite() && to.is_finite()) {
+            return false;
         }
-        // the cells between the two ends: a bound that rounding cannot
-        // stretch, and that a NaN end makes zero
-        let cells = (0..3)
-            .map(|k| last[k].abs_diff(cell[k]) as usize)
-            .sum::<usize>();
-        for _ in 0..=cells.min(3 * MAX_DIM as usize) {
-            let within = (0..3).all(|k| cell[k] >= 0 && (cell[k] as usize) < shape.dims[k]);
-            if within {
-                let c = shape.index(cell[0] as usize, cell[1] as usize, cell[2] as usize);
-                let refs = &self.refs[self.start[c] as usize..self.start[c + 1] as usize];
-                if refs
-                    .iter()
-                    .any(|&t| meets(&self.corners[t as usize], a, b - a))
-                {
-                    return true;
+        let d = to - from;
+        let dims = shape.dims.map(|n| n as i32);
+        // the stretch of the segment inside the grid, as parameters t of
+        // from + t * d, and the t at which it crosses its next cell wall
+        // along each axis
+        let (mut t0, mut t1) = (0.0f32, 1.0f32);
+        let (mut step, mut next, mut delta) = ([0i32; 3], [f32::INFINITY; 3], [0.0f32; 3]);
+        for k in 0..3 {
+            if d[k] == 0.0 {
+                if !(0.0..dims[k] as f32).contains(&from[k]) {
+                    return false;
                 }
+                continue;
+            }
+            let (enter, leave) = ((0.0 - from[k]) / d[k], (dims[k] as f32 - from[k]) / d[k]);
+            (t0, t1) = (t0.max(enter.min(leave)), t1.min(enter.max(leave)));
+            (step[k], delta[k]) = (if d[k] > 0.0 { 1 } else { -1 }, 1.0 / libm::fabsf(d[k]));
+        }
+        if t0 > t1 {
+            return false;
+        }
+        let start = from + d * t0;
+        let mut cell = [0, 1, 2].map(|k| floor_i32(start[k]).clamp(0, dims[k] - 1));
+        for k in (0..3).filter(|&k| d[k] != 0.0) {
+            let wall = (cell[k] + (d[k] > 0.0) as i32) as f32;
+            next[k] = (wall - from[k]) / d[k];
+        }
+        // a straight walk crosses each wall at most once
+        for _ in 0..dims.iter().sum::<i32>() {
+            let c = shape.index(cell[0] as usize, cell[1] as usize, cell[2] as usize);
+            let refs = &self.refs[self.start[c] as usize..self.start[c + 1] as usize];
+            if refs
+                .iter()
+                .any(|&t| meets(&self.corners[t as usize], a, b - a))
+            {
+                return true;
             }
             let k = if next[0] <= next[1] && next[0] <= next[2] {
                 0
@@ -325,6 +336,9 @@ impl<'a> Body<'a> {
                 2
             };
             cell[k] += step[k];
+            if next[k] > t1 || !(0..dims[k]).contains(&cell[k]) {
+                return false;
+            }
             next[k] += delta[k];
         }
         false
@@ -441,9 +455,15 @@ mod tests {
         assert!(!body.blocks(v(-2.0, 1.2, 0.0), v(2.0, 1.2, 0.0)));
         assert!(!body.blocks(v(1.5, 1.5, 1.5), v(0.7, 0.7, 0.7)));
         assert!(!body.blocks(v(-0.5, 0.1, 0.2), v(0.5, -0.1, 0.0)));
-        // a point and a segment with a NaN end meet nothing
+        // from far outside the grid, and wholly outside it
+        assert!(body.blocks(v(-1e4, 0.1, 0.2), v(1e4, 0.3, -0.2)));
+        assert!(body.blocks(v(3e3, -2e3, 1e3), v(0.0, 0.0, 0.0)));
+        assert!(!body.blocks(v(-1e4, 5.0, 0.0), v(1e4, 5.0, 0.0)));
+        // a point, and segments with a NaN or infinite end, meet nothing
         assert!(!body.blocks(v(1.5, 0.0, 0.0), v(1.5, 0.0, 0.0)));
+        assert!(!body.blocks(v(0.9, 0.1, 0.0), v(0.9, 0.1, 0.0)));
         assert!(!body.blocks(v(-2.0, 0.0, 0.0), v(f32::NAN, 0.0, 0.0)));
+        assert!(!body.blocks(v(-2.0, 0.0, 0.0), v(f32::INFINITY, 0.0, 0.0)));
         // every chord between two points just outside opposite sides
         for i in 0..2000u64 {
             let r = |c| rng::unit(3, i, Purpose::Uniform, c) * 2.0 - 1.0;
