@@ -2,8 +2,12 @@
 //!
 //! For each strand: the guides whose roots are near the strand's root, that
 //! face the same way (the paper's reverse-normal exclusion), that share its
-//! parting region and that lie within a search radius scaled by the local
-//! guide spacing (so guides across a gap are not used). The paper's
+//! parting region, that lie within a search radius scaled by the local
+//! guide spacing (so guides across a gap are not used), and that no other
+//! part of the body hides: where their normals are far apart, the path
+//! between the roots, lifted off the skin, must not cross the rest mesh
+//! (the one test that does not fade in, as a part in between does not
+//! either). The paper's
 //! randomized neighbour count picks how many to keep; weights are inverse
 //! distance, faded so each goes continuously to zero as its guide leaves the
 //! set: `w_i = (d_next - d_i) / d_i`, with `d_next` the distance of the first
