@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <memory>
 #include <tuple>
 
 namespace creature {
@@ -161,10 +162,12 @@ std::vector<PelageRoot> stamp(const Mesh& mesh, const PelageStampParams& params,
   const PelageMeshDesc desc = mesh.desc();
   size_t arena_bytes = 0, max_roots = 0;
   check(pelage_stamp_query(&desc, &params, &arena_bytes, &max_roots), "pelage_stamp_query");
-  std::vector<unsigned char> arena(arena_bytes);
+  // uninitialised: the stamp writes what it reads, and a host that zeroes a
+  // quarter gigabyte first pays for it in page faults
+  const std::unique_ptr<unsigned char[]> arena(new unsigned char[arena_bytes]);
   std::vector<PelageRoot> roots(max_roots);
   size_t count = 0;
-  check(pelage_stamp(&desc, &params, arena.data(), arena.size(), roots.data(), roots.size(), &count, info),
+  check(pelage_stamp(&desc, &params, arena.get(), arena_bytes, roots.data(), roots.size(), &count, info),
         "pelage_stamp");
   roots.resize(count);
   return roots;
