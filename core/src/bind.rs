@@ -332,6 +332,18 @@ impl<'a> GuideIndex<'a> {
         Ok(report)
     }
 
+    /// Whether the body hides a guide at offset `d` (`d2` its squared
+    /// length) with root normal `gn` from a strand at `p` with normal `n`
+    /// (see [`LIFT`]); the path is only walked where the normals are far
+    /// enough apart for a part to come between.
+    fn hidden(&self, p: Vec3, n: Vec3, d: Vec3, d2: f32, gn: Vec3) -> bool {
+        if gn.dot(n) >= HIDDEN_DOT {
+            return false;
+        }
+        let lift = LIFT * libm::sqrtf(d2);
+        self.body.blocks(p + n * lift, p + d + gn * lift)
+    }
+
     /// The binding of one strand, and how many guide roots its search
     /// looked at.
     fn bind_one(&self, mesh: &Mesh, r: &Root, params: &BindParams) -> (StrandBinding, u32) {
@@ -355,12 +367,11 @@ impl<'a> GuideIndex<'a> {
                 let open = gate(d, d2, n, gn, params);
                 if open > 0.0 {
                     let gated = d2 / (open * open);
-                    if gated < radius * radius && near.takes(gated, g) {
-                        let lift = LIFT * libm::sqrtf(d2);
-                        let (from, to) = (p + n * lift, p + d + gn * lift);
-                        if gn.dot(n) >= HIDDEN_DOT || !self.body.blocks(from, to) {
-                            near.push(gated, g);
-                        }
+                    if gated < radius * radius
+                        && near.takes(gated, g)
+                        && !self.hidden(p, n, d, d2, gn)
+                    {
+                        near.push(gated, g);
                     }
                 }
                 false
