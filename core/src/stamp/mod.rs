@@ -49,7 +49,7 @@ mod sizing;
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::chart::{self, Unfolded};
-use crate::tile::{LOD_LEVELS, TILE, TILE_SIDE};
+use crate::tile::{level_spacing, LOD_LEVELS, TILE, TILE_SIDE};
 use crate::{Error, Mesh, Root, ScalarMap};
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;
@@ -189,12 +189,6 @@ impl Candidate {
     }
 }
 
-/// The spacing of each LOD level in units of the disk radius: `sqrt(2)`
-/// between levels, 1 at the finest.
-fn lod_spacings() -> [f32; LOD_LEVELS] {
-    core::array::from_fn(|k| libm::powf(2.0, 0.5 * (LOD_LEVELS - 1 - k) as f32))
-}
-
 /// Corner 0 of face `f` and its edges to corners 1 and 2: a point at
 /// barycentric `(u, v)` lies at `a + e1 * u + e2 * v`.
 #[inline]
@@ -228,7 +222,7 @@ pub struct Stamper<'m, 'a> {
     previous: Option<(f32, usize)>,
     passes: u32,
     degenerate: u32,
-    /// [`lod_spacings`].
+    /// [`level_spacing`] of each level.
     spacings: [f32; LOD_LEVELS],
 }
 
@@ -346,7 +340,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             previous: None,
             passes: 0,
             degenerate: sums.degenerate,
-            spacings: lod_spacings(),
+            spacings: core::array::from_fn(level_spacing),
         };
         if !fixed {
             stamper.radius = stamper.predicted_radius();
@@ -742,7 +736,7 @@ mod tests {
         }
         assert!(raised > 0, "no level was raised: nothing to check");
         let at = |c: &Candidate| position(&stamper.mesh, c);
-        let spacings = lod_spacings();
+        let spacings = stamper.spacings;
         for (i, a) in cands.iter().enumerate() {
             for (b, &lb) in cands[i + 1..].iter().zip(&levels[i + 1..]) {
                 let (fa, fb) = (

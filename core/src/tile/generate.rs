@@ -5,7 +5,7 @@
 //! so a stamp pays nothing for its tile; the crate's tests include it too,
 //! to check the baked tile against a fresh run.
 
-use super::shape::{CELL, CELLS, LOD_LEVELS, TILE_SIDE};
+use super::shape::{level_spacing, CELL, CELLS, LOD_LEVELS, TILE_SIDE};
 use crate::rng::{self, Purpose};
 
 /// Seed of the tile's random draws. Every stamp uses this one tile, as the
@@ -210,7 +210,7 @@ fn assign_levels(points: &[[f32; 2]], cell_start: &[u32], levels: &mut [u8]) {
     let mut n_chosen = 0;
     let side = CELLS as isize;
     for k in 0..finest {
-        let r = libm::powf(2.0, 0.5 * (finest - k) as f32);
+        let r = level_spacing(k as usize);
         let r2 = r * r;
         let reach = libm::ceilf(r / CELL as f32) as isize;
         let by_cells = 2 * reach < side;

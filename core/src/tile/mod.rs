@@ -11,7 +11,7 @@
 mod generate;
 mod shape;
 
-pub use shape::{CELL, CELLS, LOD_LEVELS, TILE_SIDE};
+pub use shape::{level_spacing, CELL, CELLS, LOD_LEVELS, TILE_SIDE};
 
 // the baked tile: `POINTS`, `LEVELS` and `CELL_START`, as the fields of `Tile`
 include!(concat!(env!("OUT_DIR"), "/tile.rs"));
@@ -107,7 +107,7 @@ mod tests {
                 let d2 = torus_dist2(a, b);
                 assert!(d2 >= 0.999, "points too close: {d2}");
                 let k = la.max(lb);
-                let r = libm::powf(2.0, 0.5 * (LOD_LEVELS - 1 - k as usize) as f32);
+                let r = level_spacing(k as usize);
                 assert!(d2 >= r * r * 0.999, "level {k} spacing violated");
             }
         }

@@ -3,7 +3,7 @@
 
 /// Tile side, in units of the disk radius.
 pub const TILE_SIDE: usize = 48;
-/// Number of nested LOD levels; level `k` has spacing `sqrt(2)^(LOD_LEVELS - 1 - k)`.
+/// Number of nested LOD levels (see [`level_spacing`]).
 pub const LOD_LEVELS: usize = 12;
 /// Side of the lookup cells, in units of the disk radius. Placing a
 /// triangle walks the cells it crosses row by row: cells of 2 hold about
@@ -12,3 +12,10 @@ pub const LOD_LEVELS: usize = 12;
 pub const CELL: usize = 2;
 /// Lookup cells per tile side.
 pub const CELLS: usize = TILE_SIDE / CELL;
+
+/// The spacing of LOD level `k` in units of the disk radius:
+/// `sqrt(2)^(LOD_LEVELS - 1 - k)`, so `sqrt(2)` between levels and 1 at the
+/// finest.
+pub fn level_spacing(k: usize) -> f32 {
+    libm::powf(2.0, 0.5 * (LOD_LEVELS - 1 - k) as f32)
+}
