@@ -100,12 +100,23 @@ const MIN_RADIUS_FACTOR: f32 = 0.7;
 /// The same for sparse stamps (fewer than 4 roots per triangle), where the
 /// edge pass removes up to half the points; their candidate memory is small.
 const MIN_RADIUS_FACTOR_SPARSE: f32 = 0.45;
+/// Targets below which the sparse floor comes down with the square root of
+/// the target, to [`MIN_RADIUS_FACTOR_TINY`]: a stamp of a few roots is a
+/// lottery over the tile's windows (at the first radius a pass can stamp
+/// none), and the area term of its candidate bound, about `1.7 * target /
+/// factor^2`, stays below 2,200 points.
+const SMALL_TARGET: u32 = 256;
+/// Lowest floor, for a target of one root.
+const MIN_RADIUS_FACTOR_TINY: f32 = 0.05;
 
 fn min_radius_factor(target: u32, faces: usize) -> f32 {
-    if (target as usize) < 4 * faces {
+    if (target as usize) >= 4 * faces {
+        MIN_RADIUS_FACTOR
+    } else if target >= SMALL_TARGET {
         MIN_RADIUS_FACTOR_SPARSE
     } else {
-        MIN_RADIUS_FACTOR
+        let small = libm::sqrtf(target as f32 / SMALL_TARGET as f32);
+        (MIN_RADIUS_FACTOR_SPARSE * small).max(MIN_RADIUS_FACTOR_TINY)
     }
 }
 
@@ -425,12 +436,20 @@ impl<'m, 'a> Stamper<'m, 'a> {
         }
         let target = self.target as f32;
         let excess = (kept as f32 - target) / target;
-        if (0.0..=COUNT_TOLERANCE).contains(&excess) || kept == 0 || self.passes >= MAX_PASSES {
+        if (0.0..=COUNT_TOLERANCE).contains(&excess) || self.passes >= MAX_PASSES {
             return true;
         }
         let aim = target as f64 * (1.0 + 0.5 * COUNT_TOLERANCE as f64);
         let r1 = self.radius as f64;
-        let corrected = if self.passes < SECANT_PASSES {
+        let corrected = if kept == 0 {
+            // a small target can miss every face: there is no count to
+            // correct from, so go halfway (in log) back to a smaller radius
+            // that stamped roots, or shrink
+            match self.previous {
+                Some((r0, k0)) if k0 > 0 && r0 < self.radius => libm::sqrtf(r0 * self.radius),
+                _ => self.radius * 0.7,
+            }
+        } else if self.passes < SECANT_PASSES {
             match self.previous {
                 // a secant in log-log space through the last two passes
                 Some((r0, k0)) if r0 != self.radius && k0 != kept && k0 > 0 => {
@@ -658,6 +677,27 @@ mod tests {
         }
     }
 
+    /// A target of a few roots on a few faces can have a pass stamp none
+    /// at all (the window of the tile each chart takes misses every
+    /// point); the correction goes on from there instead of keeping zero.
+    #[test]
+    fn tiny_targets_are_met_on_small_meshes() {
+        for m in [graded_plane(1, 1.0), graded_plane(4, 20.0), sphere(4, 8)] {
+            for target in 1..=4 {
+                for seed in 0..200 {
+                    let (roots, report) = run(
+                        m.mesh(),
+                        &StampParams {
+                            seed,
+                            ..params(target)
+                        },
+                    );
+                    assert_eq!(roots.len(), target as usize, "seed {seed}: {report:?}");
+                }
+            }
+        }
+    }
+
     /// Barycentrics from the signed areas can round a hair past an edge for
     /// a point the edge tests take; every root still lies in its triangle.
     /// The mesh is the C contract test's sphere (a duplicated seam column,
@@ -724,17 +764,19 @@ mod tests {
             let cands = &cands[..kept];
             let mut out = vec![Root::default(); kept];
             stamper.finish(cands, scratch, &mut out).unwrap();
-            check_lod_spacing(stamper, cands, &scratch.level[..kept]);
+            let raised = check_lod_spacing(stamper, cands, &scratch.level[..kept]);
+            assert!(raised > 0, "no level was raised: nothing to check");
         });
     }
 
-    fn check_lod_spacing(stamper: &Stamper, cands: &[Candidate], levels: &[u8]) {
+    /// Checks the LOD spacing of every pair of kept candidates (see above);
+    /// returns how many candidates left their tile level.
+    fn check_lod_spacing(stamper: &Stamper, cands: &[Candidate], levels: &[u8]) -> usize {
         let mut raised = 0;
         for (c, &l) in cands.iter().zip(levels) {
             assert!(l as u16 >= c.level && (l as usize) < LOD_LEVELS);
             raised += (l as u16 > c.level) as usize;
         }
-        assert!(raised > 0, "no level was raised: nothing to check");
         let at = |c: &Candidate| position(&stamper.mesh, c);
         let spacings = stamper.spacings;
         for (i, a) in cands.iter().enumerate() {
@@ -757,6 +799,7 @@ mod tests {
                 );
             }
         }
+        raised
     }
 
     /// The position the passes compute for `c`, to the bit.
@@ -1079,5 +1122,156 @@ mod tests {
             required_bytes(&mesh, &p),
             Err(Error::InvalidArgument(_))
         ));
+    }
+
+    /// A height field over a jittered, warped grid of `n` x `m` cells:
+    /// vertex `(i, j)` moves by `jitter[j * (n + 1) + i]` (in quarter
+    /// cells; border vertices stay on the border), `x` and `y` go through
+    /// `x^warp[0]` and `y^warp[1]` (triangle areas then vary by up to 10^5),
+    /// cell `c` is split along the diagonal `flip[c]` picks, and `z` is a
+    /// product of two waves whose slopes stay below 0.9.
+    fn wavy_field(
+        (n, m): (usize, usize),
+        warp: [f32; 2],
+        jitter: &[(f32, f32)],
+        flip: &[bool],
+        [f1, f2, p1, p2]: [f32; 4],
+    ) -> crate::testmesh::TestMesh {
+        use core::f32::consts::TAU;
+        let amplitude = 0.1 / f1.max(f2);
+        let mut p = vec![];
+        let mut uv = vec![];
+        for j in 0..=m {
+            for i in 0..=n {
+                let (dx, dy) = jitter[j * (n + 1) + i];
+                let at = |k: usize, last: usize, d: f32, warp: f32| {
+                    let t = if k == 0 || k == last { 0.0 } else { 0.25 * d };
+                    ((k as f32 + t) / last as f32).powf(warp)
+                };
+                let (x, y) = (at(i, n, dx, warp[0]), at(j, m, dy, warp[1]));
+                let z = amplitude * (TAU * f1 * x + p1).sin() * (TAU * f2 * y + p2).cos();
+                p.push([x, y, z]);
+                uv.push([x, y]);
+            }
+        }
+        let mut t = vec![];
+        let s = (n + 1) as u32;
+        for j in 0..m as u32 {
+            for i in 0..n as u32 {
+                let a = j * s + i;
+                if flip[(j * n as u32 + i) as usize] {
+                    t.extend([[a, a + 1, a + s + 1], [a, a + s + 1, a + s]]);
+                } else {
+                    t.extend([[a, a + 1, a + s], [a + 1, a + s + 1, a + s]]);
+                }
+            }
+        }
+        crate::testmesh::TestMesh {
+            p,
+            t,
+            uv,
+            n: vec![],
+        }
+    }
+
+    use proptest::prelude::*;
+
+    /// Cells per side of [`wavy_field`] in the property test.
+    const MAX_CELLS: usize = 16;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        /// On random one-sheet surfaces with random density maps: the count
+        /// is the target, every root lies in a stamped triangle, no two
+        /// roots are closer than their pair's disk radius, every LOD level
+        /// keeps its spacing, and any face chunking gives the same points.
+        #[test]
+        fn random_surfaces_keep_every_stamp_guarantee(
+            cells in (1..=MAX_CELLS, 1..=MAX_CELLS),
+            warp in (1.0f32..3.0, 1.0f32..3.0),
+            jitter in prop::collection::vec((-1.0f32..1.0, -1.0f32..1.0), (MAX_CELLS + 1).pow(2)),
+            flip in prop::collection::vec(any::<bool>(), MAX_CELLS.pow(2)),
+            waves in (0.3f32..2.0, 0.3f32..2.0, 0.0f32..6.3, 0.0f32..6.3),
+            density in prop::collection::vec(0.0f32..=1.0, (MAX_CELLS + 1).pow(2)),
+            gray in any::<bool>(),
+            black_scale in MIN_BLACK_SCALE..=1.0f32,
+            bald_below in prop::sample::select(vec![0.0f32, 1.0 / 512.0, 0.3]),
+            target in 1u32..1500,
+            seed in any::<u64>(),
+            cuts in prop::collection::vec(0.0f32..1.0, 0..5),
+            collapse in prop::collection::vec(0usize..(MAX_CELLS + 1).pow(2), 0..3),
+        ) {
+            let mut m = wavy_field(cells, [warp.0, warp.1], &jitter, &flip, [waves.0, waves.1, waves.2, waves.3]);
+            // a vertex moved onto the next one: the faces with both are
+            // degenerate (skipped)
+            for &v in &collapse {
+                let v = v % (m.p.len() - 1);
+                m.p[v] = m.p[v + 1];
+            }
+            // every face tilts by less than 41 degrees, so every pair of
+            // faces is same-facing and every bend is under 90 degrees: the
+            // surfaces the spacing guarantee covers (a long thin face can
+            // be steeper than the waves, so flatten them until none is)
+            let tilted = |m: &crate::testmesh::TestMesh| {
+                let mesh = m.mesh();
+                (0..mesh.triangle_count())
+                    .any(|f| !mesh.shape(f).degenerate && mesh.face_normal(f).z <= 0.75)
+            };
+            for _ in 0..20 {
+                if !tilted(&m) {
+                    break;
+                }
+                m.p.iter_mut().for_each(|p| p[2] *= 0.5);
+            }
+            // a collapse can fold a face over
+            prop_assume!(!tilted(&m));
+            let mesh = m.mesh();
+            let values = &density[..m.p.len()];
+            let params = StampParams {
+                target_count: target,
+                seed,
+                density: if gray {
+                    ScalarMap::PerVertex(Strided::from_slice(values))
+                } else {
+                    ScalarMap::Constant(1.0)
+                },
+                black_scale,
+                bald_below,
+                ..StampParams::default()
+            };
+            let scale = |f: usize| FaceSetup::new(&mesh, &params, f).face.scale;
+            let stamped = (0..mesh.triangle_count()).any(|f| scale(f) > 0.0);
+            let (roots, report) = run(mesh, &params);
+            prop_assert_eq!(roots.len(), if stamped { target as usize } else { 0 }, "{:?}", report);
+            for (i, a) in roots.iter().enumerate() {
+                prop_assert!(scale(a.face as usize) > 0.0, "root on a bald face");
+                let pa = mesh.point(a.face as usize, a.u, a.v);
+                for b in &roots[i + 1..] {
+                    let r = report.radius / scale(a.face as usize).max(scale(b.face as usize));
+                    let d = pa.distance(mesh.point(b.face as usize, b.u, b.v));
+                    prop_assert!(d >= 0.999 * r, "{a:?} and {b:?}: {d} < {r}");
+                }
+            }
+            if !stamped {
+                return Ok(());
+            }
+            with_candidates(mesh, &params, |stamper, scratch, mut cands| {
+                let faces = mesh.triangle_count();
+                let mut bounds: Vec<usize> = cuts.iter().map(|c| (c * faces as f32) as usize).collect();
+                bounds.extend([0, faces]);
+                bounds.sort_unstable();
+                let mut chunked = vec![];
+                for w in bounds.windows(2) {
+                    let mut part = vec![Candidate::default(); stamper.candidate_bound(w[0]..w[1])];
+                    let k = stamper.stamp_faces(w[0]..w[1], &mut part).unwrap();
+                    chunked.extend_from_slice(&part[..k]);
+                }
+                assert_eq!(chunked, cands, "chunks at {bounds:?}");
+                let kept = stamper.prune(&mut cands, scratch).unwrap();
+                let mut out = vec![Root::default(); kept];
+                stamper.finish(&cands[..kept], scratch, &mut out).unwrap();
+                check_lod_spacing(stamper, &cands[..kept], &scratch.level[..kept]);
+            });
+        }
     }
 }
