@@ -43,21 +43,32 @@ pub fn graded_plane(n: usize, ratio: f32) -> TestMesh {
             uv.push([x, y]);
         }
     }
-    let mut t = vec![];
-    let s = (n + 1) as u32;
-    for j in 0..n as u32 {
-        for i in 0..n as u32 {
-            let a = j * s + i;
-            t.push([a, a + 1, a + s + 1]);
-            t.push([a, a + s + 1, a + s]);
-        }
-    }
     TestMesh {
         p,
-        t,
+        t: grid_triangles(n, n, |_| true),
         uv,
         n: vec![],
     }
+}
+
+/// The triangles of a grid of `n` x `m` cells whose `(n + 1) x (m + 1)`
+/// vertices are stored row by row: two per cell, split from the cell's
+/// first corner to the opposite one when `first_diagonal(cell)` holds
+/// (cells counted row by row), along the other diagonal otherwise.
+pub fn grid_triangles(n: usize, m: usize, first_diagonal: impl Fn(usize) -> bool) -> Vec<[u32; 3]> {
+    let mut t = vec![];
+    let s = (n + 1) as u32;
+    for j in 0..m as u32 {
+        for i in 0..n as u32 {
+            let a = j * s + i;
+            if first_diagonal((j * n as u32 + i) as usize) {
+                t.extend([[a, a + 1, a + s + 1], [a, a + s + 1, a + s]]);
+            } else {
+                t.extend([[a, a + 1, a + s], [a + 1, a + s + 1, a + s]]);
+            }
+        }
+    }
+    t
 }
 
 /// [`graded_plane`] (even spacing) lifted to the height field

@@ -1154,21 +1154,9 @@ mod tests {
                 uv.push([x, y]);
             }
         }
-        let mut t = vec![];
-        let s = (n + 1) as u32;
-        for j in 0..m as u32 {
-            for i in 0..n as u32 {
-                let a = j * s + i;
-                if flip[(j * n as u32 + i) as usize] {
-                    t.extend([[a, a + 1, a + s + 1], [a, a + s + 1, a + s]]);
-                } else {
-                    t.extend([[a, a + 1, a + s], [a + 1, a + s + 1, a + s]]);
-                }
-            }
-        }
         crate::testmesh::TestMesh {
             p,
-            t,
+            t: crate::testmesh::grid_triangles(n, m, |c| flip[c]),
             uv,
             n: vec![],
         }
