@@ -1141,13 +1141,14 @@ mod tests {
         let amplitude = 0.1 / f1.max(f2);
         let mut p = vec![];
         let mut uv = vec![];
+        // coordinate `k` of `0..=last`, moved by `d` quarter cells, warped
+        let at = |k: usize, last: usize, d: f32, warp: f32| {
+            let t = if k == 0 || k == last { 0.0 } else { 0.25 * d };
+            ((k as f32 + t) / last as f32).powf(warp)
+        };
         for j in 0..=m {
             for i in 0..=n {
                 let (dx, dy) = jitter[j * (n + 1) + i];
-                let at = |k: usize, last: usize, d: f32, warp: f32| {
-                    let t = if k == 0 || k == last { 0.0 } else { 0.25 * d };
-                    ((k as f32 + t) / last as f32).powf(warp)
-                };
                 let (x, y) = (at(i, n, dx, warp[0]), at(j, m, dy, warp[1]));
                 let z = amplitude * (TAU * f1 * x + p1).sin() * (TAU * f2 * y + p2).cos();
                 p.push([x, y, z]);
@@ -1173,8 +1174,15 @@ mod tests {
         params: &StampParams,
         cuts: &[f32],
     ) -> Result<(), proptest::test_runner::TestCaseError> {
-        let scale = |f: usize| FaceSetup::new(&mesh, params, f).face.scale;
-        let stamped = (0..mesh.triangle_count()).any(|f| scale(f) > 0.0);
+        // scale and normal of each face, and each root's point, made once
+        // for the pair loop
+        let faces: Vec<(f32, Vec3)> = (0..mesh.triangle_count())
+            .map(|f| {
+                let face = FaceSetup::new(&mesh, params, f).face;
+                (face.scale, Vec3::from(face.normal))
+            })
+            .collect();
+        let stamped = faces.iter().any(|&(scale, _)| scale > 0.0);
         let (roots, report) = run(mesh, params);
         let target = params.target_count as usize;
         prop_assert_eq!(
@@ -1183,17 +1191,20 @@ mod tests {
             "{:?}",
             report
         );
-        for (i, a) in roots.iter().enumerate() {
-            let fa = a.face as usize;
-            prop_assert!(scale(fa) > 0.0, "root on a bald face");
-            let pa = mesh.point(fa, a.u, a.v);
-            for b in &roots[i + 1..] {
-                let fb = b.face as usize;
-                if mesh.face_normal(fa).dot(mesh.face_normal(fb)) <= 0.0 {
+        let points: Vec<Vec3> = roots
+            .iter()
+            .map(|r| mesh.point(r.face as usize, r.u, r.v))
+            .collect();
+        for (i, (a, pa)) in roots.iter().zip(&points).enumerate() {
+            let (scale_a, normal_a) = faces[a.face as usize];
+            prop_assert!(scale_a > 0.0, "root on a bald face");
+            for (b, pb) in roots[i + 1..].iter().zip(&points[i + 1..]) {
+                let (scale_b, normal_b) = faces[b.face as usize];
+                if normal_a.dot(normal_b) <= 0.0 {
                     continue;
                 }
-                let r = report.radius / scale(fa).max(scale(fb));
-                let d = pa.distance(mesh.point(fb, b.u, b.v));
+                let r = report.radius / scale_a.max(scale_b);
+                let d = pa.distance(*pb);
                 prop_assert!(d >= 0.999 * r, "{a:?} and {b:?}: {d} < {r}");
             }
         }
