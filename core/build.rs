@@ -1,20 +1,24 @@
-//! Bakes the Poisson tile into the crate: `src/tile/generate.rs` runs here,
+//! Bakes the Poisson tile into the crate: `src/stamp/tile/generate.rs` runs here,
 //! once, and its points, levels and cell starts become static arrays.
 
 // the modules are borrowed from the crate, which uses more of them
 #![allow(dead_code)]
 
-#[path = "src/tile/generate.rs"]
+#[path = "src/stamp/tile/generate.rs"]
 mod generate;
 #[path = "src/rng.rs"]
 mod rng;
-#[path = "src/tile/shape.rs"]
+#[path = "src/stamp/tile/shape.rs"]
 mod shape;
 
 use std::fmt::Write;
 
 fn main() {
-    for file in ["src/tile/generate.rs", "src/rng.rs", "src/tile/shape.rs"] {
+    for file in [
+        "src/stamp/tile/generate.rs",
+        "src/rng.rs",
+        "src/stamp/tile/shape.rs",
+    ] {
         println!("cargo::rerun-if-changed={file}");
     }
     let tile = generate::generate(generate::SEED);

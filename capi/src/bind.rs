@@ -5,7 +5,7 @@ use crate::status::Failure;
 use crate::threads::split_over_threads;
 use crate::{PelageGuidesDesc, PelageMeshDesc, PelageRegionMap, PelageRoot, PelageStatus};
 use bytemuck::{Pod, Zeroable};
-use pelage_core::bind::{self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS};
+use pelage_core::interp::bind::{self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS};
 use pelage_core::root::check_roots;
 use pelage_core::{Arena, Root};
 

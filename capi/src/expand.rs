@@ -8,11 +8,11 @@ use crate::{
     PelageStrandGroom,
 };
 use pelage_core::arena::ArenaLayout;
-use pelage_core::bind::StrandBinding;
-use pelage_core::expand::{
+use pelage_core::interp::bind::StrandBinding;
+use pelage_core::interp::expand::{
     self, EndPoints, ExpandParams, GuideSlots, PreparedGuides, StrandBounds, Strands,
 };
-use pelage_core::groom::StrandGroom;
+use pelage_core::interp::groom::StrandGroom;
 use pelage_core::{Arena, Mesh, Root};
 
 /// End-point convention of the output curves.

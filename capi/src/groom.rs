@@ -4,7 +4,7 @@ use crate::buffers::{req, slice, slice_mut};
 use crate::status::Failure;
 use crate::{PelageMap, PelageMeshDesc, PelageRoot, PelageStatus};
 use bytemuck::{Pod, Zeroable};
-use pelage_core::groom::{GroomMaps, StrandGroom};
+use pelage_core::interp::groom::{GroomMaps, StrandGroom};
 use pelage_core::{Root, ScalarMap};
 
 /// Groom maps sampled at each strand root; start from pelage_groom_maps_defaults().

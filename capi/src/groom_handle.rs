@@ -8,9 +8,9 @@ use crate::{
     PelageExpandParams, PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus,
     PelageStrandBinding, PelageStrandGroom,
 };
-use pelage_core::bind::StrandBinding;
-use pelage_core::expand::{StrandBounds, Strands};
-use pelage_core::groom::StrandGroom;
+use pelage_core::interp::bind::StrandBinding;
+use pelage_core::interp::expand::{StrandBounds, Strands};
+use pelage_core::interp::groom::StrandGroom;
 use pelage_core::Root;
 use std::ffi::c_void;
 

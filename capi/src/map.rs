@@ -3,7 +3,7 @@
 use crate::buffers::{bytes, strided};
 use crate::status::Failure;
 use crate::PelageStatus;
-use pelage_core::map::{Texels, Texture};
+use pelage_core::surface::map::{Texels, Texture};
 use pelage_core::ScalarMap;
 use std::ffi::c_void;
 

@@ -4,7 +4,7 @@ use crate::buffers::strided;
 use crate::map::texture_bytes;
 use crate::status::Failure;
 use crate::PelageStatus;
-use pelage_core::map::{Texels, Texture};
+use pelage_core::surface::map::{Texels, Texture};
 use pelage_core::RegionMap;
 use std::ffi::c_void;
 

@@ -8,11 +8,11 @@ use crate::{
     PelageStrandBinding, PelageStrandGroom,
 };
 use pelage_core::arena::ArenaLayout;
-use pelage_core::bind::StrandBinding;
-use pelage_core::body::Body;
-use pelage_core::expand::{check_frame, check_strands, PreparedGuides, Strands};
-use pelage_core::groom::StrandGroom;
-use pelage_core::settle::{settle_checked, SettleReport};
+use pelage_core::interp::bind::StrandBinding;
+use pelage_core::interp::expand::{check_frame, check_strands, PreparedGuides, Strands};
+use pelage_core::interp::groom::StrandGroom;
+use pelage_core::interp::settle::{settle_checked, SettleReport};
+use pelage_core::surface::body::Body;
 use pelage_core::{Arena, Root};
 
 /// What pelage_settle changed.

@@ -10,32 +10,22 @@
 #![deny(missing_docs)]
 
 pub mod arena;
-pub mod bind;
-pub mod body;
-pub mod chart;
 pub mod error;
-pub mod expand;
-pub mod frame;
-pub mod grid;
-pub mod groom;
 pub mod guides;
-pub mod map;
-pub mod mesh;
-pub mod region;
+pub mod interp;
 pub mod rng;
 pub mod root;
-pub mod settle;
 pub mod stamp;
 pub mod strided;
+pub mod surface;
 #[cfg(test)]
 mod testmesh;
-pub mod tile;
 
 pub use arena::{Arena, ArenaLayout};
 pub use error::Error;
-pub use map::ScalarMap;
-pub use mesh::Mesh;
-pub use region::RegionMap;
 pub use root::Root;
 pub use stamp::{StampParams, StampReport};
 pub use strided::Strided;
+pub use surface::map::ScalarMap;
+pub use surface::mesh::Mesh;
+pub use surface::region::RegionMap;

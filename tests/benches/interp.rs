@@ -8,10 +8,10 @@
 //! memory-bandwidth floor), measured in the same run.
 
 use pelage::*;
-use pelage_core::bind::{self, BindParams, StrandBinding};
-use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
-use pelage_core::groom::{GroomMaps, StrandGroom};
 use pelage_core::guides::{CvLayout, Guides};
+use pelage_core::interp::bind::{self, BindParams, StrandBinding};
+use pelage_core::interp::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
+use pelage_core::interp::groom::{GroomMaps, StrandGroom};
 use pelage_core::{Arena, ArenaLayout, Mesh, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{

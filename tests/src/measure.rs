@@ -3,9 +3,9 @@
 
 use crate::creature::CreatureMesh;
 use glam::Vec3;
-use pelage_core::grid::HashGrid;
 use pelage_core::rng::{self, Purpose};
 use pelage_core::stamp::{self, StampParams, StampReport};
+use pelage_core::surface::grid::HashGrid;
 use pelage_core::{Arena, Mesh, Root, Strided};
 
 /// Borrows a creature mesh as a core mesh (with UVs and normals).

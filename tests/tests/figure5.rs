@@ -6,8 +6,8 @@
 //! triangle scaled by s keeps s^2 of its roots, so the count of a map is the
 //! white count times the area-weighted mean of s^2.
 
-use pelage_core::map::{Texels, Texture};
 use pelage_core::stamp::StampParams;
+use pelage_core::surface::map::{Texels, Texture};
 use pelage_core::ScalarMap;
 use pelage_tests::creature::{default_creature, figure5_maps, sample_texture};
 use pelage_tests::measure::{mesh_view, stamp_vec};

@@ -176,7 +176,12 @@ fn every_stage_gives_the_recorded_bits() {
         ("settled grooms", hash(&grooms)),
         (
             "settle counts",
-            hash(&[settle.lifted, settle.unclumped, settle.turned, settle.shortened]),
+            hash(&[
+                settle.lifted,
+                settle.unclumped,
+                settle.turned,
+                settle.shortened,
+            ]),
         ),
         ("rest curves", hash(&rest)),
         ("posed curves", hash(&posed)),

@@ -142,7 +142,7 @@ fn groom_maps_through_the_c_api_give_each_strand_its_value() {
     // a per-vertex map with interleaved values (stride 8), an 8-bit texture
     // with padded rows and a float texture: every strand gets the map's
     // value at its root (the core's lookups, here from the host's buffers)
-    use pelage_core::map::{Texels, Texture};
+    use pelage_core::surface::map::{Texels, Texture};
     let m = default_creature();
     let mesh = mesh_view(&m);
     let strands = stamp_roots(mesh, 5000, 3);
@@ -330,10 +330,10 @@ fn identical_bits_for_1_2_and_7_threads_and_chunks() {
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn avx2_kernel_gives_the_baseline_bits() {
-    use pelage_core::bind::StrandBinding;
-    use pelage_core::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
-    use pelage_core::groom::StrandGroom;
     use pelage_core::guides::{CvLayout, Guides};
+    use pelage_core::interp::bind::StrandBinding;
+    use pelage_core::interp::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
+    use pelage_core::interp::groom::StrandGroom;
     use pelage_core::{Arena, ArenaLayout, Strided};
     if !std::is_x86_feature_detected!("avx2") {
         eprintln!("no AVX2 on this CPU: nothing to compare");
@@ -353,7 +353,7 @@ fn avx2_kernel_gives_the_baseline_bits() {
             3 => (gr.kink_amplitude, gr.clump) = (0.0, 0.0),
             4 => {
                 *b = StrandBinding {
-                    clump: pelage_core::bind::NO_GUIDE,
+                    clump: pelage_core::interp::bind::NO_GUIDE,
                     ..StrandBinding::default()
                 }
             }

@@ -2,9 +2,9 @@
 
 use super::near::Near;
 use super::{face_frame, Candidate, Scratch, Stamper, GRID_CELL};
-use crate::grid::HashGrid;
 use crate::rng::{self, Purpose};
-use crate::tile::LOD_LEVELS;
+use crate::stamp::tile::LOD_LEVELS;
+use crate::surface::grid::HashGrid;
 use crate::{Error, Root};
 use glam::Vec3;
 

@@ -40,18 +40,20 @@
 // (tile points into candidates), `prune` (the edge pass), `lod` (levels
 // and ranks), with the records and buffers the passes share in `near` and
 // `scratch`.
+pub mod chart;
 mod lod;
 mod near;
 mod place;
 mod prune;
 mod scratch;
 mod sizing;
+pub mod tile;
 
 use crate::arena::{Arena, ArenaLayout};
-use crate::chart::{self, Unfolded};
-use crate::tile::{level_spacing, LOD_LEVELS, TILE, TILE_SIDE};
+use crate::stamp::tile::{level_spacing, LOD_LEVELS, TILE, TILE_SIDE};
 use crate::{Error, Mesh, Root, ScalarMap};
 use bytemuck::{Pod, Zeroable};
+use chart::Unfolded;
 use core::ops::Range;
 use glam::Vec3;
 use place::{ChartFrame, TilePlace};
@@ -68,7 +70,7 @@ pub const COUNT_TOLERANCE: f32 = 0.02;
 /// roots.
 const GRID_CELL: f32 = 5.0;
 /// Grid cells of the edge pass, in disk radii. Its table is laid out in
-/// blocks of cells ([`HashGrid::in_blocks`](crate::grid::HashGrid::in_blocks)),
+/// blocks of cells ([`HashGrid::in_blocks`](crate::surface::grid::HashGrid::in_blocks)),
 /// which makes a bucket cheaper to visit, so larger cells pay: 6 measured
 /// best against 3, 4, 5, 7, 8 and 10 on the creature at 1M roots.
 const EDGE_GRID_CELL: f32 = 6.0;

@@ -3,7 +3,7 @@
 
 use super::{Candidate, Stamper};
 use crate::arena::{Arena, ArenaLayout};
-use crate::grid::HashGrid;
+use crate::surface::grid::HashGrid;
 use crate::Error;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};

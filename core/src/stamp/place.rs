@@ -3,10 +3,10 @@
 
 use super::near::LANES;
 use super::{Candidate, Stamper};
-use crate::chart::Unfolded;
-use crate::grid::floor_i32;
 use crate::rng::{self, Purpose};
-use crate::tile::{CELL, CELLS, LOD_LEVELS, TILE, TILE_SIDE};
+use crate::stamp::chart::Unfolded;
+use crate::stamp::tile::{CELL, CELLS, LOD_LEVELS, TILE, TILE_SIDE};
+use crate::surface::grid::floor_i32;
 use crate::{Error, Mesh};
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;

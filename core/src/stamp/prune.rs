@@ -3,7 +3,7 @@
 
 use super::near::Near;
 use super::{face_frame, Candidate, Scratch, Stamper, EDGE_GRID_CELL};
-use crate::grid::HashGrid;
+use crate::surface::grid::HashGrid;
 use crate::Error;
 use glam::Vec3;
 

@@ -3,7 +3,7 @@
 use super::lod::RANK_KEYS;
 use super::near::{Gathered, Near};
 use crate::arena::{Arena, ArenaLayout};
-use crate::grid::HashGrid;
+use crate::surface::grid::HashGrid;
 use crate::Error;
 
 /// Working memory of the edge pass and the LOD pass, sized for a candidate

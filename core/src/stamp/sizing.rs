@@ -5,11 +5,11 @@ use super::{
     min_radius_factor, validate, Candidate, Face, Scratch, StampParams, Stamper, MAX_TARGET,
 };
 use crate::arena::ArenaLayout;
-use crate::tile::TILE;
+use crate::stamp::tile::TILE;
 use crate::{Error, Mesh};
 
 /// Steps the density takes between black and white when it scales faces.
-/// Only faces of one scale are laid out together (see [`chart`](crate::chart)), so a
+/// Only faces of one scale are laid out together (see [`chart`](crate::stamp::chart)), so a
 /// smooth gradient is stamped as bands of equal scale: a step is 0.8% of
 /// the face size at the paper's `black_scale` of 0.5 (1.6% of the root
 /// density in white regions, 3.1% in black ones).

@@ -4,7 +4,7 @@
 //! Ornatrix partings). Ids are labels, never blended: a root takes the id of
 //! its nearest corner or of the texel it falls in.
 
-use crate::map::{Texels, Texture};
+use crate::surface::map::{Texels, Texture};
 use crate::{Error, Mesh, Root, ScalarMap, Strided};
 
 /// Where the parting region of a root comes from.

@@ -61,7 +61,7 @@ pub struct StrandGroom {
     /// Rotation of the whole strand about its root, as a rotation vector in
     /// the root frame's tangent plane (tangent and bitangent components; its
     /// length is the angle in radians): 0 from the maps, set by
-    /// [`settle`](crate::settle) where a strand would enter the body.
+    /// [`settle`](crate::interp::settle) where a strand would enter the body.
     pub lift: [f32; 2],
 }
 
@@ -121,7 +121,7 @@ impl GroomMaps<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::map::{Texels, Texture};
+    use crate::surface::map::{Texels, Texture};
     use crate::testmesh::{graded_plane, roots};
     use crate::Strided;
 

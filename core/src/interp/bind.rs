@@ -16,10 +16,10 @@
 //! skin a guide leaves the set by sliding past `d_next`, never by a jump.
 
 use crate::arena::{Arena, ArenaLayout};
-use crate::body::Body;
-use crate::grid::HashGrid;
 use crate::guides::Guides;
 use crate::rng::{self, Purpose};
+use crate::surface::body::Body;
+use crate::surface::grid::HashGrid;
 use crate::{Error, Mesh, RegionMap, Root};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -380,7 +380,7 @@ impl<'a> GuideIndex<'a> {
         };
         let mut near = gather(self.reach);
         let orphan = StrandBinding {
-            clump: crate::bind::NO_GUIDE,
+            clump: crate::interp::bind::NO_GUIDE,
             ..StrandBinding::default()
         };
         if near.len == 0 {
@@ -688,8 +688,8 @@ mod tests {
         // the same parting painted as an id texture (uv = xy on this plane)
         let texels = [0u8, 1];
         let painted = BindParams {
-            regions: Some(RegionMap::Texture(crate::map::Texture {
-                texels: crate::map::Texels::U8(&texels),
+            regions: Some(RegionMap::Texture(crate::surface::map::Texture {
+                texels: crate::surface::map::Texels::U8(&texels),
                 width: 2,
                 height: 1,
                 row_stride: 2,

@@ -6,10 +6,10 @@
 //! carried back to world space by the strand's own root frame (paper 2.2).
 
 use crate::arena::{Arena, ArenaLayout};
-use crate::bind::{StrandBinding, NO_GUIDE};
-use crate::frame::{self, FaceBasis, Frame, FRAME_LANES};
-use crate::groom::StrandGroom;
 use crate::guides::Guides;
+use crate::interp::bind::{StrandBinding, NO_GUIDE};
+use crate::interp::groom::StrandGroom;
+use crate::surface::frame::{self, FaceBasis, Frame, FRAME_LANES};
 use crate::{Error, Mesh, Root};
 use glam::{Vec2, Vec3};
 
@@ -444,8 +444,8 @@ fn strand_is_valid(
     let e = crate::root::BARYCENTRIC_SLACK;
     let root = ((r.face as usize) < faces) & (r.u >= -e) & (r.v >= -e) & (r.u + r.v <= 1.0 + e);
     let count = b.count as usize;
-    let mut binding = count <= crate::bind::MAX_NEIGHBOURS;
-    for k in 0..crate::bind::MAX_NEIGHBOURS {
+    let mut binding = count <= crate::interp::bind::MAX_NEIGHBOURS;
+    for k in 0..crate::interp::bind::MAX_NEIGHBOURS {
         let fine = ((b.guides[k] as usize) < guides) & b.weights[k].is_finite();
         binding &= (k >= count) | fine;
     }
@@ -471,12 +471,12 @@ fn check_strand(
 ) -> Result<(), Error> {
     crate::root::check_root(faces, r, "strand roots")?;
     let count = b.count as usize;
-    if count > crate::bind::MAX_NEIGHBOURS {
+    if count > crate::interp::bind::MAX_NEIGHBOURS {
         return Err(Error::OutOfRange {
             what: "binding counts",
             index: 0,
             value: count,
-            bound: crate::bind::MAX_NEIGHBOURS + 1,
+            bound: crate::interp::bind::MAX_NEIGHBOURS + 1,
         });
     }
     let bad_guide = b.guides[..count].iter().find(|&&g| g as usize >= bound);
@@ -937,9 +937,9 @@ fn kink_wave(frequency: f32, n: usize, sin: &mut [f32], cos: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bind::{bind, BindParams};
-    use crate::groom::GroomMaps;
     use crate::guides::CvLayout;
+    use crate::interp::bind::{bind, BindParams};
+    use crate::interp::groom::GroomMaps;
     use crate::testmesh::{bumpy_plane, graded_plane, roots, straight_guides, TestMesh};
     use crate::Strided;
     use proptest::prelude::*;
@@ -979,11 +979,12 @@ mod tests {
         }
 
         fn bind(&self, params: &BindParams) -> Vec<StrandBinding> {
-            let mut buf = vec![
-                0u8;
-                crate::bind::required_bytes(&self.m.mesh(), self.guide_roots.len())
-                    .unwrap()
-            ];
+            let mut buf =
+                vec![
+                    0u8;
+                    crate::interp::bind::required_bytes(&self.m.mesh(), self.guide_roots.len())
+                        .unwrap()
+                ];
             let mut out = vec![StrandBinding::default(); self.strands.len()];
             bind(
                 &self.m.mesh(),
@@ -1224,7 +1225,7 @@ mod tests {
         // clump centre; the clump check needs nearly every strand bound
         let orphans = b
             .iter()
-            .filter(|x| x.clump == crate::bind::NO_GUIDE)
+            .filter(|x| x.clump == crate::interp::bind::NO_GUIDE)
             .count();
         assert!(orphans * 100 <= n, "{orphans} orphans of {n}");
         s.prepared(CVS, |mesh, prepared| {
@@ -1246,7 +1247,7 @@ mod tests {
                     let (sin, cos) = libm::sincosf(phase(i) + j as f32 * delta);
                     let wave = (f.t * sin + f.b * cos) * (0.05 * len * t);
                     close(at(&kinked, i, j), p + wave, "kink", i, j);
-                    if b[i].clump == crate::bind::NO_GUIDE {
+                    if b[i].clump == crate::interp::bind::NO_GUIDE {
                         continue;
                     }
                     let c = prepared.world(b[i].clump as usize);

@@ -13,12 +13,12 @@
 //! for creases where the interpolated normal grazes the surface), and last
 //! are shortened; any left inside are counted, never hidden.
 
-use crate::bind::StrandBinding;
-use crate::body::Body;
-use crate::expand::{
+use crate::interp::bind::StrandBinding;
+use crate::interp::expand::{
     check_frame, check_strands, strand, EndPoints, ExpandParams, Lanes, PreparedGuides, Strands,
 };
-use crate::groom::StrandGroom;
+use crate::interp::groom::StrandGroom;
+use crate::surface::body::Body;
 use crate::{Error, Mesh, Root};
 use core::f32::consts::FRAC_PI_2;
 use glam::{Vec2, Vec3};
@@ -105,7 +105,7 @@ pub fn settle_checked(
         ..*params
     };
     let mut lanes = Lanes::new(n);
-    let mut points = [[0.0f32; 4]; crate::expand::MAX_STRAND_POINTS];
+    let mut points = [[0.0f32; 4]; crate::interp::expand::MAX_STRAND_POINTS];
     let mut report = SettleReport::default();
     for ((root, bind), groom) in roots.iter().zip(bindings).zip(grooms) {
         let frame = guides.frame(mesh, root.face as usize, root.u, root.v);
@@ -228,9 +228,9 @@ fn settle_one(
 mod tests {
     use super::*;
     use crate::arena::{Arena, ArenaLayout};
-    use crate::bind::{bind, BindParams, StrandBinding};
-    use crate::expand::{expand, EndPoints};
     use crate::guides::{CvLayout, Guides};
+    use crate::interp::bind::{bind, BindParams, StrandBinding};
+    use crate::interp::expand::{expand, EndPoints};
     use crate::rng::{self, Purpose};
     use crate::testmesh::{roots, sphere};
     use crate::Strided;
@@ -269,7 +269,8 @@ mod tests {
         };
         let strands = roots(mesh, 3000, 2);
         let mut bindings = vec![StrandBinding::default(); strands.len()];
-        let mut buf = vec![0u8; crate::bind::required_bytes(&mesh, guide_roots.len()).unwrap()];
+        let mut buf =
+            vec![0u8; crate::interp::bind::required_bytes(&mesh, guide_roots.len()).unwrap()];
         let params = BindParams::default();
         bind(
             &mesh,

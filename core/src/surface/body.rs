@@ -14,7 +14,7 @@
 //! The mesh should be closed; an open mesh answers by the parity the holes leave.
 
 use crate::arena::{Arena, ArenaLayout};
-use crate::grid::floor_i32;
+use crate::surface::grid::floor_i32;
 use crate::{Error, Mesh};
 use glam::Vec3;
 
