@@ -21,7 +21,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 5
+#define PELAGE_VERSION_MINOR 6
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
@@ -49,8 +49,10 @@ typedef enum PelageStatus {
   PELAGE_STATUS_CORRUPT_DATA = 7,
   // Serialized data or a struct comes from an incompatible version.
   PELAGE_STATUS_VERSION_MISMATCH = 8,
-  // Reserved for the progress/cancel callback of long calls (planned in
-  // DESIGN.md); no call returns it yet.
+  // The progress callback returned false. Calls that write only at
+  // their end (stamp, bind) leave their outputs untouched; those that
+  // write in place (expand, settle) say in their docs what is then
+  // unspecified.
   PELAGE_STATUS_CANCELLED = 9,
   // An internal error (a bug in pelage, or the system refused a thread);
   // outputs may be partly written.
@@ -94,6 +96,9 @@ typedef enum PelageRegionKind {
   PELAGE_REGION_KIND_TEXTURE_U8 = 2,
 } PelageRegionKind;
 
+// The opaque object a `PelageFrame` points to.
+typedef struct PelageFrameTy PelageFrameTy;
+
 // The opaque object a `PelageGroom` points to.
 typedef struct PelageGroomTy PelageGroomTy;
 
@@ -110,6 +115,10 @@ typedef struct PelageRegionMap {
   // Bytes per texture row, or between per-vertex ids.
   size_t stride;
 } PelageRegionMap;
+
+// A progress callback: `user_data` as given with it, `fraction` the share of
+// the work done in [0, 1]. Returns true to go on, false to cancel.
+typedef bool (*PelageProgressFn)(void *user_data, double fraction);
 
 // Binding parameters; start from pelage_bind_params_defaults().
 typedef struct PelageBindParams {
@@ -137,6 +146,12 @@ typedef struct PelageBindParams {
   // Threads pelage_bind splits the strands over: 0 = all cores, 1 = the
   // calling thread only. The bindings are bitwise identical for any value.
   uint32_t thread_count;
+  // Optional progress callback (NULL: none), called on the calling
+  // thread with a never-decreasing share of the strands bound; returning
+  // false cancels (PELAGE_STATUS_CANCELLED, nothing written).
+  PelageProgressFn progress;
+  // Passed unchanged to `progress`.
+  void *progress_user_data;
 } PelageBindParams;
 
 // A triangle mesh in host memory, borrowed for one call (like an Embree
@@ -234,17 +249,31 @@ typedef struct PelageBindInfo {
 
 // Expansion parameters; start from pelage_expand_params_defaults().
 typedef struct PelageExpandParams {
-  // Control points per strand before end handling (2..64); guides are resampled.
+  // Control points per strand before end handling (2..64); guides are
+  // resampled. Must match the frame's `points_per_strand`.
   uint32_t points_per_strand;
   // End-point convention: a PelageEndPoints value.
   uint32_t end_points;
-  // Length of orphan strands (use PelageBindInfo.mean_guide_length).
+  // Length of orphan strands, 0..1e9 (use PelageBindInfo.mean_guide_length).
   float orphan_length;
-  // Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
+  // Threads the call splits the strands over: 0 = all cores, 1 = the
   // calling thread only; at most max(cores, 64). The output is bitwise
   // identical for any value.
   uint32_t thread_count;
+  // Optional progress callback (NULL: none), called on the calling
+  // thread with a never-decreasing share of the strands done; returning
+  // false cancels (PELAGE_STATUS_CANCELLED).
+  PelageProgressFn progress;
+  // Passed unchanged to `progress`.
+  void *progress_user_data;
 } PelageExpandParams;
+
+// One frame: the deformed mesh (copied and checked), its vertex tangents
+// and the posed guides in their root frames, prepared once by
+// `pelage_frame_new` and `pelage_frame_set_guides`, then read by any
+// number of `pelage_groom_expand` / `pelage_expand` calls (a renderer's
+// patches). Released by `pelage_frame_free`.
+typedef struct PelageFrameTy *PelageFrame;
 
 // Groom values of one strand.
 typedef struct PelageStrandGroom {
@@ -269,6 +298,38 @@ typedef struct PelageStrandGroom {
   // 0 from the maps; pelage_settle sets it where a strand would enter the body.
   float lift[2];
 } PelageStrandGroom;
+
+// The per-strand records of a groom: `count` roots, bindings (from
+// `pelage_bind`) and groom values (from `pelage_groom_evaluate`, settled
+// by `pelage_settle`), index for index, borrowed for the call.
+typedef struct PelageStrands {
+  // Where each strand grows.
+  const struct PelageRoot *roots;
+  // Guides and weights of each strand.
+  const struct PelageStrandBinding *bindings;
+  // Groom values of each strand.
+  const struct PelageStrandGroom *grooms;
+  // Number of strands.
+  size_t count;
+} PelageStrands;
+
+// Where expanded curves go, in host memory: points_per_curve float4
+// (x, y, z, radius) per strand into `points`, `point_stride` bytes apart
+// (16 = Embree's RTC_FORMAT_FLOAT4 layout, >= 16, a multiple of 4),
+// capacity `point_capacity` points; optionally the point count of each
+// curve (`curve_counts`) and each strand's id (`curve_ids`), NULL to skip.
+typedef struct PelageCurves {
+  // float4 control points.
+  void *points;
+  // Bytes between consecutive points.
+  size_t point_stride;
+  // Points the buffer holds.
+  size_t point_capacity;
+  // Optional uint32 per curve: its point count; or NULL.
+  uint32_t *curve_counts;
+  // Optional uint32 per curve: its strand's id; or NULL.
+  uint32_t *curve_ids;
+} PelageCurves;
 
 // A scalar value over the mesh surface: a constant, a texture, or per-vertex values.
 typedef struct PelageMap {
@@ -327,10 +388,6 @@ typedef struct PelageSettleInfo {
   // Strands still partly inside after every step.
   uint32_t unresolved;
 } PelageSettleInfo;
-
-// A progress callback: `user_data` as given with it, `fraction` the share of
-// the work done in [0, 1]. Returns true to go on, false to cancel.
-typedef bool (*PelageProgressFn)(void *user_data, double fraction);
 
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
@@ -411,6 +468,9 @@ struct PelageBindParams pelage_bind_params_defaults(void);
 // Arena bytes pelage_bind needs for `rest_mesh` (validated) and
 // `guide_count` guides.
 //
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
+// OUT_OF_RANGE, PANIC.
+//
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_bind_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, size_t *arena_bytes);
 
@@ -421,43 +481,90 @@ enum PelageStatus pelage_bind_query(const struct PelageMeshDesc *rest_mesh, size
 // the set. Writes `strand_count` records to `bindings` and, optionally,
 // `info`. Nothing is written on failure. Strands are split over
 // `params->thread_count` threads; the bindings do not depend on it.
+// `params->progress`, when set, hears the share of strands bound and may
+// cancel; the bindings are then made in a buffer of the library's and
+// copied at the end, so a cancelled call writes nothing.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
+// CAPACITY_EXCEEDED (the arena or `bindings_capacity`), MISALIGNED,
+// CANCELLED, PANIC.
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, void *arena, size_t arena_bytes, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);
 
-// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread.
+// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread,
+// no progress callback.
 //
 // Thread safety: may be called from any thread at any time.
 struct PelageExpandParams pelage_expand_params_defaults(void);
 
-// Sizes an expansion: arena bytes for `guide_count` guides on a mesh of
-// `vertex_count` vertices (the frame's vertex tangents live in the arena),
-// and the control points written per curve (points_per_strand, + 2 when
-// pinned).
+// The control points written per curve for `params` (points_per_strand,
+// + 2 when pinned).
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT.
 //
 // Thread safety: may be called from any thread at any time.
-enum PelageStatus pelage_expand_query(size_t guide_count, size_t vertex_count, const struct PelageExpandParams *params, size_t *arena_bytes, size_t *points_per_curve);
+enum PelageStatus pelage_expand_query(const struct PelageExpandParams *params, size_t *points_per_curve);
 
-// Expands `strand_count` render curves for one frame from posed guides on
-// the deformed mesh. `strands`, `bindings` and `grooms` are parallel arrays
-// (pass pointers offset by `first` to expand a range). Writes
-// points_per_curve float4 (x, y, z, radius) per strand into `points`,
-// `point_stride` bytes apart (16 = Embree's RTC_FORMAT_FLOAT4 layout),
-// capacity `point_capacity` points; optionally the point count of each curve
-// (`curve_counts`) and each strand's id (`curve_ids`), NULL to skip.
-// Work is split over `params->thread_count` threads; the bits do not depend
-// on it. Everything is validated before anything is written.
+// Expands render curves for one frame: every strand of `strands`, whose
+// records are checked on every call (a host that keeps a groom across
+// frames makes a `PelageGroom` once and calls `pelage_groom_expand`).
+// Work is split over `params->thread_count` threads; the bits do not
+// depend on it. Everything is validated before anything is written.
 //
-// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
-enum PelageStatus pelage_expand(const struct PelageMeshDesc *mesh, const struct PelageGuidesDesc *guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, const struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, void *points, size_t point_stride, size_t point_capacity, uint32_t *curve_counts, uint32_t *curve_ids);
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
+// without guides or posed for another point count, stride, a groom value
+// beyond 1e6 or a weight outside 0..1), NON_FINITE, OUT_OF_RANGE (a face or
+// guide index), CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED,
+// CANCELLED (the curves already written are unspecified), PANIC.
+//
+// Thread safety: reentrant; concurrent calls may share the frame and need
+// distinct outputs.
+enum PelageStatus pelage_expand(PelageFrame frame, const struct PelageStrands *strands, const struct PelageExpandParams *params, const struct PelageCurves *curves);
 
 // Writes Embree's index buffer for `curve_count` curves of
 // `points_per_curve` points stored back to back: one uint32 per Catmull-Rom
 // segment, the index of its first control point (points_per_curve - 3
 // segments per curve). `capacity` is in entries.
 //
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (fewer than 4 points, more
+// points than a uint32 addresses), CAPACITY_EXCEEDED, PANIC.
+//
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_curves_segment_indices(size_t curve_count, size_t points_per_curve, uint32_t *indices, size_t capacity);
+
+// Creates a frame for `guide_count` posed guides resampled to
+// `points_per_strand` points (2..64, as the expansions will ask for) on
+// the deformed `mesh`, which is copied and checked (the host may change
+// or free its buffers afterwards), and computes its vertex tangents. The
+// frame has no guides until `pelage_frame_set_guides`. On success
+// `*out_frame` is the new frame; on failure it is left untouched.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (point count, no guides,
+// bad stride, mesh values beyond 1e9), MISALIGNED, NON_FINITE,
+// OUT_OF_RANGE (an index past the vertices), PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_frame_new(const struct PelageMeshDesc *mesh, size_t guide_count, uint32_t points_per_strand, PelageFrame *out_frame);
+
+// Poses the frame's guides: checks `guides` (guide_count as given to
+// `pelage_frame_new`, roots on the mesh, finite points within 1e9, no
+// zero-length guide) and stores them resampled, in their root frames on
+// the frame's mesh. Split over `thread_count` threads (0: all cores); the
+// bits do not depend on it. May be called again for new guides (a
+// simulation's output). On failure the frame keeps the guides it had.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also guide points beyond
+// 1e9), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC (also when a worker thread cannot start: the
+// frame's guides are then unspecified until the next successful call).
+//
+// Thread safety: no other call may use `frame` during this one.
+enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct PelageGuidesDesc *guides, uint32_t thread_count);
+
+// Releases a frame. NULL is accepted and does nothing.
+//
+// Thread safety: no other call may use `frame` during or after this one.
+void pelage_frame_free(PelageFrame frame);
 
 // Default groom maps (constants; see the field docs), seed 0.
 //
@@ -470,15 +577,18 @@ struct PelageGroomMaps pelage_groom_maps_defaults(void);
 // Thread safety: reentrant; concurrent calls need distinct outputs.
 enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const struct PelageGroomMaps *maps, const struct PelageRoot *roots, size_t root_count, struct PelageStrandGroom *grooms, size_t grooms_capacity);
 
-// Creates a groom from `strand_count` render strands: parallel arrays of
-// roots, bindings (from `pelage_bind`) and groom values (from
-// `pelage_groom_evaluate` or the host). The records are checked (faces,
-// barycentrics, guide indices, weights, groom values) and copied: the host
-// may free or change its arrays afterwards. On success `*out_groom` is the
-// new groom; on failure it is left untouched.
+// Creates a groom from render strands (roots, bindings from `pelage_bind`,
+// groom values from `pelage_groom_evaluate` or the host). The records are
+// checked (faces, barycentrics, guide indices, weights in 0..1, finite
+// groom values within 1e6) and copied: the host may free or change its
+// arrays afterwards. On success `*out_groom` is the new groom; on failure
+// it is left untouched.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
+// PANIC.
 //
 // Thread safety: may be called from any thread at any time.
-enum PelageStatus pelage_groom_new(const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, const struct PelageStrandGroom *grooms, size_t strand_count, PelageGroom *out_groom);
+enum PelageStatus pelage_groom_new(const struct PelageStrands *strands, PelageGroom *out_groom);
 
 // Releases a groom. NULL is accepted and does nothing.
 //
@@ -487,18 +597,28 @@ void pelage_groom_free(PelageGroom groom);
 
 // Writes the number of strands in `groom` to `*strand_count`.
 //
+// Returns OK, NULL_PARAMETER, PANIC.
+//
 // Thread safety: may be called from any thread while `groom` is alive.
 enum PelageStatus pelage_groom_strand_count(PelageGroom groom, size_t *strand_count);
 
-// `pelage_expand` for the strands `first .. first + count` of `groom`:
-// the same outputs and bits, without reading every strand record again
-// to check it (the records were checked by `pelage_groom_new`; only that
-// they fit this frame's mesh and guides is checked). The range is how a
-// render procedural expands patch by patch.
+// Expands the strands `first .. first + count` of `groom` on `frame`:
+// the same outputs and bits as `pelage_expand` with those records, without
+// reading every record again to check it (`pelage_groom_new` did; only
+// that they fit the frame's mesh and guides is checked, in O(1)). The
+// frame's preparation is shared by every call, so a render procedural
+// expands patch by patch (one range per patch, from any threads) at the
+// cost of one whole call.
 //
-// Thread safety: concurrent calls on the same groom are safe with distinct
-// arenas and outputs.
-enum PelageStatus pelage_groom_expand(PelageGroom groom, const struct PelageMeshDesc *mesh, const struct PelageGuidesDesc *guides, size_t first, size_t count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, void *points, size_t point_stride, size_t point_capacity, uint32_t *curve_counts, uint32_t *curve_ids);
+// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (the range, or the groom's
+// faces or guides beyond the frame's), INVALID_ARGUMENT (parameters, a
+// frame without guides or posed for another point count, stride),
+// CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED, CANCELLED (the curves
+// already written are unspecified), PANIC.
+//
+// Thread safety: concurrent calls on the same groom and frame are safe
+// with distinct outputs.
+enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageExpandParams *params, const struct PelageCurves *curves);
 
 // Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 // positions into `positions` (float3, `position_stride` bytes apart) and, if
@@ -514,6 +634,9 @@ enum PelageStatus pelage_roots_evaluate(const struct PelageMeshDesc *mesh, const
 // Arena bytes pelage_settle needs for `rest_mesh` (validated) and
 // `guide_count` guides at `params->points_per_strand` points.
 //
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
+// OUT_OF_RANGE, PANIC.
+//
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, const struct PelageExpandParams *params, size_t *arena_bytes);
 
@@ -526,7 +649,14 @@ enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, si
 // strand's own frame at every frame. `grooms` is updated in place; it is
 // validated with everything else first and left untouched on failure.
 // Work is split over `params->thread_count` threads; the result does not
-// depend on it.
+// depend on it. `params->progress`, when set, hears the share of strands
+// done on the calling thread and may cancel.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9 or
+// groom values beyond 1e6), NON_FINITE, OUT_OF_RANGE, CAPACITY_EXCEEDED
+// (the arena), MISALIGNED, CANCELLED (the grooms of the strands not yet
+// reached are unchanged, the others settled: which ones is unspecified;
+// `info` is not written), PANIC.
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and grooms.
 enum PelageStatus pelage_settle(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, struct PelageSettleInfo *info);

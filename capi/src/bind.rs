@@ -2,8 +2,10 @@
 
 use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
-use crate::threads::split_over_threads;
-use crate::{PelageGuidesDesc, PelageMeshDesc, PelageRegionMap, PelageRoot, PelageStatus};
+use crate::threads::{split_over_threads, split_with_progress, Progress};
+use crate::{
+    PelageGuidesDesc, PelageMeshDesc, PelageProgressFn, PelageRegionMap, PelageRoot, PelageStatus,
+};
 use bytemuck::{Pod, Zeroable};
 use pelage_core::interp::bind::{self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS};
 use pelage_core::root::check_roots;
@@ -40,6 +42,12 @@ pub struct PelageBindParams {
     /// Threads pelage_bind splits the strands over: 0 = all cores, 1 = the
     /// calling thread only. The bindings are bitwise identical for any value.
     pub thread_count: u32,
+    /// Optional progress callback (NULL: none), called on the calling
+    /// thread with a never-decreasing share of the strands bound; returning
+    /// false cancels (PELAGE_STATUS_CANCELLED, nothing written).
+    pub progress: PelageProgressFn,
+    /// Passed unchanged to `progress`.
+    pub progress_user_data: *mut std::ffi::c_void,
 }
 
 /// Guides and weights of one strand (the flat, Pod binding record; store it
@@ -89,11 +97,16 @@ pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
         max_wrap_slope: d.max_wrap_slope,
         regions: PelageRegionMap::none(),
         thread_count: 1,
+        progress: None,
+        progress_user_data: std::ptr::null_mut(),
     }
 }
 
 /// Arena bytes pelage_bind needs for `rest_mesh` (validated) and
 /// `guide_count` guides.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
+/// OUT_OF_RANGE, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -117,6 +130,13 @@ pub extern "C" fn pelage_bind_query(
 /// the set. Writes `strand_count` records to `bindings` and, optionally,
 /// `info`. Nothing is written on failure. Strands are split over
 /// `params->thread_count` threads; the bindings do not depend on it.
+/// `params->progress`, when set, hears the share of strands bound and may
+/// cancel; the bindings are then made in a buffer of the library's and
+/// copied at the end, so a cancelled call writes nothing.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
+/// CAPACITY_EXCEEDED (the arena or `bindings_capacity`), MISALIGNED,
+/// CANCELLED, PANIC.
 ///
 /// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 #[no_mangle]
@@ -158,9 +178,18 @@ pub extern "C" fn pelage_bind(
         let index = GuideIndex::new(&mesh, &guides, &core, &mut Arena::new(arena))?;
         // every strand is checked before any range writes
         check_roots(&mesh, strands, "strand roots")?;
-        let reports = split_over_threads(strand_count, p.thread_count, out, 1, |range, part| {
-            index.bind(&mesh, &strands[range], &core, part)
-        })?;
+        let work = |range: std::ops::Range<usize>, part: &mut [StrandBinding]| index.bind(&mesh, &strands[range], &core, part);
+        let reports = if p.progress.is_none() {
+            split_over_threads(strand_count, p.thread_count, out, 1, work)?
+        } else {
+            let mut made = vec![StrandBinding::default(); strand_count];
+            let progress = Progress::new(p.progress, p.progress_user_data);
+            let reports = split_with_progress(strand_count, p.thread_count, &mut made, 1, progress, work)?;
+            if reports.iter().all(Result::is_ok) {
+                out.copy_from_slice(&made);
+            }
+            reports
+        };
         let mut report = index.report();
         for r in reports {
             report.merge(r?);

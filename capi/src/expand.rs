@@ -1,19 +1,19 @@
-//! Expanding render curves from posed guides.
+//! Expanding render curves from a frame: parameters, the strand and curve
+//! descriptors, and the one-call `pelage_expand`.
 
 use crate::buffers::{bytes_mut, req, req_mut, slice, slice_mut};
+use crate::frame::frame_ref;
 use crate::status::Failure;
-use crate::threads::{check_over_threads, split_over_threads};
+use crate::threads::{split_over_threads, split_with_progress, Progress};
 use crate::{
-    PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus, PelageStrandBinding,
-    PelageStrandGroom,
+    PelageFrame, PelageProgressFn, PelageRoot, PelageStatus, PelageStrandBinding, PelageStrandGroom,
 };
-use pelage_core::arena::ArenaLayout;
-use pelage_core::interp::bind::StrandBinding;
-use pelage_core::interp::expand::{
-    self, EndPoints, ExpandParams, GuideSlots, PreparedGuides, StrandBounds, Strands,
-};
-use pelage_core::interp::groom::StrandGroom;
-use pelage_core::{Arena, Mesh, Root};
+use pelage_core::interp::expand::ExpandJob;
+use pelage_core::interp::posed::PosedFrame;
+use pelage_core::interp::strand::{EndPoints, ExpandParams};
+use pelage_core::interp::strands::{StrandBounds, Strands};
+use std::ffi::c_void;
+use std::ops::Range;
 
 /// End-point convention of the output curves.
 #[repr(C)]
@@ -31,19 +31,27 @@ pub enum PelageEndPoints {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct PelageExpandParams {
-    /// Control points per strand before end handling (2..64); guides are resampled.
+    /// Control points per strand before end handling (2..64); guides are
+    /// resampled. Must match the frame's `points_per_strand`.
     pub points_per_strand: u32,
     /// End-point convention: a PelageEndPoints value.
     pub end_points: u32,
-    /// Length of orphan strands (use PelageBindInfo.mean_guide_length).
+    /// Length of orphan strands, 0..1e9 (use PelageBindInfo.mean_guide_length).
     pub orphan_length: f32,
-    /// Threads pelage_expand splits the strands over: 0 = all cores, 1 = the
+    /// Threads the call splits the strands over: 0 = all cores, 1 = the
     /// calling thread only; at most max(cores, 64). The output is bitwise
     /// identical for any value.
     pub thread_count: u32,
+    /// Optional progress callback (NULL: none), called on the calling
+    /// thread with a never-decreasing share of the strands done; returning
+    /// false cancels (PELAGE_STATUS_CANCELLED).
+    pub progress: PelageProgressFn,
+    /// Passed unchanged to `progress`.
+    pub progress_user_data: *mut c_void,
 }
 
-/// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread.
+/// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread,
+/// no progress callback.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -53,6 +61,8 @@ pub extern "C" fn pelage_expand_params_defaults() -> PelageExpandParams {
         end_points: PelageEndPoints::Pinned as u32,
         orphan_length: 0.1,
         thread_count: 1,
+        progress: None,
+        progress_user_data: std::ptr::null_mut(),
     }
 }
 
@@ -78,97 +88,121 @@ pub(crate) fn core_params(p: &PelageExpandParams) -> Result<ExpandParams, Failur
     Ok(params)
 }
 
-/// Sizes an expansion: arena bytes for `guide_count` guides on a mesh of
-/// `vertex_count` vertices (the frame's vertex tangents live in the arena),
-/// and the control points written per curve (points_per_strand, + 2 when
-/// pinned).
+/// The per-strand records of a groom: `count` roots, bindings (from
+/// `pelage_bind`) and groom values (from `pelage_groom_evaluate`, settled
+/// by `pelage_settle`), index for index, borrowed for the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageStrands {
+    /// Where each strand grows.
+    pub roots: *const PelageRoot,
+    /// Guides and weights of each strand.
+    pub bindings: *const PelageStrandBinding,
+    /// Groom values of each strand.
+    pub grooms: *const PelageStrandGroom,
+    /// Number of strands.
+    pub count: usize,
+}
+
+impl PelageStrands {
+    /// Checks the pointers and wraps the records (contents checked by the core).
+    pub(crate) fn view(&self) -> Result<Strands<'_>, Failure> {
+        let n = self.count;
+        Ok(Strands {
+            roots: bytemuck::cast_slice(slice(self.roots, n, "strands.roots")?),
+            bindings: bytemuck::cast_slice(slice(self.bindings, n, "strands.bindings")?),
+            grooms: bytemuck::cast_slice(slice(self.grooms, n, "strands.grooms")?),
+        })
+    }
+}
+
+/// Where expanded curves go, in host memory: points_per_curve float4
+/// (x, y, z, radius) per strand into `points`, `point_stride` bytes apart
+/// (16 = Embree's RTC_FORMAT_FLOAT4 layout, >= 16, a multiple of 4),
+/// capacity `point_capacity` points; optionally the point count of each
+/// curve (`curve_counts`) and each strand's id (`curve_ids`), NULL to skip.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageCurves {
+    /// float4 control points.
+    pub points: *mut c_void,
+    /// Bytes between consecutive points.
+    pub point_stride: usize,
+    /// Points the buffer holds.
+    pub point_capacity: usize,
+    /// Optional uint32 per curve: its point count; or NULL.
+    pub curve_counts: *mut u32,
+    /// Optional uint32 per curve: its strand's id; or NULL.
+    pub curve_ids: *mut u32,
+}
+
+/// The control points written per curve for `params` (points_per_strand,
+/// + 2 when pinned).
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
 pub extern "C" fn pelage_expand_query(
-    guide_count: usize,
-    vertex_count: usize,
     params: *const PelageExpandParams,
-    arena_bytes: *mut usize,
     points_per_curve: *mut usize,
 ) -> PelageStatus {
     ffi_boundary! {
         let p = req(params, "params")?;
-        let bytes = req_mut(arena_bytes, "arena_bytes")?;
         let per = req_mut(points_per_curve, "points_per_curve")?;
-        let core = core_params(p)?;
-        let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, vertex_count, guide_count, core.points_per_strand);
-        *bytes = layout.bytes();
-        *per = core.output_points();
+        *per = core_params(p)?.output_points();
         Ok(())
     }
 }
 
-/// Expands `strand_count` render curves for one frame from posed guides on
-/// the deformed mesh. `strands`, `bindings` and `grooms` are parallel arrays
-/// (pass pointers offset by `first` to expand a range). Writes
-/// points_per_curve float4 (x, y, z, radius) per strand into `points`,
-/// `point_stride` bytes apart (16 = Embree's RTC_FORMAT_FLOAT4 layout),
-/// capacity `point_capacity` points; optionally the point count of each curve
-/// (`curve_counts`) and each strand's id (`curve_ids`), NULL to skip.
-/// Work is split over `params->thread_count` threads; the bits do not depend
-/// on it. Everything is validated before anything is written.
+/// Expands render curves for one frame: every strand of `strands`, whose
+/// records are checked on every call (a host that keeps a groom across
+/// frames makes a `PelageGroom` once and calls `pelage_groom_expand`).
+/// Work is split over `params->thread_count` threads; the bits do not
+/// depend on it. Everything is validated before anything is written.
 ///
-/// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
+/// without guides or posed for another point count, stride, a groom value
+/// beyond 1e6 or a weight outside 0..1), NON_FINITE, OUT_OF_RANGE (a face or
+/// guide index), CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED,
+/// CANCELLED (the curves already written are unspecified), PANIC.
+///
+/// Thread safety: reentrant; concurrent calls may share the frame and need
+/// distinct outputs.
 #[no_mangle]
 pub extern "C" fn pelage_expand(
-    mesh: *const PelageMeshDesc,
-    guides: *const PelageGuidesDesc,
-    strands: *const PelageRoot,
-    bindings: *const PelageStrandBinding,
-    grooms: *const PelageStrandGroom,
-    strand_count: usize,
+    frame: PelageFrame,
+    strands: *const PelageStrands,
     params: *const PelageExpandParams,
-    arena: *mut std::ffi::c_void,
-    arena_bytes: usize,
-    points: *mut std::ffi::c_void,
-    point_stride: usize,
-    point_capacity: usize,
-    curve_counts: *mut u32,
-    curve_ids: *mut u32,
+    curves: *const PelageCurves,
 ) -> PelageStatus {
     ffi_boundary! {
-        let strands: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
-        let bindings: &[StrandBinding] = bytemuck::cast_slice(slice(bindings, strand_count, "bindings")?);
-        let grooms: &[StrandGroom] = bytemuck::cast_slice(slice(grooms, strand_count, "grooms")?);
-        let all = Strands { roots: strands, bindings, grooms };
-        let out = Curves { points, point_stride, point_capacity, curve_counts, curve_ids };
-        run(mesh, guides, all, None, params, arena, arena_bytes, out)
+        let frame = frame_ref(frame)?;
+        let all = req(strands, "strands")?.view()?;
+        let p = req(params, "params")?;
+        // every record is checked before any range writes
+        let parts = split_over_threads(all.len(), p.thread_count, &mut [0u8; 0], 0, |range, _| {
+            StrandBounds::new(&all.range(range.clone())).map_err(|e| e.shifted(range.start)).map(|b| (range.start, b))
+        })?;
+        let mut bounds = StrandBounds::default();
+        for part in parts {
+            let (start, b) = part?;
+            bounds = bounds.merge(b, start);
+        }
+        run(&frame.posed, all, &bounds, p, req(curves, "curves")?)
     }
 }
 
-/// Where [`run`] writes curves (see `pelage_expand`).
-pub(crate) struct Curves {
-    pub points: *mut std::ffi::c_void,
-    pub point_stride: usize,
-    pub point_capacity: usize,
-    pub curve_counts: *mut u32,
-    pub curve_ids: *mut u32,
-}
-
-/// Expands `all` into `out`, checking every input first: all the strand
-/// records, or, with the `bounds` of records checked before, only that
-/// they fit the mesh and guides.
-#[allow(clippy::too_many_arguments)]
+/// Expands `all` into `out` with records whose `bounds` were found by
+/// `StrandBounds::new`: checks that they fit the frame, the parameters and
+/// the output, then writes every range over threads.
 pub(crate) fn run(
-    mesh: *const PelageMeshDesc,
-    guides: *const PelageGuidesDesc,
+    frame: &PosedFrame,
     all: Strands,
-    bounds: Option<&StrandBounds>,
-    params: *const PelageExpandParams,
-    arena: *mut std::ffi::c_void,
-    arena_bytes: usize,
-    out: Curves,
+    bounds: &StrandBounds,
+    p: &PelageExpandParams,
+    out: &PelageCurves,
 ) -> Result<(), Failure> {
-    let mesh = req(mesh, "mesh")?.view()?;
-    let guides = req(guides, "guides")?.view()?;
-    let p = req(params, "params")?;
     let core = core_params(p)?;
     let strand_count = all.len();
     let per = core.output_points();
@@ -192,41 +226,15 @@ pub(crate) fn run(
     let optional = |p: *mut u32| if p.is_null() { 0 } else { strand_count };
     let counts = slice_mut(out.curve_counts, optional(out.curve_counts), "curve_counts")?;
     let ids = slice_mut(out.curve_ids, optional(out.curve_ids), "curve_ids")?;
-    let arena = bytes_mut(arena, arena_bytes, "arena")?;
-    let mut arena = Arena::new(arena);
-    let slots = GuideSlots::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
-    let filler = slots.filler;
-    split_over_threads(
-        guides.len(),
-        p.thread_count,
-        &mut *slots.data,
-        filler.floats_per_guide(),
-        |range, part| filler.fill(range.start, part),
-    )?;
-    let prepared = slots.finish();
-    expand::check_frame(&prepared, &core)?;
-    expand::check_output(strand_count, &core, points.len(), point_stride)?;
-    match bounds {
-        Some(bounds) => bounds.check(&mesh, &prepared)?,
-        None => check_over_threads(strand_count, p.thread_count, |range| {
-            expand::check_strands(&mesh, &all.range(range), &prepared)
-        })?,
-    }
-    split_over_threads(
+    let job = ExpandJob::new(frame, all, bounds, &core, points.len(), point_stride)?;
+    let progress = Progress::new(p.progress, p.progress_user_data);
+    split_with_progress(
         strand_count,
         p.thread_count,
         points,
-        per * point_stride,
-        |range, bytes| {
-            expand_range(
-                &mesh,
-                &all.range(range),
-                &prepared,
-                &core,
-                bytes,
-                point_stride,
-            );
-        },
+        job.bytes_per_strand(),
+        progress,
+        |range, bytes| run_range(&job, range, bytes),
     )?;
     counts.fill(per as u32);
     for (id, s) in ids.iter_mut().zip(all.roots) {
@@ -235,30 +243,19 @@ pub(crate) fn run(
     Ok(())
 }
 
-/// `expand_checked` in its AVX2 build where the CPU has AVX2: the same bits
-/// either way (see `expand_checked_avx2`), the AVX2 build faster.
-fn expand_range(
-    mesh: &Mesh,
-    strands: &Strands,
-    guides: &PreparedGuides,
-    params: &ExpandParams,
-    out: &mut [u8],
-    stride: usize,
-) {
+/// `ExpandJob::run` in its AVX2 build where the CPU has AVX2: the same bits
+/// either way (see `ExpandJob::run_avx2`), the AVX2 build faster.
+fn run_range(job: &ExpandJob, range: Range<usize>, out: &mut [u8]) {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, the one requirement of the AVX2 build.
-        unsafe { expand::expand_checked_avx2(mesh, strands, guides, params, out, stride) };
+        unsafe { job.run_avx2(range, out) };
         return;
     }
-    expand::expand_checked(mesh, strands, guides, params, out, stride);
+    job.run(range, out);
 }
 
-fn float4_out<'a>(
-    ptr: *mut std::ffi::c_void,
-    stride: usize,
-    count: usize,
-) -> Result<&'a mut [u8], Failure> {
+fn float4_out<'a>(ptr: *mut c_void, stride: usize, count: usize) -> Result<&'a mut [u8], Failure> {
     if count == 0 {
         return Ok(&mut []);
     }
@@ -279,6 +276,9 @@ fn float4_out<'a>(
 /// `points_per_curve` points stored back to back: one uint32 per Catmull-Rom
 /// segment, the index of its first control point (points_per_curve - 3
 /// segments per curve). `capacity` is in entries.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (fewer than 4 points, more
+/// points than a uint32 addresses), CAPACITY_EXCEEDED, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]

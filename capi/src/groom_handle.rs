@@ -1,18 +1,15 @@
 //! The groom handle: a groom's render strands, checked once and kept for
 //! expanding every frame.
 
-use crate::buffers::{req, req_mut, slice};
-use crate::expand::{run, Curves};
+use crate::buffers::{req, req_mut};
+use crate::expand::run;
+use crate::frame::frame_ref;
 use crate::status::Failure;
-use crate::{
-    PelageExpandParams, PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus,
-    PelageStrandBinding, PelageStrandGroom,
-};
+use crate::{PelageCurves, PelageExpandParams, PelageFrame, PelageStatus, PelageStrands};
 use pelage_core::interp::bind::StrandBinding;
-use pelage_core::interp::expand::{StrandBounds, Strands};
 use pelage_core::interp::groom::StrandGroom;
+use pelage_core::interp::strands::{StrandBounds, Strands};
 use pelage_core::Root;
-use std::ffi::c_void;
 
 /// The opaque object a `PelageGroom` points to.
 // not repr(C): cbindgen declares it in C without a definition
@@ -51,32 +48,30 @@ fn groom_ref<'a>(groom: PelageGroom) -> Result<&'a Groom, Failure> {
     req(groom.cast::<Groom>().cast_const(), "groom")
 }
 
-/// Creates a groom from `strand_count` render strands: parallel arrays of
-/// roots, bindings (from `pelage_bind`) and groom values (from
-/// `pelage_groom_evaluate` or the host). The records are checked (faces,
-/// barycentrics, guide indices, weights, groom values) and copied: the host
-/// may free or change its arrays afterwards. On success `*out_groom` is the
-/// new groom; on failure it is left untouched.
+/// Creates a groom from render strands (roots, bindings from `pelage_bind`,
+/// groom values from `pelage_groom_evaluate` or the host). The records are
+/// checked (faces, barycentrics, guide indices, weights in 0..1, finite
+/// groom values within 1e6) and copied: the host may free or change its
+/// arrays afterwards. On success `*out_groom` is the new groom; on failure
+/// it is left untouched.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
+/// PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
 pub extern "C" fn pelage_groom_new(
-    strands: *const PelageRoot,
-    bindings: *const PelageStrandBinding,
-    grooms: *const PelageStrandGroom,
-    strand_count: usize,
+    strands: *const PelageStrands,
     out_groom: *mut PelageGroom,
 ) -> PelageStatus {
     ffi_boundary! {
         let out = req_mut(out_groom, "out_groom")?;
-        let roots: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
-        let bindings: &[StrandBinding] = bytemuck::cast_slice(slice(bindings, strand_count, "bindings")?);
-        let grooms: &[StrandGroom] = bytemuck::cast_slice(slice(grooms, strand_count, "grooms")?);
-        let bounds = StrandBounds::new(&Strands { roots, bindings, grooms })?;
+        let strands = req(strands, "strands")?.view()?;
+        let bounds = StrandBounds::new(&strands)?;
         let groom = Box::new(Groom {
-            roots: roots.to_vec(),
-            bindings: bindings.to_vec(),
-            grooms: grooms.to_vec(),
+            roots: strands.roots.to_vec(),
+            bindings: strands.bindings.to_vec(),
+            grooms: strands.grooms.to_vec(),
             bounds,
         });
         *out = Box::into_raw(groom).cast::<PelageGroomTy>();
@@ -103,6 +98,8 @@ pub extern "C" fn pelage_groom_free(groom: PelageGroom) {
 
 /// Writes the number of strands in `groom` to `*strand_count`.
 ///
+/// Returns OK, NULL_PARAMETER, PANIC.
+///
 /// Thread safety: may be called from any thread while `groom` is alive.
 #[no_mangle]
 pub extern "C" fn pelage_groom_strand_count(
@@ -116,37 +113,39 @@ pub extern "C" fn pelage_groom_strand_count(
     }
 }
 
-/// `pelage_expand` for the strands `first .. first + count` of `groom`:
-/// the same outputs and bits, without reading every strand record again
-/// to check it (the records were checked by `pelage_groom_new`; only that
-/// they fit this frame's mesh and guides is checked). The range is how a
-/// render procedural expands patch by patch.
+/// Expands the strands `first .. first + count` of `groom` on `frame`:
+/// the same outputs and bits as `pelage_expand` with those records, without
+/// reading every record again to check it (`pelage_groom_new` did; only
+/// that they fit the frame's mesh and guides is checked, in O(1)). The
+/// frame's preparation is shared by every call, so a render procedural
+/// expands patch by patch (one range per patch, from any threads) at the
+/// cost of one whole call.
 ///
-/// Thread safety: concurrent calls on the same groom are safe with distinct
-/// arenas and outputs.
+/// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (the range, or the groom's
+/// faces or guides beyond the frame's), INVALID_ARGUMENT (parameters, a
+/// frame without guides or posed for another point count, stride),
+/// CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED, CANCELLED (the curves
+/// already written are unspecified), PANIC.
+///
+/// Thread safety: concurrent calls on the same groom and frame are safe
+/// with distinct outputs.
 #[no_mangle]
 pub extern "C" fn pelage_groom_expand(
     groom: PelageGroom,
-    mesh: *const PelageMeshDesc,
-    guides: *const PelageGuidesDesc,
+    frame: PelageFrame,
     first: usize,
     count: usize,
     params: *const PelageExpandParams,
-    arena: *mut c_void,
-    arena_bytes: usize,
-    points: *mut c_void,
-    point_stride: usize,
-    point_capacity: usize,
-    curve_counts: *mut u32,
-    curve_ids: *mut u32,
+    curves: *const PelageCurves,
 ) -> PelageStatus {
     ffi_boundary! {
         let groom = groom_ref(groom)?;
+        let frame = frame_ref(frame)?;
         let total = groom.roots.len();
         let range = first..first.checked_add(count).filter(|&end| end <= total).ok_or_else(|| {
             Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
         })?;
-        let out = Curves { points, point_stride, point_capacity, curve_counts, curve_ids };
-        run(mesh, guides, groom.strands().range(range), Some(&groom.bounds), params, arena, arena_bytes, out)
+        let p = req(params, "params")?;
+        run(&frame.posed, groom.strands().range(range), &groom.bounds, p, req(curves, "curves")?)
     }
 }

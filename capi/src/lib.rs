@@ -10,6 +10,7 @@ mod status;
 mod bind;
 mod buffers;
 mod expand;
+mod frame;
 mod groom;
 mod groom_handle;
 mod guides;
@@ -27,7 +28,10 @@ pub use bind::{
 };
 pub use expand::{
     pelage_curves_segment_indices, pelage_expand, pelage_expand_params_defaults,
-    pelage_expand_query, PelageEndPoints, PelageExpandParams,
+    pelage_expand_query, PelageCurves, PelageEndPoints, PelageExpandParams, PelageStrands,
+};
+pub use frame::{
+    pelage_frame_free, pelage_frame_new, pelage_frame_set_guides, PelageFrame, PelageFrameTy,
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,
@@ -51,7 +55,7 @@ pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
 /// Major version of the library this header belongs to.
 pub const PELAGE_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const PELAGE_VERSION_MINOR: u32 = 5;
+pub const PELAGE_VERSION_MINOR: u32 = 6;
 /// Patch version.
 pub const PELAGE_VERSION_PATCH: u32 = 0;
 

@@ -2,16 +2,16 @@
 
 use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
 use crate::expand::core_params;
-use crate::threads::{check_over_threads, split_over_threads};
+use crate::threads::{check_over_threads, split_over_threads, split_with_progress, Progress};
 use crate::{
     PelageExpandParams, PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus,
     PelageStrandBinding, PelageStrandGroom,
 };
 use pelage_core::arena::ArenaLayout;
 use pelage_core::interp::bind::StrandBinding;
-use pelage_core::interp::expand::{check_frame, check_strands, PreparedGuides, Strands};
 use pelage_core::interp::groom::StrandGroom;
-use pelage_core::interp::settle::{settle_checked, SettleReport};
+use pelage_core::interp::posed::PosedFrame;
+use pelage_core::interp::settle::{check_settle, settle_checked, SettleReport};
 use pelage_core::surface::body::Body;
 use pelage_core::{Arena, Root};
 
@@ -35,6 +35,9 @@ pub struct PelageSettleInfo {
 /// Arena bytes pelage_settle needs for `rest_mesh` (validated) and
 /// `guide_count` guides at `params->points_per_strand` points.
 ///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
+/// OUT_OF_RANGE, PANIC.
+///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
 pub extern "C" fn pelage_settle_query(
@@ -48,7 +51,7 @@ pub extern "C" fn pelage_settle_query(
         let core = core_params(req(params, "params")?)?;
         let out = req_mut(arena_bytes, "arena_bytes")?;
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, mesh.positions.len(), guide_count, core.points_per_strand);
+        PosedFrame::layout(&mut layout, mesh.positions.len(), guide_count, core.points_per_strand);
         *out = layout.bytes().saturating_add(Body::required_bytes(&mesh)?);
         Ok(())
     }
@@ -63,7 +66,14 @@ pub extern "C" fn pelage_settle_query(
 /// strand's own frame at every frame. `grooms` is updated in place; it is
 /// validated with everything else first and left untouched on failure.
 /// Work is split over `params->thread_count` threads; the result does not
-/// depend on it.
+/// depend on it. `params->progress`, when set, hears the share of strands
+/// done on the calling thread and may cancel.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9 or
+/// groom values beyond 1e6), NON_FINITE, OUT_OF_RANGE, CAPACITY_EXCEEDED
+/// (the arena), MISALIGNED, CANCELLED (the grooms of the strands not yet
+/// reached are unchanged, the others settled: which ones is unspecified;
+/// `info` is not written), PANIC.
 ///
 /// Thread safety: reentrant; concurrent calls need distinct arenas and grooms.
 #[no_mangle]
@@ -90,12 +100,19 @@ pub extern "C" fn pelage_settle(
         let arena = bytes_mut(arena, arena_bytes, "arena")?;
         let mut arena = Arena::new(arena);
         let body = Body::new(&mesh, &mut arena)?;
-        let prepared = PreparedGuides::new(&mesh, &guides, core.points_per_strand, &mut arena)?;
-        check_frame(&prepared, &core)?;
-        let all = Strands { roots, bindings, grooms: &*grooms };
-        check_over_threads(strand_count, p.thread_count, |range| check_strands(&mesh, &all.range(range), &prepared))?;
-        let reports = split_over_threads(strand_count, p.thread_count, grooms, 1, |range, part| {
-            settle_checked(&mesh, &body, &roots[range.clone()], &bindings[range], part, &prepared, &core)
+        let mut rest = PosedFrame::new(mesh, guides.len(), core.points_per_strand, &mut arena)?;
+        let posing = rest.posing(&guides)?;
+        let filler = posing.filler;
+        split_over_threads(guides.len(), p.thread_count, &mut *posing.data, filler.floats_per_guide(), |range, part| {
+            filler.fill(range.start, part)
+        })?;
+        posing.finish();
+        check_over_threads(strand_count, p.thread_count, |range| {
+            check_settle(&roots[range.clone()], &bindings[range.clone()], &grooms[range], &rest, &core)
+        })?;
+        let progress = Progress::new(p.progress, p.progress_user_data);
+        let reports = split_with_progress(strand_count, p.thread_count, grooms, 1, progress, |range, part| {
+            settle_checked(&body, &roots[range.clone()], &bindings[range], part, &rest, &core)
         })?;
         let mut total = SettleReport::default();
         for r in reports {

@@ -26,8 +26,10 @@ pub enum PelageStatus {
     CorruptData = 7,
     /// Serialized data or a struct comes from an incompatible version.
     VersionMismatch = 8,
-    /// Reserved for the progress/cancel callback of long calls (planned in
-    /// DESIGN.md); no call returns it yet.
+    /// The progress callback returned false. Calls that write only at
+    /// their end (stamp, bind) leave their outputs untouched; those that
+    /// write in place (expand, settle) say in their docs what is then
+    /// unspecified.
     Cancelled = 9,
     /// An internal error (a bug in pelage, or the system refused a thread);
     /// outputs may be partly written.
@@ -107,10 +109,16 @@ impl From<Error> for Failure {
             Error::CapacityExceeded { .. } | Error::OutputTooSmall { .. } => {
                 PelageStatus::CapacityExceeded
             }
-            Error::InvalidArgument(_) | Error::BadStride { .. } => PelageStatus::InvalidArgument,
+            Error::InvalidArgument(_) | Error::BadStride { .. } | Error::TooLarge { .. } => {
+                PelageStatus::InvalidArgument
+            }
             Error::NonFinite { .. } => PelageStatus::NonFinite,
             Error::OutOfRange { .. } => PelageStatus::OutOfRange,
+            Error::Corrupt { .. } => PelageStatus::CorruptData,
+            Error::VersionMismatch { .. } => PelageStatus::VersionMismatch,
             Error::Cancelled => PelageStatus::Cancelled,
+            // a variant newer than this layer: still a failure, never OK
+            _ => PelageStatus::InvalidArgument,
         };
         Failure::new(status, e.to_string())
     }

@@ -91,3 +91,79 @@ pub(crate) fn check_over_threads(
     })?;
     Ok(results.into_iter().collect::<Result<(), Error>>()?)
 }
+
+/// A host's progress callback and its user data (see `PelageProgressFn`).
+#[derive(Clone, Copy)]
+pub(crate) struct Progress {
+    callback: crate::PelageProgressFn,
+    user_data: *mut std::ffi::c_void,
+}
+
+impl Progress {
+    pub(crate) fn new(callback: crate::PelageProgressFn, user_data: *mut std::ffi::c_void) -> Self {
+        Progress {
+            callback,
+            user_data,
+        }
+    }
+
+    /// Reports `fraction` done; CANCELLED when the host returns false.
+    fn report(&self, fraction: f64) -> Result<(), Failure> {
+        let Some(callback) = self.callback else {
+            return Ok(());
+        };
+        // SAFETY: the host gave this callback and its user data for this
+        // call, and calls it on the calling thread only.
+        if unsafe { callback(self.user_data, fraction) } {
+            Ok(())
+        } else {
+            Err(Failure::from(Error::Cancelled))
+        }
+    }
+}
+
+/// Rounds a long call is cut into when it reports progress: the host hears
+/// from it (and may cancel) at least this often.
+const PROGRESS_ROUNDS: usize = 32;
+
+/// [`split_over_threads`] in rounds of contiguous ranges, calling
+/// `progress` on the calling thread before the first round and after each
+/// (a never-decreasing share, 1 at the end); a false return stops before
+/// the next round with CANCELLED. Without a callback, one round. `work`
+/// gets ranges of the whole `0..n` and the matching part of `out`.
+pub(crate) fn split_with_progress<T: Send, R: Send>(
+    n: usize,
+    thread_count: u32,
+    out: &mut [T],
+    per: usize,
+    progress: Progress,
+    work: impl Fn(Range<usize>, &mut [T]) -> R + Sync,
+) -> Result<Vec<R>, Failure> {
+    if progress.callback.is_none() {
+        return split_over_threads(n, thread_count, out, per, work);
+    }
+    progress.report(0.0)?;
+    let rounds = PROGRESS_ROUNDS.min(n.max(1));
+    let mut results = Vec::with_capacity(rounds);
+    let mut rest = out;
+    for r in 0..rounds {
+        let range = r * n / rounds..(r + 1) * n / rounds;
+        let take = if r + 1 == rounds {
+            rest.len()
+        } else {
+            range.len() * per
+        };
+        let (part, tail) = std::mem::take(&mut rest).split_at_mut(take);
+        rest = tail;
+        let start = range.start;
+        results.extend(split_over_threads(
+            range.len(),
+            thread_count,
+            part,
+            per,
+            |sub, p| work(sub.start + start..sub.end + start, p),
+        )?);
+        progress.report(range.end as f64 / n.max(1) as f64)?;
+    }
+    Ok(results)
+}

@@ -3,14 +3,17 @@
 use core::fmt;
 
 /// Everything that can go wrong in a core stage. Each variant carries enough
-/// context for a host to print a useful message without a debugger.
+/// context for a host to print a useful message without a debugger, and has
+/// one meaning. New variants may come in a minor version (the enum is
+/// non-exhaustive): match with a fallback arm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Error {
-    /// The caller's arena or output buffer is too small.
+    /// The caller's arena is too small (in bytes).
     CapacityExceeded {
-        /// Bytes (or elements, for output buffers) the operation needs.
+        /// Bytes the operation needs.
         needed: usize,
-        /// Bytes (or elements) that were provided.
+        /// Bytes that were provided.
         available: usize,
     },
     /// The caller's output buffer (roots, curves, records) is too small.
@@ -45,6 +48,28 @@ pub enum Error {
         /// Which input is malformed.
         what: &'static str,
     },
+    /// A finite input value beyond the magnitude pelage accepts (so that
+    /// every result stays finite; the limits are documented where the
+    /// input is, such as `surface::mesh::MAX_COORDINATE`).
+    TooLarge {
+        /// Which input holds the value, and its limit.
+        what: &'static str,
+        /// Element index within that input.
+        index: usize,
+    },
+    /// Serialized bytes are truncated, inconsistent or fail their checksum.
+    Corrupt {
+        /// What is wrong with them.
+        what: &'static str,
+    },
+    /// Serialized bytes have the wrong magic or a format version this
+    /// build does not read.
+    VersionMismatch {
+        /// The version the bytes carry (0 when the magic is wrong).
+        found: u32,
+        /// The version this build reads.
+        supported: u32,
+    },
     /// The caller's progress callback asked to stop.
     Cancelled,
 }
@@ -55,6 +80,10 @@ impl Error {
     pub fn shifted(self, by: usize) -> Error {
         match self {
             Error::NonFinite { what, index } => Error::NonFinite {
+                what,
+                index: index + by,
+            },
+            Error::TooLarge { what, index } => Error::TooLarge {
                 what,
                 index: index + by,
             },
@@ -108,6 +137,14 @@ impl fmt::Display for Error {
                     "{what}: stride smaller than the element or buffer too short"
                 )
             }
+            Error::TooLarge { what, index } => {
+                write!(f, "value too large in {what} at element {index}")
+            }
+            Error::Corrupt { what } => write!(f, "corrupt data: {what}"),
+            Error::VersionMismatch { found, supported } => write!(
+                f,
+                "version mismatch: the data has version {found}, this build reads {supported}"
+            ),
             Error::Cancelled => write!(f, "cancelled by the progress callback"),
         }
     }

@@ -118,6 +118,17 @@ impl Guides<'_> {
                 index: i,
             });
         }
+        let limit = crate::surface::mesh::MAX_COORDINATE;
+        if let Some(index) = self
+            .points
+            .iter()
+            .position(|p| p.iter().any(|c| c.abs() > limit))
+        {
+            return Err(Error::TooLarge {
+                what: "guide points (beyond 1e9)",
+                index,
+            });
+        }
         crate::root::check_roots(mesh, self.roots, "guide roots")?;
         for g in 0..self.roots.len() {
             let len = self.length(g);

@@ -316,7 +316,7 @@ impl<'a> GuideIndex<'a> {
     ) -> Result<BindReport, Error> {
         check(params, mesh)?;
         if out.len() < strands.len() {
-            return Err(Error::CapacityExceeded {
+            return Err(Error::OutputTooSmall {
                 needed: strands.len(),
                 available: out.len(),
             });
@@ -455,7 +455,7 @@ pub fn bind(
     out: &mut [StrandBinding],
 ) -> Result<BindReport, Error> {
     if out.len() < strands.len() {
-        return Err(Error::CapacityExceeded {
+        return Err(Error::OutputTooSmall {
             needed: strands.len(),
             available: out.len(),
         });

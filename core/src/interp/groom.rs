@@ -87,7 +87,7 @@ impl GroomMaps<'_> {
         out: &mut [StrandGroom],
     ) -> Result<(), Error> {
         if out.len() < roots.len() {
-            return Err(Error::CapacityExceeded {
+            return Err(Error::OutputTooSmall {
                 needed: roots.len(),
                 available: out.len(),
             });

@@ -5,4 +5,7 @@
 pub mod bind;
 pub mod expand;
 pub mod groom;
+pub mod posed;
 pub mod settle;
+pub mod strand;
+pub mod strands;

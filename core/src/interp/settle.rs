@@ -14,12 +14,12 @@
 //! are shortened; any left inside are counted, never hidden.
 
 use crate::interp::bind::StrandBinding;
-use crate::interp::expand::{
-    check_frame, check_strands, strand, EndPoints, ExpandParams, Lanes, PreparedGuides, Strands,
-};
 use crate::interp::groom::StrandGroom;
+use crate::interp::posed::PosedFrame;
+use crate::interp::strand::{strand, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
+use crate::interp::strands::{check_strands, Strands};
 use crate::surface::body::Body;
-use crate::{Error, Mesh, Root};
+use crate::{Error, Root};
 use core::f32::consts::FRAC_PI_2;
 use glam::{Vec2, Vec3};
 
@@ -61,41 +61,52 @@ impl SettleReport {
 }
 
 /// Settles the strands at `roots`, bound by `bindings`, updating `grooms`
-/// (all three parallel) on the rest `mesh` with its `body` and the rest
-/// `guides`. Validates first: nothing changes on error. Pure per strand, so
-/// disjoint ranges may run on different threads.
+/// (all three parallel) on the rest pose `guides` (a [`PosedFrame`] of the
+/// rest mesh and rest guides) with the rest mesh's `body`. Validates
+/// first: nothing changes on error. Pure per strand, so disjoint ranges may
+/// run on different threads.
 pub fn settle(
-    mesh: &Mesh,
     body: &Body,
     roots: &[Root],
     bindings: &[StrandBinding],
     grooms: &mut [StrandGroom],
-    guides: &PreparedGuides,
+    guides: &PosedFrame,
     params: &ExpandParams,
 ) -> Result<SettleReport, Error> {
-    let strands = Strands {
-        roots,
-        bindings,
-        grooms: &*grooms,
-    };
-    mesh.validate()?;
-    check_frame(guides, params)?;
-    check_strands(mesh, &strands, guides)?;
+    check_settle(roots, bindings, grooms, guides, params)?;
     Ok(settle_checked(
-        mesh, body, roots, bindings, grooms, guides, params,
+        body, roots, bindings, grooms, guides, params,
     ))
 }
 
-/// [`settle`] for inputs already checked with
-/// [`Mesh::validate`], [`check_frame`] and
-/// [`check_strands`].
+/// Everything [`settle`] checks: the parameters against the frame, and the
+/// strand records against its mesh and guides. A threaded host checks all
+/// strands (or each range, before any range runs) and then runs
+/// [`settle_checked`] on ranges.
+pub fn check_settle(
+    roots: &[Root],
+    bindings: &[StrandBinding],
+    grooms: &[StrandGroom],
+    guides: &PosedFrame,
+    params: &ExpandParams,
+) -> Result<(), Error> {
+    guides.check_params(params)?;
+    let strands = Strands {
+        roots,
+        bindings,
+        grooms,
+    };
+    let faces = guides.mesh().triangle_count();
+    check_strands(&strands, faces, guides.guide_count())
+}
+
+/// [`settle`] for inputs [`check_settle`] passed.
 pub fn settle_checked(
-    mesh: &Mesh,
     body: &Body,
     roots: &[Root],
     bindings: &[StrandBinding],
     grooms: &mut [StrandGroom],
-    guides: &PreparedGuides,
+    guides: &PosedFrame,
     params: &ExpandParams,
 ) -> SettleReport {
     let n = params.points_per_strand;
@@ -105,10 +116,10 @@ pub fn settle_checked(
         ..*params
     };
     let mut lanes = Lanes::new(n);
-    let mut points = [[0.0f32; 4]; crate::interp::expand::MAX_STRAND_POINTS];
+    let mut points = [[0.0f32; 4]; MAX_STRAND_POINTS];
     let mut report = SettleReport::default();
     for ((root, bind), groom) in roots.iter().zip(bindings).zip(grooms) {
-        let frame = guides.frame(mesh, root.face as usize, root.u, root.v);
+        let frame = guides.root_frame(root.face as usize, root.u, root.v);
         // the root itself lies on the surface; every later point must be
         // outside. Gives that, and the tip.
         let mut evaluate = |g: &StrandGroom| {
@@ -230,10 +241,10 @@ mod tests {
     use crate::arena::{Arena, ArenaLayout};
     use crate::guides::{CvLayout, Guides};
     use crate::interp::bind::{bind, BindParams, StrandBinding};
-    use crate::interp::expand::{expand, EndPoints};
+    use crate::interp::expand::expand;
     use crate::rng::{self, Purpose};
     use crate::testmesh::{roots, sphere};
-    use crate::Strided;
+    use crate::{Mesh, Strided};
 
     const CVS: usize = 8;
 
@@ -296,12 +307,12 @@ mod tests {
             orphan_length: 0.1,
         };
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, m.p.len(), guide_roots.len(), CVS);
+        PosedFrame::layout(&mut layout, m.p.len(), guide_roots.len(), CVS);
         let mut body_buf = vec![0u8; Body::required_bytes(&mesh).unwrap()];
         let body = Body::new(&mesh, &mut Arena::new(&mut body_buf)).unwrap();
         let mut guide_buf = vec![0u8; layout.bytes()];
         let prepared =
-            PreparedGuides::new(&mesh, &guides, CVS, &mut Arena::new(&mut guide_buf)).unwrap();
+            PosedFrame::with_guides(mesh, &guides, CVS, &mut Arena::new(&mut guide_buf)).unwrap();
         let per = expand_params.output_points();
         let curves = |grooms: &[StrandGroom]| {
             let mut out = vec![[0.0f32; 4]; strands.len() * per];
@@ -311,9 +322,8 @@ mod tests {
                 grooms,
             };
             expand(
-                &mesh,
-                &all,
                 &prepared,
+                &all,
                 &expand_params,
                 bytemuck::cast_slice_mut(&mut out),
                 16,
@@ -339,7 +349,6 @@ mod tests {
 
         let mut settled = original.clone();
         let report = settle(
-            &mesh,
             &body,
             &strands,
             &bindings,
@@ -372,7 +381,6 @@ mod tests {
         // settling again changes nothing, and ranges settle independently
         let mut again = settled.clone();
         let report = settle(
-            &mesh,
             &body,
             &strands,
             &bindings,
@@ -386,8 +394,8 @@ mod tests {
         let mid = strands.len() / 3;
         let (a, b) = halves.split_at_mut(mid);
         let p = (&prepared, &expand_params);
-        settle(&mesh, &body, &strands[..mid], &bindings[..mid], a, p.0, p.1).unwrap();
-        settle(&mesh, &body, &strands[mid..], &bindings[mid..], b, p.0, p.1).unwrap();
+        settle(&body, &strands[..mid], &bindings[..mid], a, p.0, p.1).unwrap();
+        settle(&body, &strands[mid..], &bindings[mid..], b, p.0, p.1).unwrap();
         assert_eq!(halves, settled);
 
         // bad grooms are refused before anything changes
@@ -395,7 +403,6 @@ mod tests {
         bad[7].lift = [f32::NAN, 0.0];
         assert!(matches!(
             settle(
-                &mesh,
                 &body,
                 &strands,
                 &bindings,

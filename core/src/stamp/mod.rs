@@ -953,7 +953,7 @@ mod tests {
             let mut short = vec![Candidate::default(); n - 1];
             assert_eq!(
                 stamper.stamp_faces(faces, &mut short),
-                Err(Error::CapacityExceeded {
+                Err(Error::OutputTooSmall {
                     needed: n,
                     available: n - 1
                 })

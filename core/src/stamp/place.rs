@@ -231,7 +231,7 @@ impl Placing {
         let len = batch.len;
         batch.len = 0;
         let available = out.len();
-        let out = out.get_mut(n..n + len).ok_or(Error::CapacityExceeded {
+        let out = out.get_mut(n..n + len).ok_or(Error::OutputTooSmall {
             needed: n + len,
             available,
         })?;

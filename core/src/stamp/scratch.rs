@@ -50,9 +50,11 @@ impl<'a> Scratch<'a> {
 
     pub(super) fn check(&self, n: usize) -> Result<(), Error> {
         if n > self.next.len() {
+            // in bytes of the per-candidate arrays, which the arena holds
+            let per = 4 + 1 + core::mem::size_of::<Near>();
             return Err(Error::CapacityExceeded {
-                needed: n,
-                available: self.next.len(),
+                needed: n * per,
+                available: self.next.len() * per,
             });
         }
         Ok(())

@@ -3,6 +3,11 @@
 use crate::{Error, Strided};
 use glam::{Vec2, Vec3};
 
+/// Largest magnitude of a mesh coordinate, normal component, uv or guide
+/// point coordinate: with it, every product a stage forms stays finite.
+/// Production scenes span well under 1e6 units.
+pub const MAX_COORDINATE: f32 = 1e9;
+
 /// A triangle mesh borrowed from the host: positions, triangle indices and
 /// optional per-vertex UVs and normals.
 ///
@@ -100,8 +105,9 @@ impl<'a> Mesh<'a> {
         where
             [f32; N]: bytemuck::Pod,
         {
-            s.iter()
-                .fold(true, |ok, p| p.iter().fold(ok, |ok, c| ok & c.is_finite()))
+            s.iter().fold(true, |ok, p| {
+                p.iter().fold(ok, |ok, c| ok & (c.abs() <= MAX_COORDINATE))
+            })
         }
         let nv = self.positions.len();
         let counts =
@@ -155,6 +161,27 @@ impl<'a> Mesh<'a> {
                     index: i,
                 });
             }
+        }
+        let large = |s: Strided<[f32; 3]>| {
+            s.iter()
+                .position(|p| p.iter().any(|c| c.abs() > MAX_COORDINATE))
+        };
+        for (what, values) in [
+            ("positions (beyond 1e9)", Some(self.positions)),
+            ("normals (beyond 1e9)", self.normals),
+        ] {
+            if let Some(index) = values.and_then(large) {
+                return Err(Error::TooLarge { what, index });
+            }
+        }
+        if let Some(index) = self.uvs.and_then(|t| {
+            t.iter()
+                .position(|p| p.iter().any(|c| c.abs() > MAX_COORDINATE))
+        }) {
+            return Err(Error::TooLarge {
+                what: "uvs (beyond 1e9)",
+                index,
+            });
         }
         for (f, tri) in self.triangles.iter().enumerate() {
             for &k in &tri {

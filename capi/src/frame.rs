@@ -1,0 +1,171 @@
+//! The frame handle: one frame's deformed mesh and posed guides, prepared
+//! once and read by any number of expansions.
+
+use crate::buffers::{req, req_mut};
+use crate::status::Failure;
+use crate::threads::split_over_threads;
+use crate::{PelageGuidesDesc, PelageMeshDesc, PelageStatus};
+use pelage_core::arena::ArenaLayout;
+use pelage_core::interp::posed::PosedFrame;
+use pelage_core::{Arena, Mesh, Strided};
+
+/// The opaque object a `PelageFrame` points to.
+// not repr(C): cbindgen declares it in C without a definition
+pub struct PelageFrameTy {
+    _private: [u8; 0],
+}
+
+/// One frame: the deformed mesh (copied and checked), its vertex tangents
+/// and the posed guides in their root frames, prepared once by
+/// `pelage_frame_new` and `pelage_frame_set_guides`, then read by any
+/// number of `pelage_groom_expand` / `pelage_expand` calls (a renderer's
+/// patches). Released by `pelage_frame_free`.
+pub type PelageFrame = *mut PelageFrameTy;
+
+/// A heap slice the frame borrows for its whole life. Kept as a raw
+/// pointer, not a Box: moving a Box asserts unique access to its contents
+/// while the frame holds references into them.
+struct Buffer<T>(*mut [T]);
+
+impl<T> Buffer<T> {
+    fn new(v: Vec<T>) -> Self {
+        Buffer(Box::into_raw(v.into_boxed_slice()))
+    }
+
+    /// The contents, for as long as the frame that owns this buffer lives.
+    fn borrow(&self) -> &'static mut [T] {
+        // SAFETY: the pointer came from Box::into_raw and is freed only in
+        // drop; each buffer is borrowed once, by the frame declared before
+        // it in `Frame`, which is dropped first.
+        unsafe { &mut *self.0 }
+    }
+}
+
+impl<T> Drop for Buffer<T> {
+    fn drop(&mut self) {
+        // SAFETY: from Box::into_raw in `new`, freed once, here.
+        drop(unsafe { Box::from_raw(self.0) });
+    }
+}
+
+/// What a [`PelageFrame`] points to.
+pub(crate) struct Frame {
+    /// Borrows the buffers below; declared first, so dropped first.
+    pub posed: PosedFrame<'static>,
+    _positions: Buffer<[f32; 3]>,
+    _triangles: Buffer<[u32; 3]>,
+    _uvs: Option<Buffer<[f32; 2]>>,
+    _normals: Option<Buffer<[f32; 3]>>,
+    _arena: Buffer<u8>,
+}
+
+/// The frame behind a handle, or NULL_PARAMETER. A non-NULL handle must
+/// come from `pelage_frame_new` and not be freed yet (the header's
+/// contract), so it points to a live `Frame`.
+pub(crate) fn frame_ref<'a>(frame: PelageFrame) -> Result<&'a Frame, Failure> {
+    req(frame.cast::<Frame>().cast_const(), "frame")
+}
+
+/// Copies a host buffer into a heap buffer.
+fn copy<T: bytemuck::Pod>(s: Strided<T>) -> Buffer<T> {
+    Buffer::new(s.iter().collect())
+}
+
+/// Creates a frame for `guide_count` posed guides resampled to
+/// `points_per_strand` points (2..64, as the expansions will ask for) on
+/// the deformed `mesh`, which is copied and checked (the host may change
+/// or free its buffers afterwards), and computes its vertex tangents. The
+/// frame has no guides until `pelage_frame_set_guides`. On success
+/// `*out_frame` is the new frame; on failure it is left untouched.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (point count, no guides,
+/// bad stride, mesh values beyond 1e9), MISALIGNED, NON_FINITE,
+/// OUT_OF_RANGE (an index past the vertices), PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_frame_new(
+    mesh: *const PelageMeshDesc,
+    guide_count: usize,
+    points_per_strand: u32,
+    out_frame: *mut PelageFrame,
+) -> PelageStatus {
+    ffi_boundary! {
+        let out = req_mut(out_frame, "out_frame")?;
+        let host = req(mesh, "mesh")?.view()?;
+        let positions = copy(host.positions);
+        let triangles = copy(host.triangles);
+        let uvs = host.uvs.map(copy);
+        let normals = host.normals.map(copy);
+        let mut mesh = Mesh::new(
+            Strided::from_slice(positions.borrow()),
+            Strided::from_slice(triangles.borrow()),
+        );
+        mesh.uvs = uvs.as_ref().map(|b| Strided::from_slice(b.borrow()));
+        mesh.normals = normals.as_ref().map(|b| Strided::from_slice(b.borrow()));
+        let points = points_per_strand as usize;
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, host.positions.len(), guide_count, points);
+        let arena = Buffer::new(vec![0u8; layout.bytes()]);
+        let posed = PosedFrame::new(mesh, guide_count, points, &mut Arena::new(arena.borrow()))?;
+        let frame = Box::new(Frame {
+            posed,
+            _positions: positions,
+            _triangles: triangles,
+            _uvs: uvs,
+            _normals: normals,
+            _arena: arena,
+        });
+        *out = Box::into_raw(frame).cast::<PelageFrameTy>();
+        Ok(())
+    }
+}
+
+/// Poses the frame's guides: checks `guides` (guide_count as given to
+/// `pelage_frame_new`, roots on the mesh, finite points within 1e9, no
+/// zero-length guide) and stores them resampled, in their root frames on
+/// the frame's mesh. Split over `thread_count` threads (0: all cores); the
+/// bits do not depend on it. May be called again for new guides (a
+/// simulation's output). On failure the frame keeps the guides it had.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also guide points beyond
+/// 1e9), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC (also when a worker thread cannot start: the
+/// frame's guides are then unspecified until the next successful call).
+///
+/// Thread safety: no other call may use `frame` during this one.
+#[no_mangle]
+pub extern "C" fn pelage_frame_set_guides(
+    frame: PelageFrame,
+    guides: *const PelageGuidesDesc,
+    thread_count: u32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let frame = req_mut(frame.cast::<Frame>(), "frame")?;
+        let guides = req(guides, "guides")?.view()?;
+        let posing = frame.posed.posing(&guides)?;
+        let filler = posing.filler;
+        let per = filler.floats_per_guide();
+        split_over_threads(guides.len(), thread_count, &mut *posing.data, per, |range, part| {
+            filler.fill(range.start, part)
+        })?;
+        posing.finish();
+        Ok(())
+    }
+}
+
+/// Releases a frame. NULL is accepted and does nothing.
+///
+/// Thread safety: no other call may use `frame` during or after this one.
+#[no_mangle]
+pub extern "C" fn pelage_frame_free(frame: PelageFrame) {
+    if frame.is_null() {
+        return;
+    }
+    // dropping plain buffers cannot panic; the boundary is kept so that no
+    // exported body can unwind into the host
+    let _ = std::panic::catch_unwind(|| {
+        // SAFETY: `frame` came from pelage_frame_new and is freed once, as
+        // the header requires.
+        drop(unsafe { Box::from_raw(frame.cast::<Frame>()) });
+    });
+}

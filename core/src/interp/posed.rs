@@ -1,0 +1,252 @@
+//! The posed frame: one frame's deformed mesh, its vertex tangents and its
+//! posed guides, prepared once and then read by any number of range
+//! expansions, on any threads.
+//!
+//! (`surface::frame::Frame` is a root's coordinate frame, a different
+//! thing.) The frame lives in the caller's arena; its guides are filled from
+//! host buffers ([`PosedFrame::pose`]) and, later, from cache bytes.
+
+use crate::arena::{Arena, ArenaLayout};
+use crate::guides::Guides;
+use crate::interp::strand::{ExpandParams, MAX_STRAND_POINTS};
+use crate::surface::frame::{self, Frame};
+use crate::{Error, Mesh};
+use glam::Vec3;
+
+/// A deformed mesh with its vertex tangents (see
+/// [`frame::vertex_tangents`]) and its posed guides, resampled to the
+/// strand point count, in their own root frames (local) and in world space.
+///
+/// Each guide is stored as its n local x, then n y, then n z coordinates,
+/// then the same for its world points, so the per-strand loops run over
+/// contiguous lanes and vectorize (element-wise only: the bits are the same
+/// as a scalar loop's on every target), and a strand's clump centre (one of
+/// its guides) sits beside that guide's local points.
+pub struct PosedFrame<'a> {
+    mesh: Mesh<'a>,
+    tangents: &'a [[f32; 3]],
+    data: &'a mut [f32],
+    points: usize,
+    guides: usize,
+    posed: bool,
+}
+
+impl<'a> PosedFrame<'a> {
+    /// Adds the arena bytes [`PosedFrame::new`] needs for a mesh of
+    /// `vertices` vertices and `guides` guides.
+    pub fn layout(
+        layout: &mut ArenaLayout,
+        vertices: usize,
+        guides: usize,
+        points_per_strand: usize,
+    ) {
+        layout.add::<[f32; 3]>(vertices);
+        let n = guides.saturating_mul(points_per_strand).saturating_mul(6);
+        layout.add::<f32>(n);
+    }
+
+    /// Checks the deformed `mesh`, computes its vertex tangents and makes
+    /// room for `guide_count` guides of `points_per_strand` points (2..=64).
+    /// The frame has no guides until [`PosedFrame::pose`].
+    pub fn new(
+        mesh: Mesh<'a>,
+        guide_count: usize,
+        points_per_strand: usize,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        if !(2..=MAX_STRAND_POINTS).contains(&points_per_strand) {
+            return Err(Error::InvalidArgument(
+                "points_per_strand must be in 2..=64",
+            ));
+        }
+        if guide_count == 0 {
+            return Err(Error::InvalidArgument("no guides"));
+        }
+        mesh.check()?;
+        let tangents = arena.alloc::<[f32; 3]>(mesh.positions.len())?;
+        let floats = guide_count
+            .checked_mul(6 * points_per_strand)
+            .ok_or(Error::InvalidArgument("guide count overflows"))?;
+        let data = arena.alloc::<f32>(floats)?;
+        frame::vertex_tangents(&mesh, tangents);
+        Ok(PosedFrame {
+            mesh,
+            tangents,
+            data,
+            points: points_per_strand,
+            guides: guide_count,
+            posed: false,
+        })
+    }
+
+    /// [`PosedFrame::new`], then [`PosedFrame::pose`] with `guides`.
+    pub fn with_guides(
+        mesh: Mesh<'a>,
+        guides: &Guides,
+        points_per_strand: usize,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        let mut frame = PosedFrame::new(mesh, guides.len(), points_per_strand, arena)?;
+        frame.pose(guides)?;
+        Ok(frame)
+    }
+
+    /// Checks `guides` against the mesh and the guide count and fills the
+    /// frame with them. On error the frame keeps the guides it had.
+    pub fn pose(&mut self, guides: &Guides) -> Result<(), Error> {
+        let posing = self.posing(guides)?;
+        posing.filler.fill(0, posing.data);
+        posing.finish();
+        Ok(())
+    }
+
+    /// [`PosedFrame::pose`] in steps, for a host that fills the guides in
+    /// parallel: this checks `guides`; the host has [`GuideFiller::fill`]
+    /// fill every guide through disjoint parts of [`Posing::data`], then
+    /// calls [`Posing::finish`] (the same bits as `pose` for any split).
+    pub fn posing<'r>(&'r mut self, guides: &'r Guides<'r>) -> Result<Posing<'r>, Error> {
+        if guides.len() != self.guides {
+            return Err(Error::InvalidArgument(
+                "the guide count differs from the frame's",
+            ));
+        }
+        guides.validate(&self.mesh)?;
+        Ok(Posing {
+            filler: GuideFiller {
+                mesh: &self.mesh,
+                tangents: self.tangents,
+                guides,
+                points: self.points,
+            },
+            data: self.data,
+            posed: &mut self.posed,
+        })
+    }
+
+    /// Checks `params`, and that the frame is posed for their point count.
+    pub fn check_params(&self, params: &ExpandParams) -> Result<(), Error> {
+        params.check()?;
+        if !self.posed {
+            return Err(Error::InvalidArgument("the frame has no posed guides"));
+        }
+        if params.points_per_strand != self.points {
+            return Err(Error::InvalidArgument(
+                "the frame was posed for another point count",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The deformed mesh (checked).
+    pub fn mesh(&self) -> &Mesh<'a> {
+        &self.mesh
+    }
+
+    /// Number of guides.
+    pub fn guide_count(&self) -> usize {
+        self.guides
+    }
+
+    /// Points per guide (the strand point count it was made for).
+    pub fn points(&self) -> usize {
+        self.points
+    }
+
+    /// True once guides were posed.
+    pub fn is_posed(&self) -> bool {
+        self.posed
+    }
+
+    /// The root frame at barycentric (u, v) on `face` of this frame's mesh.
+    pub fn root_frame(&self, face: usize, u: f32, v: f32) -> Frame {
+        Frame::at(&self.mesh, self.tangents, face, u, v)
+    }
+
+    /// Point `j` of guide `g` in the guide's root frame.
+    pub fn local_point(&self, g: usize, j: usize) -> Vec3 {
+        let l = self.local(g);
+        Vec3::new(l[j], l[self.points + j], l[2 * self.points + j])
+    }
+
+    /// Point `j` of guide `g` in world space.
+    pub fn world_point(&self, g: usize, j: usize) -> Vec3 {
+        let w = self.world(g);
+        Vec3::new(w[j], w[self.points + j], w[2 * self.points + j])
+    }
+
+    /// The mesh's vertex tangents.
+    pub(crate) fn tangents(&self) -> &[[f32; 3]] {
+        self.tangents
+    }
+
+    /// Guide `g`'s local x, y and z lanes.
+    #[inline(always)]
+    pub(crate) fn local(&self, g: usize) -> &[f32] {
+        let n = self.points;
+        &self.data[g * 6 * n..g * 6 * n + 3 * n]
+    }
+
+    /// Guide `g`'s world x, y and z lanes.
+    #[inline(always)]
+    pub(crate) fn world(&self, g: usize) -> &[f32] {
+        let n = self.points;
+        &self.data[g * 6 * n + 3 * n..(g + 1) * 6 * n]
+    }
+}
+
+/// A [`PosedFrame`] being filled with checked guides (see
+/// [`PosedFrame::posing`]).
+pub struct Posing<'r> {
+    /// Fills ranges of guides.
+    pub filler: GuideFiller<'r>,
+    /// [`GuideFiller::floats_per_guide`] floats per guide, guide after guide.
+    pub data: &'r mut [f32],
+    posed: &'r mut bool,
+}
+
+impl Posing<'_> {
+    /// Marks the frame posed, once every guide is filled.
+    pub fn finish(self) {
+        *self.posed = true;
+    }
+}
+
+/// Fills the slots of a range of guides (see [`Posing`]).
+#[derive(Clone, Copy)]
+pub struct GuideFiller<'r> {
+    mesh: &'r Mesh<'r>,
+    tangents: &'r [[f32; 3]],
+    guides: &'r Guides<'r>,
+    points: usize,
+}
+
+impl GuideFiller<'_> {
+    /// Floats each guide takes.
+    pub fn floats_per_guide(&self) -> usize {
+        6 * self.points
+    }
+
+    /// Fills the guides `first ..` that `part` holds (its length over
+    /// [`GuideFiller::floats_per_guide`]).
+    pub fn fill(&self, first: usize, part: &mut [f32]) {
+        let n = self.points;
+        let step = 1.0 / (n - 1) as f32;
+        for (i, slot) in part.chunks_exact_mut(6 * n).enumerate() {
+            let g = first + i;
+            let r = &self.guides.roots[g];
+            let frame = Frame::at(self.mesh, self.tangents, r.face as usize, r.u, r.v);
+            let (_, count) = self.guides.span(g);
+            let (local, world) = slot.split_at_mut(3 * n);
+            for j in 0..n {
+                let p = if count == n {
+                    self.guides.point(g, j)
+                } else {
+                    self.guides.sample(g, j as f32 * step)
+                };
+                let l = frame.to_local(p);
+                (local[j], local[n + j], local[2 * n + j]) = (l.x, l.y, l.z);
+                (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+            }
+        }
+    }
+}

@@ -1,0 +1,324 @@
+//! The strand kernel: one render strand from its guides, shaped by its
+//! groom values (paper 2.2 and 3). Pure per strand: expansion, settling
+//! (and later dynamics and trimming) all call it, so a strand is the same
+//! bits whichever stage draws it.
+
+use crate::interp::bind::{StrandBinding, NO_GUIDE};
+use crate::interp::groom::StrandGroom;
+use crate::interp::posed::PosedFrame;
+use crate::surface::frame::Frame;
+use crate::surface::mesh::MAX_COORDINATE;
+use crate::Error;
+use glam::Vec3;
+
+/// Most control points per strand.
+pub const MAX_STRAND_POINTS: usize = 64;
+
+/// How curve ends are written for a Catmull-Rom consumer.
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EndPoints {
+    /// The points as they are; a Catmull-Rom curve (Embree, RenderMan) spans
+    /// the second to the second-last point.
+    Raw = 0,
+    /// First and last points repeated ("pinned" in USD), so the curve runs
+    /// from the root to the tip.
+    Pinned = 1,
+}
+
+/// Expansion parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct ExpandParams {
+    /// Control points per strand before end handling (2..=64); guides are
+    /// resampled to it. Catmull-Rom consumers need 4 points per curve, so
+    /// with `Raw` ends use at least 4.
+    pub points_per_strand: usize,
+    /// End-point convention of the output.
+    pub end_points: EndPoints,
+    /// Length of orphan strands (no eligible guide), grown along the normal.
+    pub orphan_length: f32,
+}
+
+impl ExpandParams {
+    /// Control points written per strand.
+    pub fn output_points(&self) -> usize {
+        self.points_per_strand + 2 * (self.end_points == EndPoints::Pinned) as usize
+    }
+
+    /// Checks the point count and orphan length.
+    pub fn check(&self) -> Result<(), Error> {
+        if !(2..=MAX_STRAND_POINTS).contains(&self.points_per_strand) {
+            return Err(Error::InvalidArgument(
+                "points_per_strand must be in 2..=64",
+            ));
+        }
+        if !(self.orphan_length >= 0.0 && self.orphan_length <= MAX_COORDINATE) {
+            return Err(Error::InvalidArgument("orphan_length must be in 0..=1e9"));
+        }
+        Ok(())
+    }
+}
+
+/// Per-strand working lanes, reused across the strands of one call (zeroing
+/// fresh arrays per strand would cost more than the arithmetic).
+pub(crate) struct Lanes {
+    /// Parameter of each point along the strand, j / (n - 1).
+    t: [f32; MAX_STRAND_POINTS],
+    local: [f32; 3 * MAX_STRAND_POINTS],
+    /// The kink wave without phase for `wave_frequency` (bits; NaN when
+    /// none yet): neighbouring strands share a frequency, so it is reused.
+    wave: [[f32; MAX_STRAND_POINTS]; 2],
+    wave_frequency: u32,
+}
+
+impl Lanes {
+    pub(crate) fn new(n: usize) -> Self {
+        let mut t = [0.0f32; MAX_STRAND_POINTS];
+        let step = 1.0 / (n - 1) as f32;
+        for (j, tj) in t[..n].iter_mut().enumerate() {
+            *tj = j as f32 * step;
+        }
+        Lanes {
+            t,
+            local: [0.0; 3 * MAX_STRAND_POINTS],
+            wave: [[0.0; MAX_STRAND_POINTS]; 2],
+            wave_frequency: f32::NAN.to_bits(),
+        }
+    }
+}
+
+/// Writes one strand into `out`: its `points_per_strand` points, and with
+/// pinned ends the first and last again around them
+/// ([`ExpandParams::output_points`] in all).
+#[inline]
+pub(crate) fn strand(
+    frame: &Frame,
+    bind: &StrandBinding,
+    groom: &StrandGroom,
+    guides: &PosedFrame,
+    params: &ExpandParams,
+    lanes: &mut Lanes,
+    out: &mut [[f32; 4]],
+) {
+    // the common counts get loops of known length (unrolled, vectorized
+    // whole); the same operations in the same order, so the same bits
+    match params.points_per_strand {
+        8 => strand_n::<8>(frame, bind, groom, guides, params, lanes, out),
+        16 => strand_n::<16>(frame, bind, groom, guides, params, lanes, out),
+        32 => strand_n::<32>(frame, bind, groom, guides, params, lanes, out),
+        _ => strand_n::<0>(frame, bind, groom, guides, params, lanes, out),
+    }
+}
+
+/// [`strand`] for `N` points, or for `params.points_per_strand` when `N` is 0.
+#[inline(always)]
+pub(crate) fn strand_n<const N: usize>(
+    frame: &Frame,
+    bind: &StrandBinding,
+    groom: &StrandGroom,
+    guides: &PosedFrame,
+    params: &ExpandParams,
+    lanes: &mut Lanes,
+    out: &mut [[f32; 4]],
+) {
+    // checked by ExpandParams::check; the min lets the compiler drop bounds checks
+    let n = if N == 0 {
+        params.points_per_strand.min(MAX_STRAND_POINTS)
+    } else {
+        N
+    };
+    let t = &lanes.t[..n];
+    // x lanes, then y, then z, as a prepared guide stores its points: the
+    // weighted sum is one flat loop over both
+    let local = &mut lanes.local[..3 * n];
+    // the tip is summed again in scalars, in the same order (so to the same
+    // bits): read back from the vector sums, it would wait for their stores
+    let tip = if bind.count == 0 {
+        local[..2 * n].fill(0.0);
+        for (z, tj) in local[2 * n..].iter_mut().zip(t) {
+            *z = params.orphan_length * tj;
+        }
+        Vec3::new(0.0, 0.0, local[3 * n - 1])
+    } else {
+        let (g, w) = (
+            &guides.local(bind.guides[0] as usize)[..3 * n],
+            bind.weights[0],
+        );
+        let mut sum = Vec3::new(g[n - 1], g[2 * n - 1], g[3 * n - 1]) * w;
+        for (a, g) in local.iter_mut().zip(g) {
+            *a = g * w;
+        }
+        for k in 1..bind.count as usize {
+            let w = bind.weights[k];
+            let g = &guides.local(bind.guides[k] as usize)[..3 * n];
+            sum += Vec3::new(g[n - 1], g[2 * n - 1], g[3 * n - 1]) * w;
+            for (a, g) in local.iter_mut().zip(g) {
+                *a += g * w;
+            }
+        }
+        sum
+    };
+    let (ax, rest) = local.split_at_mut(n);
+    let (ay, az) = rest.split_at_mut(n);
+    let scale = groom.length;
+    let length = tip.length() * scale;
+    let bend = groom.bend * length;
+    let mut shape = [scale, bend];
+    if groom.lift != [0.0; 2] {
+        // the lift turns the scaled, bent strand, so it is shaped first
+        for j in 0..n {
+            ax[j] = ax[j] * scale + bend * t[j] * t[j];
+            ay[j] *= scale;
+            az[j] *= scale;
+        }
+        lift(groom.lift, ax, ay, az);
+        shape = [1.0, 0.0];
+    }
+    let clump = if bind.clump == NO_GUIDE {
+        0.0
+    } else {
+        groom.clump
+    };
+    let kink = groom.kink_amplitude * length;
+    let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
+    let look = Look {
+        shape,
+        clump,
+        kink,
+        phase: groom.kink_phase,
+        radius: [r0, dr],
+    };
+    let pinned = params.end_points == EndPoints::Pinned;
+    let shift = pinned as usize;
+    let local = [&*ax, &*ay, &*az];
+    let dst = &mut out[shift..shift + n];
+    if clump == 0.0 && kink == 0.0 {
+        place::<false>(frame, t, local, &NO_CLUMP, &lanes.wave, &look, dst);
+    } else {
+        if kink != 0.0 && lanes.wave_frequency != groom.kink_frequency.to_bits() {
+            let [ws, wc] = &mut lanes.wave;
+            kink_wave(groom.kink_frequency, n, &mut ws[..n], &mut wc[..n]);
+            lanes.wave_frequency = groom.kink_frequency.to_bits();
+        }
+        let centre = match bind.clump {
+            NO_GUIDE => &NO_CLUMP[..3 * n],
+            g => &guides.world(g as usize)[..3 * n],
+        };
+        place::<true>(frame, t, local, centre, &lanes.wave, &look, dst);
+    }
+    // the output was stored point by point (16 bytes), so these loads
+    // forward from the stores
+    if pinned {
+        out[0] = out[1];
+        out[n + 1] = out[n];
+    }
+}
+
+/// Stand-in clump centre for a strand without one (its pull is 0).
+static NO_CLUMP: [f32; 3 * MAX_STRAND_POINTS] = [0.0; 3 * MAX_STRAND_POINTS];
+
+/// One strand's look, from its groom values and its length.
+struct Look {
+    /// Length scale, and bend offset at the tip (both applied to local points).
+    shape: [f32; 2],
+    /// Pull toward the clump centre at the tip.
+    clump: f32,
+    /// Kink amplitude at the tip.
+    kink: f32,
+    /// Cosine and sine of the kink phase.
+    phase: [f32; 2],
+    /// Root radius, and tip minus root radius.
+    radius: [f32; 2],
+}
+
+/// Places the local points `a` in the world through `frame`, pulls them
+/// toward the clump centre `c` and adds the kink wave `wave` (when
+/// `CLUMP_KINK`), and writes the points with their radii to `out`.
+///
+/// One pass per point with everything in registers: separate passes
+/// stored and reloaded every lane between steps. A zero pull or kink
+/// changes nothing, so one loop serves a strand with either.
+#[inline(always)]
+fn place<const CLUMP_KINK: bool>(
+    frame: &Frame,
+    t: &[f32],
+    a: [&[f32]; 3],
+    c: &[f32],
+    wave: &[[f32; MAX_STRAND_POINTS]; 2],
+    look: &Look,
+    out: &mut [[f32; 4]],
+) {
+    let n = out.len();
+    let (t, [ax, ay, az]) = (&t[..n], a.map(|a| &a[..n]));
+    let (cx, cy, cz) = (&c[..n], &c[n..2 * n], &c[2 * n..3 * n]);
+    let (ws, wc) = (&wave[0][..n], &wave[1][..n]);
+    let (o, tt, b, nn) = (frame.origin, frame.t, frame.b, frame.n);
+    let [scale, bend] = look.shape;
+    let [cp, sp] = look.phase;
+    let [r0, dr] = look.radius;
+    for j in 0..n {
+        let lx = ax[j] * scale + bend * t[j] * t[j];
+        let (ly, lz) = (ay[j] * scale, az[j] * scale);
+        let mut x = o.x + tt.x * lx + b.x * ly + nn.x * lz;
+        let mut y = o.y + tt.y * lx + b.y * ly + nn.y * lz;
+        let mut z = o.z + tt.z * lx + b.z * ly + nn.z * lz;
+        if CLUMP_KINK {
+            let pull = look.clump * t[j];
+            x += (cx[j] - x) * pull;
+            y += (cy[j] - y) * pull;
+            z += (cz[j] - z) * pull;
+            // sin and cos of (phase + j delta)
+            let (ks, kc) = (sp * wc[j] + cp * ws[j], cp * wc[j] - sp * ws[j]);
+            let k = look.kink * t[j];
+            x += (tt.x * ks + b.x * kc) * k;
+            y += (tt.y * ks + b.y * kc) * k;
+            z += (tt.z * ks + b.z * kc) * k;
+        }
+        out[j] = [x, y, z, r0 + dr * t[j]];
+    }
+}
+
+/// Rotates local points about the root by the rotation vector `(w.x, w.y, 0)`
+/// (Rodrigues' formula): the paper's collision push-out by rotation about
+/// the root, fixed per strand at rest in the strand's own frame, so it
+/// follows the body and does not depend on the pose.
+fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
+    let angle = libm::sqrtf(w[0] * w[0] + w[1] * w[1]);
+    // a vector too small to square turns nothing (and has no axis)
+    if angle == 0.0 {
+        return;
+    }
+    let (kx, ky) = (w[0] / angle, w[1] / angle);
+    let (s, c) = libm::sincosf(angle);
+    for j in 0..x.len() {
+        let (vx, vy, vz) = (x[j], y[j], z[j]);
+        let along = (kx * vx + ky * vy) * (1.0 - c);
+        x[j] = vx * c + ky * vz * s + kx * along;
+        y[j] = vy * c - kx * vz * s + ky * along;
+        z[j] = vz * c + (kx * vy - ky * vx) * s;
+    }
+}
+
+/// sin and cos of `j * delta` for the `n` points of a kink wave of
+/// `frequency` waves per strand, by rotation recurrences: four interleaved
+/// chains, so the serial dependency is a quarter as long as one chain's.
+/// A pure function of `frequency` and `n`.
+fn kink_wave(frequency: f32, n: usize, sin: &mut [f32], cos: &mut [f32]) {
+    const CHAINS: usize = 4;
+    let delta = core::f32::consts::TAU * frequency / (n - 1) as f32;
+    let (s1, c1) = libm::sincosf(delta);
+    // the rotation by 4 delta by two double-angle steps, not another sincos
+    let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
+    let (s4, c4) = (2.0 * s2 * c2, c2 * c2 - s2 * s2);
+    let (mut s, mut c) = ([0.0f32; CHAINS], [1.0f32; CHAINS]);
+    for i in 1..CHAINS {
+        (s[i], c[i]) = (s[i - 1] * c1 + c[i - 1] * s1, c[i - 1] * c1 - s[i - 1] * s1);
+    }
+    for (sj, cj) in sin.chunks_mut(CHAINS).zip(cos.chunks_mut(CHAINS)) {
+        sj.copy_from_slice(&s[..sj.len()]);
+        cj.copy_from_slice(&c[..cj.len()]);
+        for i in 0..CHAINS {
+            (s[i], c[i]) = (s[i] * c4 + c[i] * s4, c[i] * c4 - s[i] * s4);
+        }
+    }
+}
