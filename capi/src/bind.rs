@@ -65,8 +65,14 @@ pub struct PelageStrandBinding {
     pub clump: u32,
 }
 
-const _: () =
-    assert!(std::mem::size_of::<PelageStrandBinding>() == std::mem::size_of::<StrandBinding>());
+same_layout!(
+    PelageStrandBinding,
+    StrandBinding,
+    guides,
+    weights,
+    count,
+    clump
+);
 const _: () = assert!(MAX_NEIGHBOURS == PELAGE_MAX_NEIGHBOURS as usize);
 
 /// What binding found.

@@ -55,8 +55,19 @@ pub struct PelageStrandGroom {
     pub lift: [f32; 2],
 }
 
-const _: () =
-    assert!(std::mem::size_of::<PelageStrandGroom>() == std::mem::size_of::<StrandGroom>());
+same_layout!(
+    PelageStrandGroom,
+    StrandGroom,
+    length,
+    root_radius,
+    tip_radius,
+    bend,
+    kink_amplitude,
+    kink_frequency,
+    kink_phase,
+    clump,
+    lift
+);
 
 fn constant(m: &ScalarMap) -> PelageMap {
     match m {

@@ -23,8 +23,7 @@ pub struct PelageRoot {
     pub rank: u32,
 }
 
-const _: () =
-    assert!(std::mem::size_of::<PelageRoot>() == std::mem::size_of::<pelage_core::Root>());
+same_layout!(PelageRoot, pelage_core::Root, face, u, v, id, rank);
 const _: () =
     assert!(std::mem::align_of::<PelageRoot>() == std::mem::align_of::<pelage_core::Root>());
 

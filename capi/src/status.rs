@@ -156,3 +156,16 @@ macro_rules! ffi_boundary {
         $crate::status::boundary(move || -> Result<(), $crate::status::Failure> { $($body)* })
     };
 }
+
+/// Asserts at compile time that a C record and its core twin (cast into
+/// each other by bytemuck) have the same size, alignment and every named
+/// field at the same offset.
+macro_rules! same_layout {
+    ($c:ty, $core:ty, $($field:ident),+) => {
+        const _: () = {
+            assert!(std::mem::size_of::<$c>() == std::mem::size_of::<$core>());
+            assert!(std::mem::align_of::<$c>() == std::mem::align_of::<$core>());
+            $(assert!(std::mem::offset_of!($c, $field) == std::mem::offset_of!($core, $field));)+
+        };
+    };
+}

@@ -1,21 +1,26 @@
 //! Interpolation benchmark at the paper's gorilla scale (Figure 1): the
 //! ~65K-triangle creature, 13,030 guides x 16 points, 979,526 render hairs x
-//! 16 points (18 with pinned ends). Reports bind time, and expand time per
-//! frame at 1 and 2 threads through the C API (`pelage_expand`, which checks
-//! every strand record each call, and `pelage_groom_expand` on a groom whose
-//! records were checked once), next to the time to simply
-//! write the same number of output bytes with the same threads (the
-//! memory-bandwidth floor), measured in the same run.
+//! 16 points (18 with pinned ends). Reports bind time, and the time per
+//! frame at 1 and 2 threads through the C API (the frame made, then
+//! `pelage_expand`, which checks every strand record each call, or
+//! `pelage_groom_expand` on a groom whose records were checked once, in one
+//! call or as 500 patches spread over the host's threads), next to the time
+//! to simply write the same number of output bytes with the same threads
+//! (the memory-bandwidth floor), measured in the same run.
 
 use pelage::*;
 use pelage_core::guides::{CvLayout, Guides};
 use pelage_core::interp::bind::{self, BindParams, StrandBinding};
-use pelage_core::interp::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
+use pelage_core::interp::expand::ExpandJob;
 use pelage_core::interp::groom::{GroomMaps, StrandGroom};
+use pelage_core::interp::posed::PosedFrame;
+use pelage_core::interp::strand::{EndPoints, ExpandParams};
+use pelage_core::interp::strands::{StrandBounds, Strands};
 use pelage_core::{Arena, ArenaLayout, Mesh, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
-    combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots, ExpandCall,
+    combed_guides, curves_desc, frame, guides_desc, mesh_desc, mesh_view, stamp_roots,
+    strands_desc, ExpandCall, Frame,
 };
 use std::hint::black_box;
 use std::time::Instant;
@@ -104,40 +109,23 @@ fn main() {
     let gdesc = guides_desc(&guide_roots, &guide_points);
     let mut ep = pelage_expand_params_defaults();
     ep.points_per_strand = CVS as u32;
-    let (mut bytes, mut per) = (0, 0);
-    assert_eq!(
-        pelage_expand_query(
-            guide_roots.len(),
-            m.positions.len(),
-            &ep,
-            &mut bytes,
-            &mut per
-        ),
-        PelageStatus::Ok
-    );
-    let mut earena = vec![0u8; bytes];
+    let mut per = 0;
+    assert_eq!(pelage_expand_query(&ep, &mut per), PelageStatus::Ok);
     let mut out = vec![[0.0f32; 4]; hairs.len() * per];
     let mb = (out.len() * 16) as f64 / 1e6;
     println!("bind: {:.1} ms ({:.2e} hairs/s); groom maps: {:.1} ms; output {mb:.0} MB per frame ({per} points per hair)", t_bind * 1e3, hairs.len() as f64 / t_bind, t_groom * 1e3);
+    println!("every row is one frame: the frame (mesh copied and checked, tangents, posed guides) made, then the hairs expanded");
     println!(
-        "{:>21} {:>7} | {:>9} {:>8} {:>11} | {:>13} {:>9} | {:>8}",
-        "call", "threads", "expand ms", "frames/s", "hairs/s", "write-floor ms", "GB/s", "ratio"
+        "{:>28} {:>7} | {:>9} {:>8} {:>11} | {:>13} {:>9} | {:>8}",
+        "call", "threads", "frame ms", "frames/s", "hairs/s", "write-floor ms", "GB/s", "ratio"
     );
     let (binds, groom_records) = (
         bytemuck::cast_slice(&bindings),
         bytemuck::cast_slice(&grooms),
     );
+    let strands = strands_desc(&hairs, binds, groom_records);
     let mut handle: PelageGroom = std::ptr::null_mut();
-    assert_eq!(
-        pelage_groom_new(
-            bytemuck::cast_slice(&hairs).as_ptr(),
-            binds.as_ptr(),
-            groom_records.as_ptr(),
-            hairs.len(),
-            &mut handle,
-        ),
-        PelageStatus::Ok
-    );
+    assert_eq!(pelage_groom_new(&strands, &mut handle), PelageStatus::Ok);
     for threads in [1u32, 2] {
         ep.thread_count = threads;
         let t_floor = time(7, || {
@@ -153,36 +141,32 @@ fn main() {
             params: &ep,
         };
         let t_expand = time(7, || {
-            let s = call.run(&mut earena, &mut out, None);
-            assert_eq!(s, PelageStatus::Ok);
+            assert_eq!(call.run(&mut out, None), PelageStatus::Ok);
             black_box(&out);
         });
         // a groom kept across frames: its records were checked once
         let t_groom = time(7, || {
-            let s = pelage_groom_expand(
-                handle,
-                &desc,
-                &gdesc,
-                0,
-                hairs.len(),
-                &ep,
-                earena.as_mut_ptr().cast(),
-                earena.len(),
-                out.as_mut_ptr().cast(),
-                16,
-                out.len(),
-                std::ptr::null_mut(),
-                std::ptr::null_mut(),
-            );
+            let f = frame(&desc, &gdesc, CVS as u32, threads).unwrap();
+            let curves = curves_desc(&mut out, None);
+            let s = pelage_groom_expand(handle, f.0, 0, hairs.len(), &ep, &curves);
             assert_eq!(s, PelageStatus::Ok);
+            black_box(&out);
+        });
+        // a renderer: the frame made once, then 500 patches expanded with
+        // thread_count 1 each, the host's threads taking patches as they
+        // free up
+        let t_patches = time(7, || {
+            let f = frame(&desc, &gdesc, CVS as u32, threads).unwrap();
+            patches(handle, &f, &mut out, per, threads as usize);
             black_box(&out);
         });
         for (name, t) in [
             ("pelage_expand", t_expand),
             ("pelage_groom_expand", t_groom),
+            ("500 patches (groom_expand)", t_patches),
         ] {
             println!(
-                "{name:>21} {:>7} | {:>9.1} {:>8.1} {:>11.3e} | {:>13.1} {:>9.2} | {:>7.2}x",
+                "{name:>28} {:>7} | {:>9.1} {:>8.1} {:>11.3e} | {:>13.1} {:>9.2} | {:>7.2}x",
                 threads,
                 t * 1e3,
                 1.0 / t,
@@ -192,16 +176,71 @@ fn main() {
                 t / t_floor
             );
         }
+        println!(
+            "{:>28} {:>7} | 500 patches / one call: {:.3}",
+            "",
+            threads,
+            t_patches / t_groom
+        );
     }
     pelage_groom_free(handle);
-    println!("ratio = expand time / time to write the same bytes with the same threads (the bandwidth floor)");
+    println!("ratio = frame time / time to write the same bytes with the same threads (the bandwidth floor)");
     stages(&mesh, &guides, &hairs, &bindings, &grooms, &ep, &mut out);
     println!("paper: 2 frames/s with full interpolation (979,526 hairs)");
 }
 
+/// Patches of the render procedural: contiguous strand ranges.
+const PATCHES: usize = 500;
+
+/// Expands `handle`'s strands on `frame` as [`PATCHES`] ranges, each one
+/// `pelage_groom_expand` call on one thread, spread over `threads` host
+/// threads that take the next patch as they free up.
+fn patches(handle: PelageGroom, frame: &Frame, out: &mut [[f32; 4]], per: usize, threads: usize) {
+    let n = out.len() / per;
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    // each patch's part of the output, handed out with the patch
+    let mut parts: Vec<Option<&mut [[f32; 4]]>> = Vec::with_capacity(PATCHES);
+    let mut rest = out;
+    for p in 0..PATCHES {
+        let len = ((p + 1) * n / PATCHES - p * n / PATCHES) * per;
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(len);
+        parts.push(Some(mine));
+        rest = tail;
+    }
+    let parts = std::sync::Mutex::new(parts);
+    let (handle, frame) = (handle as usize, frame.0 as usize);
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| loop {
+                let params = PelageExpandParams {
+                    points_per_strand: CVS as u32,
+                    ..pelage_expand_params_defaults()
+                };
+                let p = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if p >= PATCHES {
+                    break;
+                }
+                let part = parts.lock().unwrap()[p].take().unwrap();
+                let first = p * n / PATCHES;
+                let curves = curves_desc(part, None);
+                let count = curves.point_capacity / per;
+                let s = pelage_groom_expand(
+                    handle as PelageGroom,
+                    frame as PelageFrame,
+                    first,
+                    count,
+                    &params,
+                    &curves,
+                );
+                assert_eq!(s, PelageStatus::Ok);
+            });
+        }
+    });
+}
+
 /// Where one thread's frame goes, through the core: preparing the posed
-/// guides, validating the strands (every frame, so that nothing is written
-/// on bad input), and the expansion kernel itself.
+/// frame, checking the strand records (what `pelage_expand` does every
+/// call and `pelage_groom_new` once), and the expansion kernel itself.
 fn stages(
     mesh: &Mesh,
     guides: &Guides,
@@ -219,27 +258,31 @@ fn stages(
         orphan_length: ep.orphan_length,
     };
     let mut layout = ArenaLayout::new();
-    PreparedGuides::layout(&mut layout, mesh.positions.len(), guides.len(), CVS);
+    PosedFrame::layout(&mut layout, mesh.positions.len(), guides.len(), CVS);
     let mut arena = vec![0u8; layout.bytes()];
     let t_prepare = time(7, || {
-        black_box(PreparedGuides::new(mesh, guides, CVS, &mut Arena::new(&mut arena)).unwrap());
+        black_box(
+            PosedFrame::with_guides(*mesh, guides, CVS, &mut Arena::new(&mut arena)).unwrap(),
+        );
     });
-    let prepared = PreparedGuides::new(mesh, guides, CVS, &mut Arena::new(&mut arena)).unwrap();
+    let frame = PosedFrame::with_guides(*mesh, guides, CVS, &mut Arena::new(&mut arena)).unwrap();
     let strands = Strands {
         roots: hairs,
         bindings,
         grooms,
     };
     let t_check = time(7, || {
-        expand::check_strands(mesh, &strands, &prepared).unwrap();
+        black_box(StrandBounds::new(&strands).unwrap());
     });
+    let bounds = StrandBounds::new(&strands).unwrap();
     let bytes: &mut [u8] = bytemuck::cast_slice_mut(out);
+    let job = ExpandJob::new(&frame, strands, &bounds, &params, bytes.len(), 16).unwrap();
     let t_kernel = time(7, || {
-        kernel(mesh, &strands, &prepared, &params, bytes);
+        kernel(&job, bytes);
         black_box(&bytes);
     });
     println!(
-        "1 thread, core stages: prepare guides {:.1} ms, check strands {:.1} ms, expand kernel{} {:.1} ms ({:.0} ns per hair)",
+        "1 thread, core stages: prepare frame {:.1} ms, check strand records {:.1} ms, expand kernel{} {:.1} ms ({:.0} ns per hair)",
         t_prepare * 1e3,
         t_check * 1e3,
         if avx2() { " (AVX2)" } else { "" },
@@ -256,18 +299,12 @@ fn avx2() -> bool {
 }
 
 /// The expansion kernel the C API runs: its AVX2 build where the CPU has it.
-fn kernel(
-    mesh: &Mesh,
-    strands: &Strands,
-    prepared: &PreparedGuides,
-    params: &ExpandParams,
-    out: &mut [u8],
-) {
+fn kernel(job: &ExpandJob, out: &mut [u8]) {
     #[cfg(target_arch = "x86_64")]
     if avx2() {
         // SAFETY: the CPU has AVX2.
-        unsafe { expand::expand_checked_avx2(mesh, strands, prepared, params, out, 16) };
+        unsafe { job.run_avx2(0..job.len(), out) };
         return;
     }
-    expand::expand_checked(mesh, strands, prepared, params, out, 16);
+    job.run(0..job.len(), out);
 }

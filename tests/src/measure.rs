@@ -183,7 +183,62 @@ pub fn guides_desc(roots: &[Root], points: &[[f32; 3]]) -> pelage::PelageGuidesD
     }
 }
 
-/// The borrowed inputs of a `pelage_expand` call, so tests state only what differs.
+/// A frame handle, freed on drop.
+pub struct Frame(pub pelage::PelageFrame);
+
+impl Drop for Frame {
+    fn drop(&mut self) {
+        pelage::pelage_frame_free(self.0);
+    }
+}
+
+/// A frame of `mesh` posed with `guides` for `points` points per strand,
+/// or the first failing status.
+pub fn frame(
+    mesh: &pelage::PelageMeshDesc,
+    guides: &pelage::PelageGuidesDesc,
+    points: u32,
+    threads: u32,
+) -> Result<Frame, pelage::PelageStatus> {
+    let mut handle = std::ptr::null_mut();
+    let s = pelage::pelage_frame_new(mesh, guides.guide_count, points, &mut handle);
+    if s != pelage::PelageStatus::Ok {
+        return Err(s);
+    }
+    let frame = Frame(handle);
+    match pelage::pelage_frame_set_guides(frame.0, guides, threads) {
+        pelage::PelageStatus::Ok => Ok(frame),
+        s => Err(s),
+    }
+}
+
+/// Strand records as the C API's descriptor (borrows the slices).
+pub fn strands_desc(
+    roots: &[Root],
+    bindings: &[pelage::PelageStrandBinding],
+    grooms: &[pelage::PelageStrandGroom],
+) -> pelage::PelageStrands {
+    pelage::PelageStrands {
+        roots: bytemuck::cast_slice::<Root, pelage::PelageRoot>(roots).as_ptr(),
+        bindings: bindings.as_ptr(),
+        grooms: grooms.as_ptr(),
+        count: roots.len(),
+    }
+}
+
+/// Packed float4 curves (stride 16) into `out`, optionally with counts.
+pub fn curves_desc(out: &mut [[f32; 4]], counts: Option<&mut [u32]>) -> pelage::PelageCurves {
+    pelage::PelageCurves {
+        points: out.as_mut_ptr().cast(),
+        point_stride: 16,
+        point_capacity: out.len(),
+        curve_counts: counts.map_or(std::ptr::null_mut(), |c| c.as_mut_ptr()),
+        curve_ids: std::ptr::null_mut(),
+    }
+}
+
+/// The borrowed inputs of a frame and a `pelage_expand` call, so tests
+/// state only what differs.
 pub struct ExpandCall<'a> {
     /// The (deformed) mesh.
     pub mesh: &'a pelage::PelageMeshDesc,
@@ -200,29 +255,27 @@ pub struct ExpandCall<'a> {
 }
 
 impl ExpandCall<'_> {
-    /// Expands every strand into `out` (capacity `out.len()` points, stride
-    /// 16), optionally filling per-curve point counts.
-    pub fn run(
+    /// Makes the frame and expands every strand into `out` (capacity
+    /// `out.len()` points, stride 16), optionally filling per-curve point
+    /// counts; the first failing status otherwise.
+    pub fn run(&self, out: &mut [[f32; 4]], counts: Option<&mut [u32]>) -> pelage::PelageStatus {
+        let p = self.params;
+        let frame = match frame(self.mesh, self.guides, p.points_per_strand, p.thread_count) {
+            Ok(f) => f,
+            Err(s) => return s,
+        };
+        self.run_on(&frame, out, counts)
+    }
+
+    /// Expands every strand on `frame` (see [`ExpandCall::run`]).
+    pub fn run_on(
         &self,
-        arena: &mut [u8],
+        frame: &Frame,
         out: &mut [[f32; 4]],
         counts: Option<&mut [u32]>,
     ) -> pelage::PelageStatus {
-        pelage::pelage_expand(
-            self.mesh,
-            self.guides,
-            bytemuck::cast_slice::<Root, pelage::PelageRoot>(self.strands).as_ptr(),
-            self.bindings.as_ptr(),
-            self.grooms.as_ptr(),
-            self.strands.len(),
-            self.params,
-            arena.as_mut_ptr().cast(),
-            arena.len(),
-            out.as_mut_ptr().cast(),
-            16,
-            out.len(),
-            counts.map_or(std::ptr::null_mut(), |c| c.as_mut_ptr()),
-            std::ptr::null_mut(),
-        )
+        let strands = strands_desc(self.strands, self.bindings, self.grooms);
+        let curves = curves_desc(out, counts);
+        pelage::pelage_expand(frame.0, &strands, self.params, &curves)
     }
 }

@@ -8,7 +8,9 @@
 use pelage::*;
 use pelage_core::Root;
 use pelage_tests::creature::{default_creature, CreatureMesh};
-use pelage_tests::measure::{combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots};
+use pelage_tests::measure::{
+    combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots, ExpandCall,
+};
 
 const CVS: usize = 12;
 
@@ -41,36 +43,18 @@ fn expand(
         thread_count: 2,
         ..pelage_expand_params_defaults()
     };
-    let (mut bytes, mut per) = (0usize, 0usize);
-    assert_eq!(
-        pelage_expand_query(
-            guides.guide_count,
-            m.positions.len(),
-            &params,
-            &mut bytes,
-            &mut per
-        ),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
+    let mut per = 0usize;
+    assert_eq!(pelage_expand_query(&params, &mut per), PelageStatus::Ok);
     let mut out = vec![[0.0f32; 4]; strands.len() * per];
-    let s = pelage_expand(
-        &mesh_desc(m),
+    let call = ExpandCall {
+        mesh: &mesh_desc(m),
         guides,
-        bytemuck::cast_slice::<Root, PelageRoot>(strands).as_ptr(),
-        bindings.as_ptr(),
-        grooms.as_ptr(),
-        strands.len(),
-        &params,
-        arena.as_mut_ptr().cast(),
-        arena.len(),
-        out.as_mut_ptr().cast(),
-        16,
-        out.len(),
-        std::ptr::null_mut(),
-        std::ptr::null_mut(),
-    );
-    assert_eq!(s, PelageStatus::Ok);
+        strands,
+        bindings,
+        grooms,
+        params: &params,
+    };
+    assert_eq!(call.run(&mut out, None), PelageStatus::Ok);
     out
 }
 

@@ -93,15 +93,11 @@ fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32;
     expand_from(m, &guides, g, params).unwrap()
 }
 
-/// An arena sized by `pelage_expand_query` for `guides` guides on `m`, and
-/// the control points per curve.
-fn expand_arena(m: &CreatureMesh, guides: usize, params: &PelageExpandParams) -> (Vec<u8>, usize) {
-    let (mut bytes, mut per) = (0usize, 0usize);
-    assert_eq!(
-        pelage_expand_query(guides, m.positions.len(), params, &mut bytes, &mut per),
-        PelageStatus::Ok
-    );
-    (vec![0u8; bytes], per)
+/// The control points per curve `params` write.
+fn points_per_curve(params: &PelageExpandParams) -> usize {
+    let mut per = 0usize;
+    assert_eq!(pelage_expand_query(params, &mut per), PelageStatus::Ok);
+    per
 }
 
 /// `g`'s strands expanded from `guides` (g's guides, possibly stored
@@ -112,7 +108,7 @@ fn expand_from(
     g: &Groom,
     params: &PelageExpandParams,
 ) -> Result<Vec<[f32; 4]>, PelageStatus> {
-    let (mut arena, per) = expand_arena(m, g.guide_roots.len(), params);
+    let per = points_per_curve(params);
     let mut out = vec![[0.0f32; 4]; g.strands.len() * per];
     let mut counts = vec![0u32; g.strands.len()];
     let call = ExpandCall {
@@ -125,7 +121,7 @@ fn expand_from(
     };
     let canary = [-7.0f32; 4];
     out.fill(canary);
-    match call.run(&mut arena, &mut out, Some(&mut counts)) {
+    match call.run(&mut out, Some(&mut counts)) {
         PelageStatus::Ok => {
             assert!(counts.iter().all(|&c| c as usize == per));
             Ok(out)
@@ -332,8 +328,11 @@ fn identical_bits_for_1_2_and_7_threads_and_chunks() {
 fn avx2_kernel_gives_the_baseline_bits() {
     use pelage_core::guides::{CvLayout, Guides};
     use pelage_core::interp::bind::StrandBinding;
-    use pelage_core::interp::expand::{self, EndPoints, ExpandParams, PreparedGuides, Strands};
+    use pelage_core::interp::expand::ExpandJob;
     use pelage_core::interp::groom::StrandGroom;
+    use pelage_core::interp::posed::PosedFrame;
+    use pelage_core::interp::strand::{EndPoints, ExpandParams};
+    use pelage_core::interp::strands::{StrandBounds, Strands};
     use pelage_core::{Arena, ArenaLayout, Strided};
     if !std::is_x86_feature_detected!("avx2") {
         eprintln!("no AVX2 on this CPU: nothing to compare");
@@ -372,27 +371,24 @@ fn avx2_kernel_gives_the_baseline_bits() {
     };
     for points in [16, 8, 32, 11] {
         let mut layout = ArenaLayout::new();
-        PreparedGuides::layout(&mut layout, mesh.positions.len(), guides.len(), points);
+        PosedFrame::layout(&mut layout, mesh.positions.len(), guides.len(), points);
         let mut arena = vec![0u8; layout.bytes()];
-        let prepared =
-            PreparedGuides::new(&mesh, &guides, points, &mut Arena::new(&mut arena)).unwrap();
+        let frame =
+            PosedFrame::with_guides(mesh, &guides, points, &mut Arena::new(&mut arena)).unwrap();
+        let bounds = StrandBounds::new(&strands).unwrap();
         for end_points in [EndPoints::Raw, EndPoints::Pinned] {
             let params = ExpandParams {
                 points_per_strand: points,
                 end_points,
                 orphan_length: 0.05,
             };
-            expand::check_inputs(&mesh, &strands, &prepared, &params, usize::MAX, 16).unwrap();
             for stride in [16, 20] {
                 let bytes = strands.len() * params.output_points() * stride;
                 let (mut base, mut wide) = (vec![0u8; bytes], vec![1u8; bytes]);
-                expand::expand_checked(&mesh, &strands, &prepared, &params, &mut base, stride);
+                let job = ExpandJob::new(&frame, strands, &bounds, &params, bytes, stride).unwrap();
+                job.run(0..job.len(), &mut base);
                 // SAFETY: the CPU has AVX2 (checked above).
-                unsafe {
-                    expand::expand_checked_avx2(
-                        &mesh, &strands, &prepared, &params, &mut wide, stride,
-                    )
-                };
+                unsafe { job.run_avx2(0..job.len(), &mut wide) };
                 let pad = |v: &[u8]| -> Vec<u8> {
                     v.chunks(stride).flat_map(|p| p[..16].to_vec()).collect()
                 };
@@ -543,7 +539,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     params.points_per_strand = 16;
     params.end_points = PelageEndPoints::Pinned as u32;
     params.orphan_length = 0.05;
-    let (mut earena, per) = expand_arena(&m, sim.strands.len(), &params);
+    let per = points_per_curve(&params);
     let mut out = vec![[0.0f32; 4]; render.len() * per];
     let call = ExpandCall {
         mesh: &d,
@@ -553,7 +549,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
         grooms: &grooms,
         params: &params,
     };
-    let s = call.run(&mut earena, &mut out, None);
+    let s = call.run(&mut out, None);
     assert_eq!(s, PelageStatus::Ok);
     // every render hair starts on the surface and ends outside, about a guide length away
     for (i, r) in render.iter().enumerate() {
@@ -687,7 +683,7 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
     let mut broken = g.bindings.clone();
     broken[5].guides[0] = 1 << 20;
     let params = pelage_expand_params_defaults();
-    let (mut earena, per) = expand_arena(&m, g.guide_roots.len(), &params);
+    let per = points_per_curve(&params);
     let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
     let mut call = ExpandCall {
         mesh: &d,
@@ -697,12 +693,12 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
         grooms: &g.grooms,
         params: &params,
     };
-    let s = call.run(&mut earena, &mut pts, None);
+    let s = call.run(&mut pts, None);
     assert_eq!(s, PelageStatus::OutOfRange);
     assert!(pts.iter().all(|p| *p == [-1.0; 4]));
     call.bindings = &g.bindings;
     let short = pts.len() - 1;
-    let s = call.run(&mut earena, &mut pts[..short], None);
+    let s = call.run(&mut pts[..short], None);
     assert_eq!(s, PelageStatus::CapacityExceeded);
     assert!(pts.iter().all(|p| *p == [-1.0; 4]));
 }
@@ -751,7 +747,7 @@ fn interleaved_outputs_and_host_records_are_checked() {
     assert_eq!(s, PelageStatus::InvalidArgument);
     // groom and binding records read back from a file are checked too
     let params = pelage_expand_params_defaults();
-    let (mut arena, per) = expand_arena(&m, g.guide_roots.len(), &params);
+    let per = points_per_curve(&params);
     let mut pts = vec![[-1.0f32; 4]; g.strands.len() * per];
     let good = guides_desc(&g.guide_roots, &g.guide_points);
     let mut run = |bindings: &[PelageStrandBinding], grooms: &[PelageStrandGroom]| {
@@ -763,7 +759,7 @@ fn interleaved_outputs_and_host_records_are_checked() {
             grooms,
             params: &params,
         };
-        let s = call.run(&mut arena, &mut pts, None);
+        let s = call.run(&mut pts, None);
         (s, pts.iter().all(|p| *p == [-1.0; 4]))
     };
     let mut grooms = g.grooms.clone();
