@@ -325,32 +325,38 @@ PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, c
   return info;
 }
 
-Expander::Expander(size_t guide_count, size_t vertex_count, const PelageExpandParams& params) : params_(params) {
-  size_t arena_bytes = 0;
-  check(pelage_expand_query(guide_count, vertex_count, &params_, &arena_bytes, &per_curve_), "pelage_expand_query");
-  arena_.resize(arena_bytes);
+Frame::Frame(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageExpandParams& params) {
+  const PelageMeshDesc desc = mesh.desc();
+  check(pelage_frame_new(&desc, guides.guide_count, params.points_per_strand, &frame_), "pelage_frame_new");
+  const PelageStatus s = pelage_frame_set_guides(frame_, &guides, params.thread_count);
+  if (s != PELAGE_STATUS_OK) {
+    pelage_frame_free(frame_);
+    check(s, "pelage_frame_set_guides");
+  }
 }
 
-void Expander::expand(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageRoot* strands,
-                      const PelageStrandBinding* bindings, const PelageStrandGroom* grooms, size_t count,
-                      float* points, size_t capacity, uint32_t* curve_counts, uint32_t* curve_ids) {
-  const PelageMeshDesc desc = mesh.desc();
-  check(pelage_expand(&desc, &guides, strands, bindings, grooms, count, &params_, arena_.data(), arena_.size(),
-                      points, 4 * sizeof(float), capacity, curve_counts, curve_ids),
-        "pelage_expand");
+Expander::Expander(const PelageExpandParams& params) : params_(params) {
+  check(pelage_expand_query(&params_, &per_curve_), "pelage_expand_query");
+}
+
+void Expander::expand(const Frame& frame, const PelageRoot* strands, const PelageStrandBinding* bindings,
+                      const PelageStrandGroom* grooms, size_t count, float* points, size_t capacity,
+                      uint32_t* curve_counts, uint32_t* curve_ids) {
+  const PelageStrands records{strands, bindings, grooms, count};
+  const PelageCurves curves{points, 4 * sizeof(float), capacity, curve_counts, curve_ids};
+  check(pelage_expand(frame.get(), &records, &params_, &curves), "pelage_expand");
 }
 
 Groom::Groom(const PelageRoot* strands, const PelageStrandBinding* bindings, const PelageStrandGroom* grooms,
              size_t count) {
-  check(pelage_groom_new(strands, bindings, grooms, count, &groom_), "pelage_groom_new");
+  const PelageStrands records{strands, bindings, grooms, count};
+  check(pelage_groom_new(&records, &groom_), "pelage_groom_new");
 }
 
-void Expander::expand(const Mesh& mesh, const PelageGuidesDesc& guides, const Groom& groom, size_t first,
-                      size_t count, float* points, size_t capacity) {
-  const PelageMeshDesc desc = mesh.desc();
-  check(pelage_groom_expand(groom.get(), &desc, &guides, first, count, &params_, arena_.data(), arena_.size(), points,
-                            4 * sizeof(float), capacity, nullptr, nullptr),
-        "pelage_groom_expand");
+void Expander::expand(const Frame& frame, const Groom& groom, size_t first, size_t count, float* points,
+                      size_t capacity) {
+  const PelageCurves curves{points, 4 * sizeof(float), capacity, nullptr, nullptr};
+  check(pelage_groom_expand(groom.get(), frame.get(), first, count, &params_, &curves), "pelage_groom_expand");
 }
 
 std::vector<uint32_t> segment_indices(size_t curves, size_t per_curve) {

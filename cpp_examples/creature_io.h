@@ -164,28 +164,41 @@ class Groom {
   PelageGroom groom_ = nullptr;
 };
 
-// pelage_expand with an arena sized once (per groom) and reused every frame.
+// One frame (pelage_frame_new, pelage_frame_set_guides): the deformed mesh
+// copied and checked, its tangents, and the posed guides, prepared once for
+// every expansion of the frame. Throws.
+class Frame {
+ public:
+  Frame(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageExpandParams& params);
+  ~Frame() { pelage_frame_free(frame_); }
+  Frame(const Frame&) = delete;
+  Frame& operator=(const Frame&) = delete;
+  PelageFrame get() const { return frame_; }
+
+ private:
+  PelageFrame frame_ = nullptr;
+};
+
+// Expansion parameters and the curves they write.
 class Expander {
  public:
-  // For `guide_count` guides on meshes of `vertex_count` vertices.
-  Expander(size_t guide_count, size_t vertex_count, const PelageExpandParams& params);
+  explicit Expander(const PelageExpandParams& params);
   // float4 points written per curve (points_per_strand, + 2 when pinned).
   size_t points_per_curve() const { return per_curve_; }
   const PelageExpandParams& params() const { return params_; }
   // Writes the curves of strands[0..count) (bindings and grooms parallel)
-  // into `points`: float4, stride 16, `capacity` points. Throws.
-  void expand(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageRoot* strands,
-              const PelageStrandBinding* bindings, const PelageStrandGroom* grooms, size_t count, float* points,
-              size_t capacity, uint32_t* curve_counts = nullptr, uint32_t* curve_ids = nullptr);
+  // into `points`: float4, stride 16, `capacity` points (pelage_expand:
+  // the records are checked). Throws.
+  void expand(const Frame& frame, const PelageRoot* strands, const PelageStrandBinding* bindings,
+              const PelageStrandGroom* grooms, size_t count, float* points, size_t capacity,
+              uint32_t* curve_counts = nullptr, uint32_t* curve_ids = nullptr);
   // The same for the strands first..first + count of `groom`
   // (pelage_groom_expand: the records are not checked again).
-  void expand(const Mesh& mesh, const PelageGuidesDesc& guides, const Groom& groom, size_t first, size_t count,
-              float* points, size_t capacity);
+  void expand(const Frame& frame, const Groom& groom, size_t first, size_t count, float* points, size_t capacity);
 
  private:
   PelageExpandParams params_;
   size_t per_curve_ = 0;
-  std::vector<unsigned char> arena_;
 };
 
 // Embree's index buffer for `curves` curves of `per_curve` points stored back

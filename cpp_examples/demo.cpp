@@ -233,7 +233,7 @@ int main(int argc, char** argv) try {
 
   // 7. Embree geometry sharing our buffers: every hair for the camera; the
   // segments of the hairs with rank < N/2 (same vertex buffer) for shadows.
-  creature::Expander expander(guide_roots.size(), mesh.vertex_count(), ep);
+  creature::Expander expander(ep);
   const size_t per = expander.points_per_curve(), segments = per - 3;
   std::vector<float> points(4 * per * n);  // the vertex buffer Embree reads
   const std::vector<uint32_t> indices = creature::segment_indices(n, per);
@@ -253,11 +253,14 @@ int main(int argc, char** argv) try {
   creature::attach_curves(device.device, shadow, points.data(), per * n, shadow_indices.data(), shadow_indices.size());
   device.check("geometry");
 
-  // 8. Expand: a frame's work once guides are posed (here: the rest pose).
+  // 8. A frame's work once guides are posed (here: the rest pose): the
+  // frame prepared once (mesh, tangents, guides in their root frames), then
+  // the hairs expanded from it (a renderer would expand patch ranges).
   std::vector<double> frame_s;
   for (int f = 0; f < opt.frames; ++f) {
     clock = {};
-    expander.expand(mesh, guides, fur, 0, n, points.data(), per * n);
+    const creature::Frame frame(mesh, guides, ep);
+    expander.expand(frame, fur, 0, n, points.data(), per * n);
     frame_s.push_back(clock.seconds());
   }
   std::sort(frame_s.begin(), frame_s.end());

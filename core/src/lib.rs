@@ -5,6 +5,26 @@
 //! runs unchanged inside a DCC plugin, a render procedural or a `no_std` target.
 //! Randomness is counter-based ([`rng`]), so results never depend on call order,
 //! chunking or thread count.
+//!
+//! # Public surface
+//! Modules are grouped by the paper's stages, and data flows downward:
+//! - [`surface`]: the mesh and what is read off it (maps, parting regions,
+//!   root frames, the body's inside test, point grids).
+//! - [`stamp`]: Poisson stamping of roots (paper 2.3); `stamp::tile` and
+//!   `stamp::chart` are public for inspection and tests.
+//! - [`interp`]: bind, groom values, settle, and per frame the posed frame
+//!   ([`interp::posed::PosedFrame`]), the strand kernel
+//!   ([`interp::strand`]), strand records and their checks
+//!   ([`interp::strands`]) and the expansion driver ([`interp::expand`]).
+//! - Shared data and memory: [`arena`], [`error`], [`guides`], [`root`],
+//!   [`rng`], [`strided`].
+//!
+//! Hosts need [`stamp::stamp`], [`interp::bind::bind`],
+//! [`interp::groom::GroomMaps`], [`interp::settle::settle`],
+//! [`interp::posed::PosedFrame`] and [`interp::expand::ExpandJob`] (or
+//! [`interp::expand::expand`]); the lower-level items (the hash grid, the
+//! counter-based RNG, tile and chart queries, the strand checks) are public
+//! because the C API, the end-to-end tests and the benchmarks use them.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]

@@ -235,7 +235,8 @@ Fur grow(const creature::Mesh& mesh, const PelageGuidesDesc& guides, const std::
   f.points.resize(4 * per * roots.size());
   if (with_counts) f.counts.assign(roots.size(), 0xCDCDCDCDu), f.ids.assign(roots.size(), 0xCDCDCDCDu);
   clock = {};
-  expander.expand(mesh, guides, roots.data(), f.bindings.data(), f.grooms.data(), roots.size(), f.points.data(),
+  const creature::Frame frame(mesh, guides, expander.params());
+  expander.expand(frame, roots.data(), f.bindings.data(), f.grooms.data(), roots.size(), f.points.data(),
                   per * roots.size(), with_counts ? f.counts.data() : nullptr, with_counts ? f.ids.data() : nullptr);
   f.expand_s = clock.seconds();
   return f;
@@ -328,7 +329,7 @@ int main(int argc, char** argv) try {
   ep.end_points = PELAGE_END_POINTS_PINNED;
   ep.orphan_length = kGuideLength;
   ep.thread_count = 0;
-  creature::Expander expander(guide_roots.size(), mesh.vertex_count(), ep);
+  creature::Expander expander(ep);
   const size_t per = expander.points_per_curve();
   Fur fur = grow(mesh, guides, roots, maps, expander, true);
   std::printf("\nbind %.2f s (%u orphans of %zu, mean guide length %.4f, spacing %.4f); groom %.3f s; "

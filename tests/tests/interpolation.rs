@@ -524,6 +524,8 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
         bindings.len(),
         null_mut(),
     );
+    // SAFETY: pelage_last_error returns a valid NUL-terminated string that
+    // lives until the next failing call on this thread.
     assert_eq!(s, PelageStatus::Ok, "{:?}", unsafe {
         std::ffi::CStr::from_ptr(pelage_last_error())
     });

@@ -85,8 +85,11 @@ impl<'r, 'a> ExpandJob<'r, 'a> {
 
     /// [`ExpandJob::run`] compiled for AVX2: the same operations in the same
     /// order (no fused multiply-add), so the same bits, in wider registers.
-    /// Calling it needs `unsafe`: the host checks first that the CPU has
-    /// AVX2 (for example with `is_x86_feature_detected!("avx2")`).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2: the host checks first (for example with
+    /// `is_x86_feature_detected!("avx2")`); outside an AVX2 context the call
+    /// needs `unsafe`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     pub fn run_avx2(&self, range: Range<usize>, out: &mut [u8]) {

@@ -23,6 +23,7 @@ pub struct GroomMaps<'a> {
     pub clump: ScalarMap<'a>,
 }
 
+/// Every default is a constant map (the C API hands them out as constants).
 impl Default for GroomMaps<'_> {
     fn default() -> Self {
         GroomMaps {

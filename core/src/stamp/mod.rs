@@ -226,7 +226,6 @@ pub struct Stamper<'m, 'a> {
     target: u32,
     faces: &'a [Face],
     places: &'a [TilePlace],
-    scaled_area: f64,
     first_radius: f32,
     radius: f32,
     /// The radius was given: one pass, every root kept.
@@ -346,7 +345,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
             target: params.target_count,
             faces,
             places,
-            scaled_area: area,
             first_radius: radius,
             fixed,
             radius,
@@ -398,16 +396,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
             r = (libm::sqrt(stamped / (aim + self.predicted_loss(r))) as f32).max(floor);
         }
         r
-    }
-
-    /// Current disk radius.
-    pub fn radius(&self) -> f32 {
-        self.radius
-    }
-
-    /// Sum of triangle areas weighted by squared density scale.
-    pub fn scaled_area(&self) -> f64 {
-        self.scaled_area
     }
 
     /// Upper bound on the candidates [`stamp_faces`](Self::stamp_faces) writes

@@ -1,0 +1,2 @@
+# Empty dependencies file for asan_canary.
+# This may be replaced when dependencies are built.

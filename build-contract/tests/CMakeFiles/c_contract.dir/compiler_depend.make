@@ -1,0 +1,2 @@
+# Empty compiler generated dependencies file for c_contract.
+# This may be replaced when dependencies are built.

@@ -1,0 +1,2 @@
+# Empty dependencies file for header_c99.
+# This may be replaced when dependencies are built.
