@@ -100,6 +100,10 @@ pub extern "C" fn pelage_groom_maps_defaults() -> PelageGroomMaps {
 /// Samples the groom maps at `root_count` strand roots (once per groom) into
 /// `grooms` (capacity `grooms_capacity`). Nothing is written on failure.
 ///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a map's kind, size or
+/// stride; a texture map without mesh uvs), NON_FINITE, OUT_OF_RANGE (a
+/// root's face), CAPACITY_EXCEEDED (`grooms_capacity`), MISALIGNED, PANIC.
+///
 /// Thread safety: reentrant; concurrent calls need distinct outputs.
 #[no_mangle]
 pub extern "C" fn pelage_groom_evaluate(

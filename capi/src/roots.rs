@@ -35,6 +35,10 @@ const _: () =
 /// 1e-4) before anything is written. The two outputs may interleave in one
 /// buffer; neither may overlap the inputs.
 ///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a root outside its
+/// triangle, a stride), NON_FINITE, OUT_OF_RANGE (a face), MISALIGNED,
+/// PANIC.
+///
 /// Thread safety: reentrant; concurrent calls may share inputs but not outputs.
 #[no_mangle]
 pub extern "C" fn pelage_roots_evaluate(

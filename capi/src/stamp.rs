@@ -98,6 +98,10 @@ fn core_params<'a>(
 /// Sizes a stamping call: the arena bytes `pelage_stamp` needs and an upper
 /// bound on the roots it writes. Validates the mesh and parameters.
 ///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, density map,
+/// strides, mesh values beyond 1e9), NON_FINITE, OUT_OF_RANGE, MISALIGNED,
+/// PANIC.
+///
 /// Thread safety: reentrant; the inputs must not change during the call.
 #[no_mangle]
 pub extern "C" fn pelage_stamp_query(
@@ -133,6 +137,10 @@ pub extern "C" fn pelage_stamp_query(
 /// of roots needed when the root buffer was the limit; nothing else is written.
 /// `params->progress`, when set, reports progress and can cancel the call
 /// (PELAGE_STATUS_CANCELLED, nothing written).
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
+/// CAPACITY_EXCEEDED (the arena, or `roots_capacity`), MISALIGNED,
+/// CANCELLED, PANIC.
 ///
 /// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 #[no_mangle]
