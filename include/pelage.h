@@ -574,6 +574,10 @@ struct PelageGroomMaps pelage_groom_maps_defaults(void);
 // Samples the groom maps at `root_count` strand roots (once per groom) into
 // `grooms` (capacity `grooms_capacity`). Nothing is written on failure.
 //
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a map's kind, size or
+// stride; a texture map without mesh uvs), NON_FINITE, OUT_OF_RANGE (a
+// root's face), CAPACITY_EXCEEDED (`grooms_capacity`), MISALIGNED, PANIC.
+//
 // Thread safety: reentrant; concurrent calls need distinct outputs.
 enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const struct PelageGroomMaps *maps, const struct PelageRoot *roots, size_t root_count, struct PelageStrandGroom *grooms, size_t grooms_capacity);
 
@@ -628,6 +632,10 @@ enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size
 // 1e-4) before anything is written. The two outputs may interleave in one
 // buffer; neither may overlap the inputs.
 //
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a root outside its
+// triangle, a stride), NON_FINITE, OUT_OF_RANGE (a face), MISALIGNED,
+// PANIC.
+//
 // Thread safety: reentrant; concurrent calls may share inputs but not outputs.
 enum PelageStatus pelage_roots_evaluate(const struct PelageMeshDesc *mesh, const struct PelageRoot *roots, size_t root_count, void *positions, size_t position_stride, void *normals, size_t normal_stride);
 
@@ -671,6 +679,10 @@ struct PelageStampParams pelage_stamp_params_defaults(void);
 // Sizes a stamping call: the arena bytes `pelage_stamp` needs and an upper
 // bound on the roots it writes. Validates the mesh and parameters.
 //
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, density map,
+// strides, mesh values beyond 1e9), NON_FINITE, OUT_OF_RANGE, MISALIGNED,
+// PANIC.
+//
 // Thread safety: reentrant; the inputs must not change during the call.
 enum PelageStatus pelage_stamp_query(const struct PelageMeshDesc *mesh, const struct PelageStampParams *params, size_t *arena_bytes, size_t *max_roots);
 
@@ -686,6 +698,10 @@ enum PelageStatus pelage_stamp_query(const struct PelageMeshDesc *mesh, const st
 // of roots needed when the root buffer was the limit; nothing else is written.
 // `params->progress`, when set, reports progress and can cancel the call
 // (PELAGE_STATUS_CANCELLED, nothing written).
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
+// CAPACITY_EXCEEDED (the arena, or `roots_capacity`), MISALIGNED,
+// CANCELLED, PANIC.
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct PelageStampParams *params, void *arena, size_t arena_bytes, struct PelageRoot *roots, size_t roots_capacity, size_t *root_count, struct PelageStampInfo *info);
