@@ -12,7 +12,13 @@ const MAX_THREADS: usize = 64;
 /// threads than cores never helps, and the cap keeps a huge "as many as
 /// possible" value from spawning one thread per strand.
 fn thread_total(thread_count: u32) -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // asked once: on Linux the answer reads cgroup files (tens of
+    // microseconds), which a renderer's per-patch calls would pay each time
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    if thread_count == 1 {
+        return 1;
+    }
+    let cores = *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     match thread_count {
         0 => cores,
         n => (n as usize).min(cores.max(MAX_THREADS)),

@@ -87,14 +87,25 @@ impl StrandBounds {
             if !strand_is_valid(faces, guides, r, b, g) {
                 check_strand(faces, guides, r, b, g).map_err(|e| e.shifted(i))?;
             }
+            // the strand's largest guide + 1, without a branch per slot
+            let count = b.count as usize;
+            let clump = if b.clump == NO_GUIDE {
+                0
+            } else {
+                b.clump as usize + 1
+            };
+            let used = (0..MAX_NEIGHBOURS).fold(clump, |m, k| {
+                m.max(if k < count {
+                    b.guides[k] as usize + 1
+                } else {
+                    0
+                })
+            });
             if r.face as usize >= bounds.faces.0 {
                 bounds.faces = (r.face as usize + 1, i);
             }
-            let clump = (b.clump != NO_GUIDE).then_some(&b.clump);
-            for &k in b.guides[..b.count as usize].iter().chain(clump) {
-                if k as usize >= bounds.guides.0 {
-                    bounds.guides = (k as usize + 1, i);
-                }
+            if used > bounds.guides.0 {
+                bounds.guides = (used, i);
             }
         }
         Ok(bounds)
