@@ -1,2 +1,0 @@
-# Empty dependencies file for asan_canary.
-# This may be replaced when dependencies are built.

@@ -1,2 +1,0 @@
-# Empty dependencies file for c_contract.
-# This may be replaced when dependencies are built.

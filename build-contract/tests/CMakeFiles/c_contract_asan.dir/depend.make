@@ -1,2 +1,0 @@
-# Empty dependencies file for c_contract_asan.
-# This may be replaced when dependencies are built.

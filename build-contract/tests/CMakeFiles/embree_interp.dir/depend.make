@@ -1,2 +1,0 @@
-# Empty dependencies file for embree_interp.
-# This may be replaced when dependencies are built.

@@ -1,2 +1,0 @@
-# Empty dependencies file for header_c99.
-# This may be replaced when dependencies are built.
