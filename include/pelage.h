@@ -589,7 +589,7 @@ enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const
 // it is left untouched.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
-// PANIC.
+// MISALIGNED (a record pointer), PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_groom_new(const struct PelageStrands *strands, PelageGroom *out_groom);

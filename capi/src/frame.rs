@@ -93,6 +93,19 @@ pub extern "C" fn pelage_frame_new(
     ffi_boundary! {
         let out = req_mut(out_frame, "out_frame")?;
         let host = req(mesh, "mesh")?.view()?;
+        let points = points_per_strand as usize;
+        // everything is checked before anything is allocated, so a bad
+        // count is a status, not an allocation that aborts the host
+        PosedFrame::check_sizes(guide_count, points)?;
+        host.check()?;
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, host.positions.len(), guide_count, points);
+        let mut storage = Vec::new();
+        storage.try_reserve_exact(layout.bytes()).map_err(|_| {
+            Failure::new(PelageStatus::InvalidArgument, format!("cannot allocate {} bytes for the frame", layout.bytes()))
+        })?;
+        storage.resize(layout.bytes(), 0u8);
+        let arena = Buffer::new(storage);
         let positions = copy(host.positions);
         let triangles = copy(host.triangles);
         let uvs = host.uvs.map(copy);
@@ -103,10 +116,6 @@ pub extern "C" fn pelage_frame_new(
         );
         mesh.uvs = uvs.as_ref().map(|b| Strided::from_slice(b.borrow()));
         mesh.normals = normals.as_ref().map(|b| Strided::from_slice(b.borrow()));
-        let points = points_per_strand as usize;
-        let mut layout = ArenaLayout::new();
-        PosedFrame::layout(&mut layout, host.positions.len(), guide_count, points);
-        let arena = Buffer::new(vec![0u8; layout.bytes()]);
         let posed = PosedFrame::new(mesh, guide_count, points, &mut Arena::new(arena.borrow()))?;
         let frame = Box::new(Frame {
             posed,

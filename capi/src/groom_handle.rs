@@ -56,7 +56,7 @@ fn groom_ref<'a>(groom: PelageGroom) -> Result<&'a Groom, Failure> {
 /// it is left untouched.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
-/// PANIC.
+/// MISALIGNED (a record pointer), PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]

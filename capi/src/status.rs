@@ -109,7 +109,7 @@ impl From<Error> for Failure {
             Error::CapacityExceeded { .. } | Error::OutputTooSmall { .. } => {
                 PelageStatus::CapacityExceeded
             }
-            Error::InvalidArgument(_) | Error::BadStride { .. } | Error::TooLarge { .. } => {
+            Error::InvalidArgument(_) | Error::BadStride { .. } | Error::OutOfDomain { .. } => {
                 PelageStatus::InvalidArgument
             }
             Error::NonFinite { .. } => PelageStatus::NonFinite,

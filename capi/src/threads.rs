@@ -169,7 +169,13 @@ pub(crate) fn split_with_progress<T: Send, R: Send>(
             per,
             |sub, p| work(sub.start + start..sub.end + start, p),
         )?);
-        progress.report(range.end as f64 / n.max(1) as f64)?;
+        // with nothing to do, the one round finishes all of it
+        let done = if n == 0 {
+            1.0
+        } else {
+            range.end as f64 / n as f64
+        };
+        progress.report(done)?;
     }
     Ok(results)
 }

@@ -48,11 +48,12 @@ pub enum Error {
         /// Which input is malformed.
         what: &'static str,
     },
-    /// A finite input value beyond the magnitude pelage accepts (so that
-    /// every result stays finite; the limits are documented where the
-    /// input is, such as `surface::mesh::MAX_COORDINATE`).
-    TooLarge {
-        /// Which input holds the value, and its limit.
+    /// A finite input value outside the range pelage accepts for it (a
+    /// weight outside 0..=1, a coordinate beyond
+    /// `surface::mesh::MAX_COORDINATE`: limits that keep every result
+    /// finite, documented where the input is).
+    OutOfDomain {
+        /// Which input holds the value, and its accepted range.
         what: &'static str,
         /// Element index within that input.
         index: usize,
@@ -83,7 +84,7 @@ impl Error {
                 what,
                 index: index + by,
             },
-            Error::TooLarge { what, index } => Error::TooLarge {
+            Error::OutOfDomain { what, index } => Error::OutOfDomain {
                 what,
                 index: index + by,
             },
@@ -137,8 +138,11 @@ impl fmt::Display for Error {
                     "{what}: stride smaller than the element or buffer too short"
                 )
             }
-            Error::TooLarge { what, index } => {
-                write!(f, "value too large in {what} at element {index}")
+            Error::OutOfDomain { what, index } => {
+                write!(
+                    f,
+                    "value outside the accepted range in {what} at element {index}"
+                )
             }
             Error::Corrupt { what } => write!(f, "corrupt data: {what}"),
             Error::VersionMismatch { found, supported } => write!(

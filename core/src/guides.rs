@@ -124,8 +124,8 @@ impl Guides<'_> {
             .iter()
             .position(|p| p.iter().any(|c| c.abs() > limit))
         {
-            return Err(Error::TooLarge {
-                what: "guide points (beyond 1e9)",
+            return Err(Error::OutOfDomain {
+                what: "guide points (within 1e9)",
                 index,
             });
         }

@@ -11,14 +11,25 @@
  * Then the success path on a UV sphere: counts, ranges, ranks, ids, root
  * positions on their triangles, determinism, strided outputs, maps.
  *
- * Interpolation (bind, groom, expand, segment indices) gets the same
- * treatment on the sphere with a few dozen guides and a few hundred strands:
- * every pointer NULL, short arenas and outputs, bad strides, NaN, zero-length
- * and zero guides, roots off the mesh, bad parameters, maps and bindings;
- * every output canary-filled and checked untouched after each failure. The
- * success path checks bindings, grooms, pinned curves on their roots, counts,
- * ids, thread-count and range independence, strided output, RAW ends and the
- * segment index buffer.
+ * Interpolation (bind, groom, frame, expand, groom handle, settle, segment
+ * indices) gets the same treatment on the sphere with a few dozen guides and
+ * a few hundred strands: every pointer NULL, short arenas and outputs, bad
+ * strides, NaN, zero-length and zero guides, roots off the mesh, bad
+ * parameters, maps and bindings; every output canary-filled and checked
+ * untouched after each failure. The success path checks bindings, grooms,
+ * pinned curves on their roots, counts, ids, thread-count and range
+ * independence, strided output, RAW ends and the segment index buffer.
+ *
+ * The frame handle (PelageFrame): NULL arguments, a frame without guides, a
+ * guide count or point count other than the frame's (a failed
+ * pelage_frame_set_guides keeps the guides the frame had), a copied mesh,
+ * re-posing, a deformed pose. Hostile inputs must never give OK with
+ * non-finite output: values beyond the documented limits (mesh and guide
+ * coordinates beyond 1e9, binding weights outside 0..1, groom values beyond
+ * 1e6, orphan_length beyond 1e9) are refused with nothing written, and the
+ * legal extremes give finite curves. Progress callbacks (bind, expand,
+ * groom_expand, settle, stamp) rise to 1 on the calling thread without
+ * changing the bits, and a false return cancels at once.
  *
  * Bad inputs are memory-safe: a buffer declared with stride 13 really holds
  * elements 13 bytes apart, so a missing check shows up as a wrong status,
@@ -186,8 +197,9 @@ static size_t g_arena_bytes;
 static PelageRoot *g_roots;           /* the reference result */
 static size_t g_count, g_capacity;
 
-/* Runs stamp_query, stamp and (optionally) roots_evaluate on `mesh` with
- * otherwise valid arguments; each must fail with `want`, outputs untouched. */
+/* Runs stamp_query, stamp and (optionally) bind_query, frame_new and
+ * roots_evaluate on `mesh` with otherwise valid arguments; each must fail with
+ * `want`, outputs (and *out_frame) untouched. */
 static void bad_mesh_(int line, const char *name, const PelageMeshDesc *mesh, const PelageStampParams *params,
                       PelageStatus want, int evaluate) {
   char what[160];
@@ -218,6 +230,16 @@ static void bad_mesh_(int line, const char *name, const PelageMeshDesc *mesh, co
     expect_(__FILE__, line, what, pelage_bind_query(mesh, 100, &bind_bytes), want);
     if (!untouched(&bind_bytes, sizeof bind_bytes)) {
       ++g_failures, fprintf(stderr, "%s:%d: %s wrote its outputs\n", __FILE__, line, what);
+    }
+
+    PelageFrame frame = (PelageFrame)(void *)&g_scratch; /* a canary handle, never dereferenced */
+    snprintf(what, sizeof what, "%s: pelage_frame_new", name);
+    const PelageStatus made = pelage_frame_new(mesh, 100, 16, &frame);
+    expect_(__FILE__, line, what, made, want);
+    if (made == PELAGE_STATUS_OK) {
+      pelage_frame_free(frame);
+    } else if (frame != (PelageFrame)(void *)&g_scratch) {
+      ++g_failures, fprintf(stderr, "%s:%d: %s wrote *out_frame\n", __FILE__, line, what);
     }
 
     const size_t bytes = g_count * 12;
@@ -793,7 +815,7 @@ static void test_evaluate(void) {
   free(pos), free(nrm), free(roots);
 }
 
-/* --- Interpolation: bind, groom, expand, segment indices -------------------------- */
+/* --- Interpolation: bind, groom, frame, expand, segment indices ------------------- */
 
 #define GCVS 8          /* points per guide */
 #define GLEN 0.2f       /* guide length on the unit sphere */
@@ -802,7 +824,8 @@ static void test_evaluate(void) {
 #define MAXSTRIDE 32    /* widest output stride tested (bytes) */
 
 /* The interpolation fixture on the sphere: guides leaning toward -y, strands,
- * and every output buffer the failure cases canary-fill and check. */
+ * a frame posed with the guides, and every output buffer the failure cases
+ * canary-fill and check. */
 typedef struct Interp {
   PelageMeshDesc mesh;
   PelageRoot *guide_roots, *strands;
@@ -817,8 +840,8 @@ typedef struct Interp {
   PelageGroomMaps maps;
   PelageStrandGroom *grooms; /* the reference grooms */
   PelageExpandParams expand_params;
-  unsigned char *expand_arena;
-  size_t expand_arena_bytes, per;
+  PelageFrame frame; /* the rest pose, posed with the guides at expand_params.points_per_strand */
+  size_t per;
   float *points; /* the reference curves, stride 16 */
   /* outputs of the failure cases */
   PelageStrandBinding *bind_out;
@@ -870,15 +893,43 @@ static int outputs_untouched(void) {
     }                                                                                       \
   } while (0)
 
+/* The records and curve buffers of pelage_expand and pelage_groom_expand, field by field. */
+static PelageStrands records(const PelageRoot *roots, const PelageStrandBinding *bindings,
+                             const PelageStrandGroom *grooms, size_t count) {
+  PelageStrands s;
+  s.roots = roots, s.bindings = bindings, s.grooms = grooms, s.count = count;
+  return s;
+}
+static PelageCurves curves_of(void *points, size_t stride, size_t capacity, uint32_t *counts, uint32_t *ids) {
+  PelageCurves c;
+  c.points = points, c.point_stride = stride, c.point_capacity = capacity;
+  c.curve_counts = counts, c.curve_ids = ids;
+  return c;
+}
+static PelageStatus expand_(PelageFrame frame, const PelageRoot *roots, const PelageStrandBinding *bindings,
+                            const PelageStrandGroom *grooms, size_t count, const PelageExpandParams *params,
+                            void *points, size_t stride, size_t capacity, uint32_t *counts, uint32_t *ids) {
+  const PelageStrands s = records(roots, bindings, grooms, count);
+  const PelageCurves c = curves_of(points, stride, capacity, counts, ids);
+  return pelage_expand(frame, &s, params, &c);
+}
+static PelageStatus groom_expand_(PelageGroom groom, PelageFrame frame, size_t first, size_t count,
+                                  const PelageExpandParams *params, void *points, size_t stride, size_t capacity,
+                                  uint32_t *counts, uint32_t *ids) {
+  const PelageCurves c = curves_of(points, stride, capacity, counts, ids);
+  return pelage_groom_expand(groom, frame, first, count, params, &c);
+}
+
 /* The calls with the fixture's valid arguments, one argument replaced. */
 #define BIND(mesh, guides, strands, count, params, arena, bytes, out, capacity) \
   pelage_bind(mesh, guides, strands, count, params, arena, bytes, out, capacity, &g_in.info_out)
 #define BIND_OK_ARGS                                                                                    \
   &g_in.mesh, &g_in.guides, g_in.strands, g_in.strand_count, &g_in.bind_params, g_in.bind_arena, \
       g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count
-#define EXPAND(mesh, guides, strands, bindings, grooms, count, params, arena, bytes, points, stride, capacity) \
-  pelage_expand(mesh, guides, strands, bindings, grooms, count, params, arena, bytes, points, stride, capacity, \
-                g_in.counts_out, g_in.ids_out)
+#define EXPAND(frame, strands, bindings, grooms, count, params, points, stride, capacity) \
+  expand_(frame, strands, bindings, grooms, count, params, points, stride, capacity, g_in.counts_out, g_in.ids_out)
+#define GROOM_EXPAND(groom, frame, first, count, params, points, capacity) \
+  groom_expand_(groom, frame, first, count, params, points, 16, capacity, g_in.counts_out, g_in.ids_out)
 #define POINTS_CAPACITY (g_in.strand_count * g_in.per)
 
 static size_t stamp_sphere(uint32_t target, uint64_t seed, PelageRoot **out) {
@@ -894,11 +945,47 @@ static size_t stamp_sphere(uint32_t target, uint64_t seed, PelageRoot **out) {
   return n;
 }
 
+/* A frame on `mesh` posed with `guides` at `points` points per strand (posed on `threads` threads). */
+static PelageFrame make_frame(const PelageMeshDesc *mesh, const PelageGuidesDesc *guides, uint32_t points,
+                              uint32_t threads) {
+  PelageFrame frame = NULL;
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_new(mesh, guides->guide_count, points, &frame));
+  REQUIRE(frame != NULL);
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(frame, guides, threads));
+  return frame;
+}
+
+/* Every strand expanded on `frame` with `params`: OK, and the reference bits. */
+static int gives_reference(PelageFrame frame, const PelageExpandParams *params) {
+  FILL(g_in.points_out, points_out_bytes());
+  const PelageStatus s = expand_(frame, g_in.strands, g_in.bindings, g_in.grooms, g_in.strand_count, params,
+                                 g_in.points_out, 16, POINTS_CAPACITY, NULL, NULL);
+  if (s != PELAGE_STATUS_OK) fprintf(stderr, "  (expand gave %s: \"%s\")\n", status_name(s), pelage_last_error());
+  return s == PELAGE_STATUS_OK && memcmp(g_in.points_out, g_in.points, POINTS_CAPACITY * 16) == 0;
+}
+/* The frame (still) holds the fixture's guides. */
+#define SAME_AS_REFERENCE(frame) CHECK(gives_reference(frame, &g_in.expand_params))
+
+static size_t count_non_finite(const float *v, size_t count) {
+  size_t bad = 0;
+  for (size_t i = 0; i < count; ++i) bad += !isfinite(v[i]);
+  return bad;
+}
+
+/* The first strand with at least one guide. */
+static size_t first_bound(void) {
+  size_t k = 0;
+  while (k < g_in.strand_count && g_in.bindings[k].count == 0) ++k;
+  REQUIRE(k < g_in.strand_count);
+  return k;
+}
+
 static void test_interp_defaults(void) {
   const PelageBindParams b = pelage_bind_params_defaults();
   CHECK(b.min_neighbours == 3 && b.max_neighbours == 6 && b.seed == 0);
   CHECK(b.min_normal_dot == 0.25f && b.search_factor == 2.5f && b.max_wrap_slope == 0.3f);
   CHECK(b.regions.kind == PELAGE_REGION_KIND_NONE && b.regions.data == NULL && b.thread_count == 1);
+  CHECK(b.progress == NULL && b.progress_user_data == NULL);
   const PelageGroomMaps m = pelage_groom_maps_defaults();
   const PelageMap *all[7] = {&m.length, &m.root_width, &m.tip_width, &m.bend, &m.kink_amplitude, &m.kink_frequency,
                              &m.clump};
@@ -909,9 +996,10 @@ static void test_interp_defaults(void) {
   const PelageExpandParams e = pelage_expand_params_defaults();
   CHECK(e.points_per_strand == 16 && e.end_points == PELAGE_END_POINTS_PINNED);
   CHECK(e.orphan_length == 0.1f && e.thread_count == 1);
+  CHECK(e.progress == NULL && e.progress_user_data == NULL);
 }
 
-/* Guides, strands, bind, groom and expand on the sphere; the success-path invariants. */
+/* Guides, strands, bind, groom, frame and expand on the sphere; the success-path invariants. */
 static void test_interp_success(void) {
   g_in.mesh = sphere_desc(&g_sphere);
   g_in.guide_count = stamp_sphere(NGUIDES, 5, &g_in.guide_roots);
@@ -962,7 +1050,7 @@ static void test_interp_success(void) {
     int ok = b->count >= 1 && b->count <= g_in.bind_params.max_neighbours;
     fewer += b->count < g_in.bind_params.min_neighbours;
     for (uint32_t k = 0; k < b->count && k < 8; ++k) {
-      ok &= b->guides[k] < g_in.guide_count && b->weights[k] >= 0.0f;
+      ok &= b->guides[k] < g_in.guide_count && b->weights[k] >= 0.0f && b->weights[k] <= 1.0f;
       sum += b->weights[k];
     }
     ok &= fabs(sum - 1.0) < 1e-4 && b->clump == b->guides[0]; /* clump: the nearest eligible guide */
@@ -979,6 +1067,19 @@ static void test_interp_success(void) {
   FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
   EXPECT(PELAGE_STATUS_OK, pelage_bind(BIND_OK_ARGS, NULL));
   CHECK(memcmp(g_in.bind_out, g_in.bindings, g_in.strand_count * sizeof *g_in.bind_out) == 0);
+  /* nor on the thread count */
+  {
+    PelageBindParams bp = g_in.bind_params;
+    const unsigned threads[3] = {0, 2, 7};
+    for (int t = 0; t < 3; ++t) {
+      bp.thread_count = threads[t];
+      FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
+      EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &g_in.guides, g_in.strands, g_in.strand_count, &bp,
+                                           g_in.bind_arena, g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count,
+                                           NULL));
+      CHECK(memcmp(g_in.bind_out, g_in.bindings, g_in.strand_count * sizeof *g_in.bind_out) == 0);
+    }
+  }
   /* the same guides read from float4 slots (stride 16) bind the same */
   {
     PelageGuidesDesc wide = g_in.guides;
@@ -1013,24 +1114,26 @@ static void test_interp_success(void) {
   CHECK(bad_groom == 0); /* widths are diameters; the groom holds radii */
   EXPECT(PELAGE_STATUS_OK, pelage_groom_evaluate(&g_in.mesh, &g_in.maps, NULL, 0, NULL, 0));
 
-  /* expand: query, then pinned 16-point curves with counts and ids */
+  /* expand: query, a frame posed with the guides, then pinned 16-point curves with counts and ids */
   g_in.expand_params = pelage_expand_params_defaults();
   g_in.expand_params.orphan_length = g_in.info.mean_guide_length;
-  EXPECT(PELAGE_STATUS_OK,
-         pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &g_in.expand_params, &g_in.expand_arena_bytes, &g_in.per));
+  EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&g_in.expand_params, &g_in.per));
   CHECK(g_in.per == 18);
   REQUIRE(g_in.per >= 4);
   const size_t per = g_in.per, n = g_in.strand_count;
-  g_in.expand_arena = malloc(g_in.expand_arena_bytes);
   g_in.points = malloc(n * per * 16);
   g_in.points_out = malloc(points_out_bytes());
   g_in.counts_out = malloc(n * 4), g_in.ids_out = malloc(n * 4);
   g_in.index_out = malloc(index_out_count() * 4 + 4);
-  REQUIRE(g_in.expand_arena && g_in.points && g_in.points_out && g_in.counts_out && g_in.ids_out && g_in.index_out);
+  REQUIRE(g_in.points && g_in.points_out && g_in.counts_out && g_in.ids_out && g_in.index_out);
+  g_in.frame = NULL;
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_new(&g_in.mesh, g_in.guide_count, g_in.expand_params.points_per_strand,
+                                            &g_in.frame));
+  REQUIRE(g_in.frame != NULL);
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(g_in.frame, &g_in.guides, 1));
   FILL(g_in.points, n * per * 16), FILL(g_in.counts_out, n * 4), FILL(g_in.ids_out, n * 4);
-  EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
-                                         &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes,
-                                         g_in.points, 16, n * per, g_in.counts_out, g_in.ids_out));
+  EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                   g_in.points, 16, n * per, g_in.counts_out, g_in.ids_out));
   float(*root)[3] = malloc(n * sizeof *root);
   REQUIRE(root);
   EXPECT(PELAGE_STATUS_OK, pelage_roots_evaluate(&g_in.mesh, g_in.strands, n, root, 12, NULL, 0));
@@ -1038,7 +1141,7 @@ static void test_interp_success(void) {
   double worst_root = 0.0, shortest = 1e30, longest = 0.0;
   for (size_t i = 0; i < n; ++i) {
     const float *c = g_in.points + 4 * per * i;
-    for (size_t j = 0; j < 4 * per; ++j) non_finite += !isfinite(c[j]);
+    non_finite += count_non_finite(c, 4 * per);
     for (size_t j = 0; j < per; ++j) negative += c[4 * j + 3] < 0.0f;
     double d = 0.0, len = 0.0;
     for (int k = 0; k < 3; ++k) {
@@ -1053,8 +1156,8 @@ static void test_interp_success(void) {
     bad_count += g_in.counts_out[i] != per;
     bad_id += g_in.ids_out[i] != g_in.strands[i].id;
   }
-  printf("expand: %zu curves x %zu points, arena %zu bytes; max |point 0 - root| %.2e; chord %.3f .. %.3f\n", n, per,
-         g_in.expand_arena_bytes, worst_root, shortest, longest);
+  printf("expand: %zu curves x %zu points; max |point 0 - root| %.2e; chord %.3f .. %.3f\n", n, per, worst_root,
+         shortest, longest);
   CHECK(non_finite == 0 && negative == 0);
   CHECK(off_root == 0);  /* PINNED: point 0 is the root */
   CHECK(unpinned == 0);  /* ... repeated as point 1, the tip repeated at the end */
@@ -1063,33 +1166,36 @@ static void test_interp_success(void) {
   CHECK(shortest > 0.05 && longest < 0.4);
   free(root);
 
-  /* the bits do not depend on the thread count, and a range gives the same curves */
+  /* the bits depend neither on the thread count of the expansion nor on that of the posing, and a
+   * range gives the same curves */
   {
     PelageExpandParams p = g_in.expand_params;
     const unsigned threads[3] = {0, 2, 7};
     for (int t = 0; t < 3; ++t) {
       p.thread_count = threads[t];
-      FILL(g_in.points_out, points_out_bytes());
-      EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
-                                             &p, g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16,
-                                             n * per, NULL, NULL));
-      CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) == 0);
+      CHECK(gives_reference(g_in.frame, &p));
+      PelageFrame f = make_frame(&g_in.mesh, &g_in.guides, g_in.expand_params.points_per_strand, threads[t]);
+      SAME_AS_REFERENCE(f);
+      pelage_frame_free(f);
     }
     const size_t first = n / 3;
-    FILL(g_in.points_out, points_out_bytes());
-    EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands + first, g_in.bindings + first,
-                                           g_in.grooms + first, n - first, &g_in.expand_params, g_in.expand_arena,
-                                           g_in.expand_arena_bytes, g_in.points_out, 16, (n - first) * per, NULL,
-                                           NULL));
+    FILL(g_in.points_out, points_out_bytes()), FILL(g_in.counts_out, n * 4), FILL(g_in.ids_out, n * 4);
+    EXPECT(PELAGE_STATUS_OK, EXPAND(g_in.frame, g_in.strands + first, g_in.bindings + first, g_in.grooms + first,
+                                    n - first, &g_in.expand_params, g_in.points_out, 16, (n - first) * per));
     CHECK(memcmp(g_in.points_out, g_in.points + 4 * per * first, (n - first) * per * 16) == 0);
     CHECK(untouched(g_in.points_out + (n - first) * per * 16, points_out_bytes() - (n - first) * per * 16));
+    size_t wrong = 0;
+    for (size_t i = 0; i < n - first; ++i) {
+      wrong += g_in.counts_out[i] != per || g_in.ids_out[i] != g_in.strands[first + i].id;
+    }
+    CHECK(wrong == 0);
+    CHECK(untouched(g_in.counts_out + (n - first), first * 4) && untouched(g_in.ids_out + (n - first), first * 4));
   }
   /* a padded stride: the same points, the padding untouched */
   {
     FILL(g_in.points_out, points_out_bytes());
-    EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
-                                           &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes,
-                                           g_in.points_out, MAXSTRIDE, n * per, NULL, NULL));
+    EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                     g_in.points_out, MAXSTRIDE, n * per, NULL, NULL));
     size_t differ = 0, padding = 0;
     for (size_t i = 0; i < n * per; ++i) {
       differ += memcmp(g_in.points_out + i * MAXSTRIDE, g_in.points + 4 * i, 16) != 0;
@@ -1097,17 +1203,16 @@ static void test_interp_success(void) {
     }
     CHECK(differ == 0 && padding == 0);
   }
-  /* RAW ends: 16 points per curve, the pinned curve without its repeated ends */
+  /* RAW ends: 16 points per curve, the pinned curve without its repeated ends (the same frame) */
   {
     PelageExpandParams raw = g_in.expand_params;
     raw.end_points = PELAGE_END_POINTS_RAW;
-    size_t bytes = 0, raw_per = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &raw, &bytes, &raw_per));
-    CHECK(raw_per == 16 && bytes <= g_in.expand_arena_bytes);
+    size_t raw_per = 0;
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&raw, &raw_per));
+    CHECK(raw_per == 16);
     FILL(g_in.points_out, points_out_bytes());
-    EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
-                                           &raw, g_in.expand_arena, bytes, g_in.points_out, 16, n * raw_per, NULL,
-                                           NULL));
+    EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &raw, g_in.points_out,
+                                     16, n * raw_per, NULL, NULL));
     size_t differ = 0;
     for (size_t i = 0; i < n; ++i) {
       differ += memcmp(g_in.points_out + 16 * raw_per * i, g_in.points + 4 * (per * i + 1), 16 * raw_per) != 0;
@@ -1115,8 +1220,8 @@ static void test_interp_success(void) {
     CHECK(differ == 0);
   }
   /* no strands */
-  EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, NULL, NULL, NULL, 0, &g_in.expand_params,
-                                         g_in.expand_arena, g_in.expand_arena_bytes, NULL, 16, 0, NULL, NULL));
+  EXPECT(PELAGE_STATUS_OK,
+         expand_(g_in.frame, NULL, NULL, NULL, 0, &g_in.expand_params, NULL, 16, 0, NULL, NULL));
 
   /* segment indices: curve c, segment s -> c * per + s */
   FILL(g_in.index_out, index_out_count() * 4);
@@ -1132,6 +1237,233 @@ static void test_interp_success(void) {
     EXPECT(PELAGE_STATUS_OK, pelage_curves_segment_indices(3, 4, four, 3)); /* one segment per curve */
     CHECK(four[0] == 0 && four[1] == 4 && four[2] == 8);
   }
+}
+
+/* The frame handle: bad arguments leave *out_frame untouched; a frame without guides, or posed for
+ * another point count, is refused; a failed pelage_frame_set_guides keeps the guides the frame had; the
+ * mesh is copied; new guides replace the old; a deformed pose moves the curves with it. */
+static void test_frame(void) {
+  const size_t n = g_in.strand_count, per = g_in.per, points = g_in.guide_count * GCVS;
+  const PelageFrame canary = (PelageFrame)(void *)&g_in; /* never dereferenced */
+  PelageFrame out = canary, f = NULL;
+
+  /* point counts outside 2..64, no guides, and guide counts no machine holds: a status, never an
+   * allocation that aborts the process */
+  const uint32_t bad_points[5] = {0, 1, 65, 1000, UINT32_MAX};
+  for (int i = 0; i < 5; ++i) {
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_new(&g_in.mesh, g_in.guide_count, bad_points[i], &out));
+  }
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_new(&g_in.mesh, 0, 16, &out));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_new(&g_in.mesh, SIZE_MAX, 16, &out));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_new(&g_in.mesh, (size_t)1 << 40, 64, &out));
+  CHECK(out == canary);
+  /* the bounds of the point count are fine */
+  const uint32_t good_points[2] = {2, 64};
+  for (int i = 0; i < 2; ++i) {
+    f = make_frame(&g_in.mesh, &g_in.guides, good_points[i], 1);
+    PelageExpandParams p = g_in.expand_params;
+    size_t pp = 0;
+    p.points_per_strand = good_points[i];
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&p, &pp));
+    CHECK(pp == good_points[i] + 2u);
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &p, g_in.points_out, 16, n * pp));
+    CHECK(count_non_finite((const float *)(const void *)g_in.points_out, n * pp * 4) == 0);
+    CHECK(memcmp(g_in.points_out, g_in.points, 16) == 0); /* the same root */
+    pelage_frame_free(f);
+  }
+  pelage_frame_free(NULL);
+
+  /* a frame without guides: expand and groom_expand refuse it, nothing written */
+  PelageGroom groom = NULL;
+  {
+    const PelageStrands r = records(g_in.strands, g_in.bindings, g_in.grooms, n);
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &groom));
+    REQUIRE(groom != NULL);
+  }
+  f = NULL;
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_new(&g_in.mesh, g_in.guide_count, 16, &f));
+  REQUIRE(f != NULL && f != canary);
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                               g_in.points_out, 16, POINTS_CAPACITY));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+        GROOM_EXPAND(groom, f, 0, n, &g_in.expand_params, g_in.points_out, POINTS_CAPACITY));
+  /* ... even with no strands to expand */
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(f, NULL, NULL, NULL, 0, &g_in.expand_params, NULL, 16, 0));
+  /* guide counts other than the frame's are refused, and leave it without guides */
+  PelageGuidesDesc fewer = g_in.guides, more = g_in.guides;
+  fewer.guide_count -= 1, fewer.point_count -= GCVS;
+  PelageRoot *more_roots = malloc((g_in.guide_count + 1) * sizeof *more_roots);
+  float(*more_points)[3] = malloc((points + GCVS) * sizeof *more_points);
+  REQUIRE(more_roots && more_points);
+  memcpy(more_roots, g_in.guide_roots, g_in.guide_count * sizeof *more_roots);
+  more_roots[g_in.guide_count] = g_in.guide_roots[0];
+  memcpy(more_points, g_in.guide_points, points * sizeof *more_points);
+  memcpy(more_points[points], g_in.guide_points[0], GCVS * sizeof *more_points);
+  more.roots = more_roots, more.guide_count += 1, more.points = more_points, more.point_count += GCVS;
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &fewer, 1));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &more, 2));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                               g_in.points_out, 16, POINTS_CAPACITY));
+  /* posed: the reference bits */
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, 1));
+  SAME_AS_REFERENCE(f);
+  /* a guide count other than the frame's now leaves it with the guides it had */
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &fewer, 1));
+  SAME_AS_REFERENCE(f);
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &more, 0));
+  SAME_AS_REFERENCE(f);
+  /* new guides (a simulation's next frame) replace the old ones: longer guides, longer curves; posing
+   * the old ones again gives the old bits */
+  {
+    float(*longer)[3] = malloc(points * sizeof *longer);
+    REQUIRE(longer);
+    for (size_t g = 0; g < g_in.guide_count; ++g) {
+      for (int j = 0; j < GCVS; ++j) {
+        for (int k = 0; k < 3; ++k) {
+          const float r = g_in.guide_points[g * GCVS][k];
+          longer[g * GCVS + (size_t)j][k] = r + 1.5f * (g_in.guide_points[g * GCVS + (size_t)j][k] - r);
+        }
+      }
+    }
+    PelageGuidesDesc next = g_in.guides;
+    next.points = longer;
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &next, 2));
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                    g_in.points_out, 16, POINTS_CAPACITY));
+    const float *c = (const float *)(const void *)g_in.points_out;
+    double chord_ref = 0.0, chord_new = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      if (g_in.bindings[i].count == 0) continue;
+      const float *a = g_in.points + 4 * per * i, *b = c + 4 * per * i;
+      double da = 0.0, db = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        da += ((double)a[4 * (per - 1) + (size_t)k] - a[k]) * ((double)a[4 * (per - 1) + (size_t)k] - a[k]);
+        db += ((double)b[4 * (per - 1) + (size_t)k] - b[k]) * ((double)b[4 * (per - 1) + (size_t)k] - b[k]);
+      }
+      chord_ref += sqrt(da), chord_new += sqrt(db);
+    }
+    printf("frame: guides 1.5x longer: mean chord of the bound strands %.4f -> %.4f\n", chord_ref / (double)n,
+           chord_new / (double)n);
+    CHECK(chord_new > 1.3 * chord_ref && chord_new < 1.7 * chord_ref);
+    CHECK(memcmp(c, g_in.points, 16) == 0); /* the roots do not move */
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, 0));
+    SAME_AS_REFERENCE(f);
+    free(longer);
+  }
+  free(more_roots), free(more_points);
+  pelage_frame_free(f);
+
+  /* points per strand: a frame posed for 12 points refuses 16-point parameters, and the 16-point frame
+   * 12-point ones; 12-point parameters on the 12-point frame expand */
+  {
+    PelageFrame f12 = make_frame(&g_in.mesh, &g_in.guides, 12, 1);
+    PelageExpandParams p12 = g_in.expand_params;
+    p12.points_per_strand = 12;
+    size_t per12 = 0;
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&p12, &per12));
+    CHECK(per12 == 14);
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(f12, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                                 &g_in.expand_params, g_in.points_out, 16, POINTS_CAPACITY));
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+          GROOM_EXPAND(groom, f12, 0, n, &g_in.expand_params, g_in.points_out, POINTS_CAPACITY));
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+          EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &p12, g_in.points_out, 16, n * per12));
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT, GROOM_EXPAND(groom, g_in.frame, 0, n, &p12, g_in.points_out, n * per12));
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK,
+           EXPAND(f12, g_in.strands, g_in.bindings, g_in.grooms, n, &p12, g_in.points_out, 16, n * per12));
+    const float *c = (const float *)(const void *)g_in.points_out;
+    size_t off_root = 0;
+    for (size_t i = 0; i < n; ++i) off_root += memcmp(c + 4 * per12 * i, g_in.points + 4 * per * i, 16) != 0;
+    CHECK(off_root == 0 && count_non_finite(c, n * per12 * 4) == 0);
+    CHECK(untouched(g_in.points_out + n * per12 * 16, points_out_bytes() - n * per12 * 16));
+    pelage_frame_free(f12);
+  }
+
+  /* the mesh is copied: the host may overwrite and free its buffers once the frame is made */
+  {
+    Sphere copy = sphere_new(g_sphere.rows, g_sphere.cols);
+    const PelageMeshDesc m = sphere_desc(&copy);
+    f = NULL;
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_new(&m, g_in.guide_count, 16, &f));
+    REQUIRE(f != NULL);
+    for (size_t v = 0; v < copy.nv; ++v) copy.p[v][0] = NAN, copy.n[v][1] = INFINITY, copy.uv[v][0] = NAN;
+    memset(copy.t, 0xff, copy.nt * sizeof *copy.t);
+    sphere_free(&copy); /* read after this, ASan and Valgrind object */
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, 1));
+    SAME_AS_REFERENCE(f);
+    pelage_frame_free(f);
+  }
+  /* ... and so are the guides: the frame keeps them resampled */
+  {
+    float(*copy)[3] = malloc(points * sizeof *copy);
+    PelageRoot *roots = malloc(g_in.guide_count * sizeof *roots);
+    REQUIRE(copy && roots);
+    memcpy(copy, g_in.guide_points, points * sizeof *copy);
+    memcpy(roots, g_in.guide_roots, g_in.guide_count * sizeof *roots);
+    PelageGuidesDesc g = g_in.guides;
+    g.points = copy, g.roots = roots;
+    f = make_frame(&g_in.mesh, &g, 16, 2);
+    memset(copy, 0xff, points * sizeof *copy), memset(roots, 0xff, g_in.guide_count * sizeof *roots);
+    free(copy), free(roots);
+    SAME_AS_REFERENCE(f);
+    pelage_frame_free(f);
+  }
+
+  /* a deformed pose: the sphere scaled by 1.5 and moved, the guides with it. The curves start at the
+   * strands' roots on the deformed mesh, and but for the orphans (whose length is absolute) are the
+   * reference curves scaled and moved alike; the radii stay. */
+  {
+    const float scale = 1.5f, shift[3] = {3.0f, -2.0f, 0.5f};
+    float(*dp)[3] = malloc(g_sphere.nv * sizeof *dp), (*dg)[3] = malloc(points * sizeof *dg);
+    float(*root)[3] = malloc(n * sizeof *root);
+    REQUIRE(dp && dg && root);
+    for (size_t v = 0; v < g_sphere.nv; ++v) {
+      for (int k = 0; k < 3; ++k) dp[v][k] = scale * g_sphere.p[v][k] + shift[k];
+    }
+    for (size_t j = 0; j < points; ++j) {
+      for (int k = 0; k < 3; ++k) dg[j][k] = scale * g_in.guide_points[j][k] + shift[k];
+    }
+    PelageMeshDesc dm = g_in.mesh;
+    dm.positions = dp;
+    PelageGuidesDesc dgd = g_in.guides;
+    dgd.points = dg;
+    f = make_frame(&dm, &dgd, 16, 0);
+    FILL(g_in.points_out, points_out_bytes()), FILL(g_in.counts_out, n * 4), FILL(g_in.ids_out, n * 4);
+    EXPECT(PELAGE_STATUS_OK, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                    g_in.points_out, 16, POINTS_CAPACITY));
+    EXPECT(PELAGE_STATUS_OK, pelage_roots_evaluate(&dm, g_in.strands, n, root, 12, NULL, 0));
+    const float *c = (const float *)(const void *)g_in.points_out;
+    double worst_root = 0.0, worst_moved = 0.0;
+    size_t radius_changed = 0, bad_meta = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const float *a = g_in.points + 4 * per * i, *b = c + 4 * per * i;
+      for (int k = 0; k < 3; ++k) {
+        const double d = fabs((double)b[k] - root[i][k]);
+        worst_root = d > worst_root ? d : worst_root;
+      }
+      bad_meta += g_in.counts_out[i] != per || g_in.ids_out[i] != g_in.strands[i].id;
+      for (size_t j = 0; j < per; ++j) {
+        radius_changed += a[4 * j + 3] != b[4 * j + 3];
+        if (g_in.bindings[i].count == 0) continue;
+        for (int k = 0; k < 3; ++k) {
+          const double d = fabs((double)b[4 * j + (size_t)k] - ((double)scale * a[4 * j + (size_t)k] + shift[k]));
+          worst_moved = d > worst_moved ? d : worst_moved;
+        }
+      }
+    }
+    printf("frame: deformed pose (x1.5, moved): max |point 0 - root| %.2e, max |point - moved reference| %.2e\n",
+           worst_root, worst_moved);
+    CHECK(count_non_finite(c, n * per * 4) == 0);
+    CHECK(worst_root < 1e-5 * 4);
+    CHECK(worst_moved < 1e-4);
+    CHECK(radius_changed == 0 && bad_meta == 0);
+    pelage_frame_free(f);
+    free(dp), free(dg), free(root);
+  }
+  pelage_groom_free(groom);
 }
 
 static void test_interp_null_pointers(void) {
@@ -1182,37 +1514,55 @@ static void test_interp_null_pointers(void) {
     EXPECT(PELAGE_STATUS_OK, pelage_groom_evaluate(&g_in.mesh, &maps, g_in.strands, n, g_in.groom_out, n));
   }
 
-  /* pelage_expand_query */
-  size_t *bytes = &g_in.sizes_out[0], *per = &g_in.sizes_out[1];
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, NULL, bytes, per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &g_in.expand_params, NULL, per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &g_in.expand_params, bytes, NULL));
+  /* pelage_frame_new and pelage_frame_set_guides: every pointer argument, and the pointers inside the
+   * descriptors; *out_frame untouched, the frame keeps its guides */
+  {
+    const PelageFrame canary = (PelageFrame)(void *)&g_in; /* never dereferenced */
+    PelageFrame out = canary;
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_new(NULL, g_in.guide_count, 16, &out));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_new(&g_in.mesh, g_in.guide_count, 16, NULL));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_new(&mesh, g_in.guide_count, 16, &out)); /* positions NULL */
+    mesh = g_in.mesh, mesh.indices = NULL;
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_new(&mesh, g_in.guide_count, 16, &out));
+    CHECK(out == canary);
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(NULL, &g_in.guides, 1));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, NULL, 1));
+    guides = g_in.guides, guides.roots = NULL;
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, &guides, 1));
+    guides = g_in.guides, guides.points = NULL;
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, &guides, 2));
+    SAME_AS_REFERENCE(g_in.frame);
+    pelage_frame_free(NULL);
+  }
 
-  /* pelage_expand: every pointer argument (curve_counts and curve_ids are optional) */
-#define EXPAND_NULL(mesh, guides, strands, bindings, grooms, params, arena, points)                               \
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, EXPAND(mesh, guides, strands, bindings, grooms, n, params, arena,          \
-                                             g_in.expand_arena_bytes, points, 16, POINTS_CAPACITY))
-  EXPAND_NULL(NULL, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
-              g_in.points_out);
-  EXPAND_NULL(&g_in.mesh, NULL, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
-              g_in.points_out);
-  EXPAND_NULL(&g_in.mesh, &g_in.guides, NULL, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
-              g_in.points_out);
-  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, NULL, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
-              g_in.points_out);
-  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, NULL, &g_in.expand_params, g_in.expand_arena,
-              g_in.points_out);
-  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, NULL, g_in.expand_arena,
-              g_in.points_out);
-  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, NULL,
-              g_in.points_out);
-  EXPAND_NULL(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params,
-              g_in.expand_arena, NULL);
-  guides = g_in.guides, guides.points = NULL;
-  EXPAND_NULL(&g_in.mesh, &guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
-              g_in.points_out);
-  EXPAND_NULL(&mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, &g_in.expand_params, g_in.expand_arena,
-              g_in.points_out);
+  /* pelage_expand_query */
+  size_t *per = &g_in.sizes_out[1];
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(NULL, per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(&g_in.expand_params, NULL));
+
+  /* pelage_expand: every pointer argument, and the pointers inside the records and the curves
+   * (curve_counts and curve_ids are optional) */
+  {
+    const PelageStrands r = records(g_in.strands, g_in.bindings, g_in.grooms, n);
+    const PelageCurves c = curves_of(g_in.points_out, 16, POINTS_CAPACITY, g_in.counts_out, g_in.ids_out);
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand(NULL, &r, &g_in.expand_params, &c));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand(g_in.frame, NULL, &g_in.expand_params, &c));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand(g_in.frame, &r, NULL, &c));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand(g_in.frame, &r, &g_in.expand_params, NULL));
+  }
+#define EXPAND_NULL(strands, bindings, grooms, points)                                                      \
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, EXPAND(g_in.frame, strands, bindings, grooms, n, &g_in.expand_params, \
+                                             points, 16, POINTS_CAPACITY))
+  EXPAND_NULL(NULL, g_in.bindings, g_in.grooms, g_in.points_out);
+  EXPAND_NULL(g_in.strands, NULL, g_in.grooms, g_in.points_out);
+  EXPAND_NULL(g_in.strands, g_in.bindings, NULL, g_in.points_out);
+  EXPAND_NULL(g_in.strands, g_in.bindings, g_in.grooms, NULL);
+#undef EXPAND_NULL
+  /* the optional outputs may be NULL */
+  FILL(g_in.points_out, points_out_bytes());
+  EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                   g_in.points_out, 16, POINTS_CAPACITY, NULL, g_in.ids_out));
+  CHECK(memcmp(g_in.points_out, g_in.points, POINTS_CAPACITY * 16) == 0);
 
   /* pelage_curves_segment_indices */
   FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_curves_segment_indices(n, g_in.per, NULL, index_out_count()));
@@ -1234,46 +1584,47 @@ static void test_interp_capacity(void) {
   /* groom: one record short */
   FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
         pelage_groom_evaluate(&g_in.mesh, &g_in.maps, g_in.strands, n, g_in.groom_out, n - 1));
-  /* expand: arena half the size, no arena, points one short */
-  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
-        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
-               g_in.expand_arena, g_in.expand_arena_bytes / 2, g_in.points_out, 16, POINTS_CAPACITY));
-  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
-        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params, NULL, 0,
-               g_in.points_out, 16, POINTS_CAPACITY));
-  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
-        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
-               g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY - 1));
-  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
-        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
-               g_in.expand_arena, g_in.expand_arena_bytes, NULL, 16, 0));
+  /* expand: points one short (packed and padded), no point buffer; RAW needs 2 points per curve fewer */
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                                &g_in.expand_params, g_in.points_out, 16, POINTS_CAPACITY - 1));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                                &g_in.expand_params, g_in.points_out, MAXSTRIDE, POINTS_CAPACITY - 1));
+  FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                                &g_in.expand_params, NULL, 16, 0));
+  {
+    PelageExpandParams raw = g_in.expand_params;
+    raw.end_points = PELAGE_END_POINTS_RAW;
+    FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &raw,
+                                                  g_in.points_out, 16, n * (g_in.per - 2) - 1));
+  }
   /* segment indices: one entry short */
   FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
         pelage_curves_segment_indices(n, g_in.per, g_in.index_out, index_out_count() - 1));
-  /* the sizes asked for are enough at any arena alignment, and give the same results */
-  unsigned char *bind_arena = malloc(g_in.bind_arena_bytes + 3), *expand_arena = malloc(g_in.expand_arena_bytes + 3);
-  REQUIRE(bind_arena && expand_arena);
+  /* the bind arena size asked for is enough at any alignment, and any 4-byte aligned place in the
+   * point buffer takes the curves: the same results */
+  unsigned char *bind_arena = malloc(g_in.bind_arena_bytes + 3);
+  REQUIRE(bind_arena);
   for (size_t offset = 0; offset < 4; ++offset) {
     fill_outputs();
     EXPECT(PELAGE_STATUS_OK, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &g_in.bind_params, bind_arena + offset,
                                   g_in.bind_arena_bytes, g_in.bind_out, n));
     CHECK(memcmp(g_in.bind_out, g_in.bindings, n * sizeof *g_in.bind_out) == 0);
-    EXPECT(PELAGE_STATUS_OK, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
-                                    &g_in.expand_params, expand_arena + offset, g_in.expand_arena_bytes,
-                                    g_in.points_out, 16, POINTS_CAPACITY));
-    CHECK(memcmp(g_in.points_out, g_in.points, n * g_in.per * 16) == 0);
+    EXPECT(PELAGE_STATUS_OK, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                    g_in.points_out + 4 * offset, 16, POINTS_CAPACITY));
+    CHECK(memcmp(g_in.points_out + 4 * offset, g_in.points, n * g_in.per * 16) == 0);
+    CHECK(untouched(g_in.points_out, 4 * offset));
   }
-  free(bind_arena), free(expand_arena);
+  free(bind_arena);
 }
 
-/* pelage_bind and pelage_expand with the guides replaced must both fail with `want`. */
+/* pelage_bind and pelage_frame_set_guides with the guides replaced must both fail with `want`; the
+ * frame keeps the guides it had. */
 #define BAD_GUIDES(want, guides_ptr)                                                                                \
   do {                                                                                                              \
     FAILS(want, BIND(&g_in.mesh, guides_ptr, g_in.strands, g_in.strand_count, &g_in.bind_params, g_in.bind_arena, \
                      g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count));                                     \
-    FAILS(want, EXPAND(&g_in.mesh, guides_ptr, g_in.strands, g_in.bindings, g_in.grooms, g_in.strand_count,        \
-                       &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16,       \
-                       POINTS_CAPACITY));                                                                           \
+    FAILS(want, pelage_frame_set_guides(g_in.frame, guides_ptr, 2));                                               \
+    SAME_AS_REFERENCE(g_in.frame);                                                                                  \
   } while (0)
 
 static void test_interp_bad_input(void) {
@@ -1293,7 +1644,7 @@ static void test_interp_bad_input(void) {
   BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g); /* not guide_count x points_per_guide */
   g = g_in.guides, g.points_per_guide = 1, g.point_count = g_in.guide_count;
   BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g); /* a guide needs 2 points */
-  /* zero guides */
+  /* zero guides (for the frame also a guide count other than its own) */
   g = g_in.guides, g.roots = NULL, g.guide_count = 0, g.points = NULL, g.point_count = 0;
   BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
   g = g_in.guides, g.guide_count = 0, g.point_count = 0;
@@ -1323,7 +1674,8 @@ static void test_interp_bad_input(void) {
   BAD_GUIDES(PELAGE_STATUS_NON_FINITE, &g);
   free(copy), free(roots);
 
-  /* strands: a root off the mesh or NaN fails bind, groom and expand; counts that overflow */
+  /* strands: a root off the mesh or NaN fails bind, groom and expand (pelage_groom_new does not know
+   * the mesh: it takes a face past this one, and pelage_groom_expand refuses it); counts that overflow */
   PelageRoot *strands = malloc(n * sizeof *strands);
   REQUIRE(strands);
   memcpy(strands, g_in.strands, n * sizeof *strands);
@@ -1333,19 +1685,61 @@ static void test_interp_bad_input(void) {
     FAILS(want, BIND(&g_in.mesh, &g_in.guides, strands, n, &g_in.bind_params, g_in.bind_arena, g_in.bind_arena_bytes,
                      g_in.bind_out, n));
     FAILS(want, pelage_groom_evaluate(&g_in.mesh, &g_in.maps, strands, n, g_in.groom_out, n));
-    FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
-                       g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY));
+    FAILS(want, EXPAND(g_in.frame, strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params, g_in.points_out, 16,
+                       POINTS_CAPACITY));
+    {
+      PelageExpandParams threads = g_in.expand_params;
+      threads.thread_count = 3; /* checked over threads: the same verdict */
+      FAILS(want, EXPAND(g_in.frame, strands, g_in.bindings, g_in.grooms, n, &threads, g_in.points_out, 16,
+                         POINTS_CAPACITY));
+    }
+    const PelageStrands r = records(strands, g_in.bindings, g_in.grooms, n);
+    PelageGroom groom = NULL;
+    EXPECT(pass == 0 ? PELAGE_STATUS_OK : PELAGE_STATUS_NON_FINITE, pelage_groom_new(&r, &groom));
+    if (pass == 0) {
+      REQUIRE(groom != NULL);
+      FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+            GROOM_EXPAND(groom, g_in.frame, 0, n, &g_in.expand_params, g_in.points_out, POINTS_CAPACITY));
+      /* the groom as a whole is checked against the frame (documented: "the groom's faces"), so a
+       * range without that strand is refused too */
+      FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+            GROOM_EXPAND(groom, g_in.frame, 0, n - 1, &g_in.expand_params, g_in.points_out, (n - 1) * g_in.per));
+      pelage_groom_free(groom);
+    } else {
+      CHECK(groom == NULL);
+    }
     strands[n - 1] = g_in.strands[n - 1];
     strands[n / 2].v = NAN;
+  }
+  /* misaligned records */
+  {
+    const PelageRoot *r2 = restride(g_in.strands, sizeof *g_in.strands, n, sizeof *g_in.strands, 2);
+    const PelageStrandBinding *b2 = restride(g_in.bindings, sizeof *g_in.bindings, n, sizeof *g_in.bindings, 2);
+    const PelageStrandGroom *g2 = restride(g_in.grooms, sizeof *g_in.grooms, n, sizeof *g_in.grooms, 2);
+    FAILS(PELAGE_STATUS_MISALIGNED, EXPAND(g_in.frame, r2, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
+                                           g_in.points_out, 16, POINTS_CAPACITY));
+    FAILS(PELAGE_STATUS_MISALIGNED, EXPAND(g_in.frame, g_in.strands, b2, g_in.grooms, n, &g_in.expand_params,
+                                           g_in.points_out, 16, POINTS_CAPACITY));
+    FAILS(PELAGE_STATUS_MISALIGNED, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g2, n, &g_in.expand_params,
+                                           g_in.points_out, 16, POINTS_CAPACITY));
+    PelageGroom groom = NULL;
+    const PelageStrands r = records(g_in.strands, b2, g_in.grooms, n);
+    EXPECT(PELAGE_STATUS_MISALIGNED, pelage_groom_new(&r, &groom));
+    CHECK(groom == NULL);
   }
   free(strands);
   FAILS(PELAGE_STATUS_INVALID_ARGUMENT, BIND(&g_in.mesh, &g_in.guides, g_in.strands, SIZE_MAX / 8, &g_in.bind_params,
                                              g_in.bind_arena, g_in.bind_arena_bytes, g_in.bind_out, SIZE_MAX));
   FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
         pelage_groom_evaluate(&g_in.mesh, &g_in.maps, g_in.strands, SIZE_MAX / 8, g_in.groom_out, SIZE_MAX));
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
-        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, SIZE_MAX / 8, &g_in.expand_params,
-               g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, SIZE_MAX));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, SIZE_MAX / 8,
+                                               &g_in.expand_params, g_in.points_out, 16, SIZE_MAX));
+  {
+    PelageGroom groom = NULL;
+    const PelageStrands r = records(g_in.strands, g_in.bindings, g_in.grooms, SIZE_MAX / 8);
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_groom_new(&r, &groom));
+    CHECK(groom == NULL);
+  }
 
   /* bind parameters */
   PelageBindParams bp;
@@ -1398,6 +1792,7 @@ static void test_interp_bad_input(void) {
     }
     free(regions);
   }
+#undef BAD_BIND_PARAMS
 
   /* groom maps: zero-size texture, unknown kind, NaN, texture without UVs */
   {
@@ -1426,66 +1821,67 @@ static void test_interp_bad_input(void) {
     m = g_in.maps, m.kink_frequency = t; /* the same map on a mesh with UVs */
     fill_outputs();
     EXPECT(PELAGE_STATUS_OK, pelage_groom_evaluate(&g_in.mesh, &m, g_in.strands, n, g_in.groom_out, n));
+#undef BAD_MAPS
   }
 
-  /* expansion parameters and output layout */
+  /* expansion parameters (pelage_expand_query refuses what pelage_expand refuses) and output layout */
   PelageExpandParams ep;
-#define BAD_EXPAND_PARAMS(want)                                                                               \
-  FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,            \
-                     g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY))
+#define BAD_EXPAND_PARAMS(want)                                                                                    \
+  do {                                                                                                             \
+    FAILS(want, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep, g_in.points_out, 16,         \
+                       POINTS_CAPACITY));                                                                          \
+    FAILS(want, pelage_expand_query(&ep, &g_in.sizes_out[1]));                                                     \
+  } while (0)
   ep = g_in.expand_params, ep.end_points = 9;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &ep, &g_in.sizes_out[0],
-                                                            &g_in.sizes_out[1]));
   ep = g_in.expand_params, ep.points_per_strand = 1;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  ep = g_in.expand_params, ep.points_per_strand = 0;
+  BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
   ep = g_in.expand_params, ep.points_per_strand = 65; /* points_out has room for 67 points per curve */
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
-        EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &ep, g_in.expand_arena,
-               g_in.expand_arena_bytes, g_in.points_out, 16, n * 67));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,
+                                               g_in.points_out, 16, n * 67));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(&ep, &g_in.sizes_out[1]));
+  ep = g_in.expand_params, ep.points_per_strand = UINT32_MAX;
+  BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
   ep = g_in.expand_params, ep.orphan_length = NAN;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
   ep = g_in.expand_params, ep.orphan_length = -1.0f;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
+  ep = g_in.expand_params, ep.orphan_length = INFINITY;
+  BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
   {
-    /* with a buffer sized for the valid 18 points, the invalid count is reported as a capacity problem */
+    /* with a buffer sized for the valid 18 points, the invalid count is still reported (printed) */
     ep = g_in.expand_params, ep.points_per_strand = 65;
-    const PelageStatus s = EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,
-                                  g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, n * g_in.per);
+    const PelageStatus s = EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep, g_in.points_out, 16,
+                                  n * g_in.per);
     printf("note: pelage_expand with points_per_strand 65 and room for %zu points per curve gives %s (\"%s\")\n",
            g_in.per, status_name(s), pelage_last_error());
     CHECK(s != PELAGE_STATUS_OK);
   }
-  {
-    /* pelage_expand_query on points_per_strand outside 2..64: printed, not required */
-    size_t sizes[2] = {0, 0};
-    ep = g_in.expand_params, ep.points_per_strand = 65;
-    const PelageStatus s = pelage_expand_query(g_in.guide_count, g_in.mesh.vertex_count, &ep, &sizes[0], &sizes[1]);
-    printf("note: pelage_expand_query with points_per_strand 65 gives %s (arena %zu, %zu points per curve); "
-           "pelage_expand rejects it\n", status_name(s), sizes[0], sizes[1]);
-  }
 #define BAD_LAYOUT(want, points, stride)                                                                   \
-  FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,              \
-                     &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes, points, stride,   \
-                     POINTS_CAPACITY))
+  FAILS(want, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params, points, \
+                     stride, POINTS_CAPACITY))
   BAD_LAYOUT(PELAGE_STATUS_INVALID_ARGUMENT, g_in.points_out, 12);
   BAD_LAYOUT(PELAGE_STATUS_INVALID_ARGUMENT, g_in.points_out, 0);
   BAD_LAYOUT(PELAGE_STATUS_MISALIGNED, g_in.points_out, 18);
   BAD_LAYOUT(PELAGE_STATUS_MISALIGNED, g_in.points_out + 2, 16);
-  FAILS(PELAGE_STATUS_MISALIGNED, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, g_in.grooms, n,
-                                                &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes,
-                                                g_in.points_out, 16, POINTS_CAPACITY,
-                                                (uint32_t *)(void *)((unsigned char *)g_in.counts_out + 2), NULL));
+  BAD_LAYOUT(PELAGE_STATUS_INVALID_ARGUMENT, g_in.points_out, SIZE_MAX / 8 * 4); /* size overflows */
+#undef BAD_LAYOUT
+  FAILS(PELAGE_STATUS_MISALIGNED,
+        expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params, g_in.points_out, 16,
+                POINTS_CAPACITY, (uint32_t *)(void *)((unsigned char *)g_in.counts_out + 2), NULL));
+  FAILS(PELAGE_STATUS_MISALIGNED,
+        expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params, g_in.points_out, 16,
+                POINTS_CAPACITY, NULL, (uint32_t *)(void *)((unsigned char *)g_in.ids_out + 1)));
 
   /* bindings that point past the guides */
   PelageStrandBinding *b = malloc(n * sizeof *b);
   REQUIRE(b);
-#define BAD_BINDINGS(want)                                                                                  \
-  FAILS(want, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, b, g_in.grooms, n, &g_in.expand_params,     \
-                     g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY))
-  size_t bound = 0;
-  while (bound < n && g_in.bindings[bound].count == 0) ++bound;
-  REQUIRE(bound < n);
+#define BAD_BINDINGS(want)                                                                                   \
+  FAILS(want, EXPAND(g_in.frame, g_in.strands, b, g_in.grooms, n, &g_in.expand_params, g_in.points_out, 16, \
+                     POINTS_CAPACITY))
+  const size_t bound = first_bound();
   memcpy(b, g_in.bindings, n * sizeof *b);
   b[bound].guides[0] = (uint32_t)g_in.guide_count;
   BAD_BINDINGS(PELAGE_STATUS_OUT_OF_RANGE);
@@ -1506,9 +1902,20 @@ static void test_interp_bad_input(void) {
     for (uint32_t k = b[i].count; k < 8; ++k) b[i].guides[k] = UINT32_MAX, b[i].weights[k] = NAN;
   }
   fill_outputs();
-  EXPECT(PELAGE_STATUS_OK, EXPAND(&g_in.mesh, &g_in.guides, g_in.strands, b, g_in.grooms, n, &g_in.expand_params,
-                                  g_in.expand_arena, g_in.expand_arena_bytes, g_in.points_out, 16, POINTS_CAPACITY));
+  EXPECT(PELAGE_STATUS_OK, EXPAND(g_in.frame, g_in.strands, b, g_in.grooms, n, &g_in.expand_params, g_in.points_out,
+                                  16, POINTS_CAPACITY));
   CHECK(memcmp(g_in.points_out, g_in.points, n * g_in.per * 16) == 0);
+  {
+    PelageGroom groom = NULL;
+    const PelageStrands r = records(g_in.strands, b, g_in.grooms, n);
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &groom));
+    fill_outputs();
+    EXPECT(PELAGE_STATUS_OK,
+           GROOM_EXPAND(groom, g_in.frame, 0, n, &g_in.expand_params, g_in.points_out, POINTS_CAPACITY));
+    CHECK(memcmp(g_in.points_out, g_in.points, n * g_in.per * 16) == 0);
+    pelage_groom_free(groom);
+  }
+#undef BAD_BINDINGS
   free(b);
 
   /* segment indices */
@@ -1521,23 +1928,234 @@ static void test_interp_bad_input(void) {
   scratch_free();
 }
 
+/* A copy of the sphere scaled by `scale`, with the fixture's guides scaled alike (for the legal extremes). */
+typedef struct Scaled {
+  float (*p)[3], (*g)[3];
+  PelageMeshDesc mesh;
+  PelageGuidesDesc guides;
+} Scaled;
+static Scaled scaled_new(float scale) {
+  Scaled s;
+  const size_t points = g_in.guide_count * GCVS;
+  s.p = malloc(g_sphere.nv * sizeof *s.p), s.g = malloc(points * sizeof *s.g);
+  REQUIRE(s.p && s.g);
+  for (size_t v = 0; v < g_sphere.nv; ++v) {
+    for (int k = 0; k < 3; ++k) s.p[v][k] = scale * g_sphere.p[v][k];
+  }
+  for (size_t j = 0; j < points; ++j) {
+    for (int k = 0; k < 3; ++k) s.g[j][k] = scale * g_in.guide_points[j][k];
+  }
+  s.mesh = g_in.mesh, s.mesh.positions = s.p;
+  s.guides = g_in.guides, s.guides.points = s.g;
+  return s;
+}
+static void scaled_free(Scaled *s) { free(s->p), free(s->g); }
+
+/* Hostile inputs never give OK with non-finite output: values beyond the documented limits (mesh and
+ * guide coordinates beyond 1e9, binding weights outside 0..1, groom values beyond 1e6, orphan_length
+ * beyond 1e9) are refused with nothing written; values at the limits give finite curves.
+ * (pelage_settle: see test_settle.) */
+static void test_hostile(void) {
+  const Sphere *s = &g_sphere;
+  const size_t n = g_in.strand_count, per = g_in.per, points = g_in.guide_count * GCVS;
+  const PelageGroom canary = (PelageGroom)(void *)&g_in; /* never dereferenced */
+
+  /* mesh values beyond 1e9: finite, but their products are not. Every call that takes a mesh refuses
+   * them (BAD_MESH: stamp_query, stamp, bind_query, frame_new, roots_evaluate) */
+  {
+    float(*p)[3] = malloc(s->nv * sizeof *p), (*nrm)[3] = malloc(s->nv * sizeof *nrm);
+    float(*uv)[2] = malloc(s->nv * sizeof *uv);
+    REQUIRE(p && nrm && uv);
+    PelageMeshDesc m;
+    const float huge[4] = {1e30f, 3e38f, -3e38f, 2e9f};
+    const char *names[4] = {"position 1e30", "position 3e38", "position -3e38", "position 2e9"};
+    for (int i = 0; i < 4; ++i) {
+      memcpy(p, s->p, s->nv * sizeof *p);
+      p[s->nv / 3][i % 3] = huge[i];
+      m = g_in.mesh, m.positions = p;
+      BAD_MESH(names[i], m, PELAGE_STATUS_INVALID_ARGUMENT);
+    }
+    memcpy(nrm, s->n, s->nv * sizeof *nrm);
+    nrm[5][0] = 1e30f;
+    m = g_in.mesh, m.normals = nrm;
+    BAD_MESH("normal 1e30", m, PELAGE_STATUS_INVALID_ARGUMENT);
+    memcpy(uv, s->uv, s->nv * sizeof *uv);
+    uv[5][1] = -3e38f;
+    m = g_in.mesh, m.uvs = uv;
+    BAD_MESH("uv -3e38", m, PELAGE_STATUS_INVALID_ARGUMENT);
+    free(p), free(nrm), free(uv);
+  }
+
+  /* a guide point 1e30 (and 3e38) from its root: set_guides (and bind) refuse it, the frame keeps
+   * the guides it had */
+  {
+    float(*copy)[3] = malloc(points * sizeof *copy);
+    REQUIRE(copy);
+    PelageGuidesDesc g = g_in.guides;
+    g.points = copy;
+    memcpy(copy, g_in.guide_points, points * sizeof *copy);
+    copy[3 * GCVS + GCVS - 1][0] += 1e30f;
+    BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
+    memcpy(copy, g_in.guide_points, points * sizeof *copy);
+    copy[5 * GCVS + 2][2] = -3e38f;
+    BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
+    memcpy(copy, g_in.guide_points, points * sizeof *copy);
+    copy[points - 1][1] = 2e9f;
+    BAD_GUIDES(PELAGE_STATUS_INVALID_ARGUMENT, &g);
+    free(copy);
+  }
+
+  PelageGroom groom = NULL;
+  {
+    const PelageStrands r = records(g_in.strands, g_in.bindings, g_in.grooms, n);
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &groom));
+    REQUIRE(groom != NULL);
+  }
+
+  /* binding weights outside 0..1 (1e30, -1) and non-finite ones: pelage_groom_new and pelage_expand
+   * (on one thread or several) refuse them, nothing written */
+  {
+    PelageStrandBinding *b = malloc(n * sizeof *b);
+    REQUIRE(b);
+    const size_t bound = first_bound();
+    size_t last = n - 1;
+    while (g_in.bindings[last].count < 2) --last;
+    const float weights[5] = {1e30f, -1.0f, 1.0001f, NAN, -INFINITY};
+    const PelageStatus want[5] = {PELAGE_STATUS_INVALID_ARGUMENT, PELAGE_STATUS_INVALID_ARGUMENT,
+                                  PELAGE_STATUS_INVALID_ARGUMENT, PELAGE_STATUS_NON_FINITE, PELAGE_STATUS_NON_FINITE};
+    PelageExpandParams threads = g_in.expand_params;
+    threads.thread_count = 3;
+    for (int i = 0; i < 5; ++i) {
+      memcpy(b, g_in.bindings, n * sizeof *b);
+      b[bound].weights[0] = weights[i];
+      FAILS(want[i], EXPAND(g_in.frame, g_in.strands, b, g_in.grooms, n, &g_in.expand_params, g_in.points_out, 16,
+                            POINTS_CAPACITY));
+      PelageGroom out = canary;
+      const PelageStrands r = records(g_in.strands, b, g_in.grooms, n);
+      FAILS(want[i], pelage_groom_new(&r, &out));
+      CHECK(out == canary);
+      /* a later slot of a strand near the end, found by a worker thread: named by its index in the whole */
+      memcpy(b, g_in.bindings, n * sizeof *b);
+      b[last].weights[1] = weights[i];
+      FAILS(want[i], EXPAND(g_in.frame, g_in.strands, b, g_in.grooms, n, &threads, g_in.points_out, 16,
+                            POINTS_CAPACITY));
+      char element[64];
+      snprintf(element, sizeof element, "at element %zu", last);
+      CHECK(strstr(pelage_last_error(), element) != NULL);
+      FAILS(want[i], pelage_groom_new(&r, &out));
+      CHECK(out == canary);
+    }
+    /* the bounds themselves are fine: weights 0 and 1 */
+    memcpy(b, g_in.bindings, n * sizeof *b);
+    b[bound].weights[0] = 1.0f, b[last].weights[1] = 0.0f;
+    fill_outputs();
+    EXPECT(PELAGE_STATUS_OK, EXPAND(g_in.frame, g_in.strands, b, g_in.grooms, n, &g_in.expand_params,
+                                    g_in.points_out, 16, POINTS_CAPACITY));
+    CHECK(count_non_finite((const float *)(const void *)g_in.points_out, n * per * 4) == 0);
+    free(b);
+  }
+
+  /* groom values beyond 1e6 (finite): refused by pelage_groom_new and pelage_expand */
+  {
+    PelageStrandGroom *gr = malloc(n * sizeof *gr);
+    REQUIRE(gr);
+    for (int field = 0; field < 11; ++field) {
+      if (field == 9 || field == 10) continue; /* lift: bounded by pi, tested with settle */
+      memcpy(gr, g_in.grooms, n * sizeof *gr);
+      float *values = (float *)(void *)&gr[n / 2];
+      values[field] = field % 2 ? -2e6f : 1e30f;
+      if (field == 1 || field == 2) values[field] = 2e6f; /* radii: positive */
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(g_in.frame, g_in.strands, g_in.bindings, gr, n,
+                                                   &g_in.expand_params, g_in.points_out, 16, POINTS_CAPACITY));
+      PelageGroom out = canary;
+      const PelageStrands r = records(g_in.strands, g_in.bindings, gr, n);
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_groom_new(&r, &out));
+      CHECK(out == canary);
+    }
+    free(gr);
+  }
+
+  /* orphan_length beyond 1e9: pelage_expand, pelage_groom_expand and the queries refuse it */
+  {
+    PelageExpandParams ep = g_in.expand_params;
+    const float lengths[3] = {1e30f, 2e9f, -1e30f};
+    for (int i = 0; i < 3; ++i) {
+      ep.orphan_length = lengths[i];
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,
+                                                   g_in.points_out, 16, POINTS_CAPACITY));
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out,
+                                                         POINTS_CAPACITY));
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(&ep, &g_in.sizes_out[1]));
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep,
+                                                                &g_in.sizes_out[0]));
+    }
+  }
+
+  /* the legal extremes: a sphere of radius 5e8 (its guides reach 6e8, within 1e9), every groom value
+   * at 1e6 (kink phase included), orphan_length 1e9: OK, and every point finite */
+  {
+    Scaled big = scaled_new(5e8f);
+    PelageStrandGroom *gr = malloc(n * sizeof *gr);
+    REQUIRE(gr);
+    for (size_t i = 0; i < n; ++i) {
+      gr[i] = g_in.grooms[i];
+      gr[i].length = 1e6f, gr[i].root_radius = 1e6f, gr[i].tip_radius = 1e6f, gr[i].bend = -1e6f;
+      gr[i].kink_amplitude = 1e6f, gr[i].kink_frequency = 1e6f, gr[i].kink_phase[0] = 1e6f;
+      gr[i].kink_phase[1] = -1e6f, gr[i].clump = 1e6f;
+    }
+    PelageFrame f = make_frame(&big.mesh, &big.guides, 16, 2);
+    PelageExpandParams ep = g_in.expand_params;
+    ep.orphan_length = 1e9f;
+    const PelageEndPoints ends[2] = {PELAGE_END_POINTS_PINNED, PELAGE_END_POINTS_RAW};
+    for (int e = 0; e < 2; ++e) {
+      ep.end_points = (uint32_t)ends[e];
+      FILL(g_in.points_out, points_out_bytes());
+      const PelageStatus st = EXPAND(f, g_in.strands, g_in.bindings, gr, n, &ep, g_in.points_out, 16,
+                                     POINTS_CAPACITY);
+      EXPECT(PELAGE_STATUS_OK, st);
+      const size_t bad = count_non_finite((const float *)(const void *)g_in.points_out, n * (per - 2u * (size_t)e) * 4);
+      printf("hostile: radius 5e8, groom values 1e6, orphan_length 1e9 (%s ends): %s, %zu non-finite values\n",
+             e == 0 ? "pinned" : "raw", status_name(st), bad);
+      CHECK(st != PELAGE_STATUS_OK || bad == 0);
+    }
+    /* the same through a groom */
+    PelageGroom extreme = NULL;
+    const PelageStrands r = records(g_in.strands, g_in.bindings, gr, n);
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &extreme));
+    ep.end_points = PELAGE_END_POINTS_PINNED;
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(extreme, f, 0, n, &ep, g_in.points_out, POINTS_CAPACITY));
+    CHECK(count_non_finite((const float *)(const void *)g_in.points_out, n * per * 4) == 0);
+    pelage_groom_free(extreme);
+    /* values just past the limits are refused on this frame too */
+    gr[n - 1].kink_frequency = 1.0001e6f;
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+          EXPAND(f, g_in.strands, g_in.bindings, gr, n, &ep, g_in.points_out, 16, POINTS_CAPACITY));
+    pelage_frame_free(f);
+    free(gr);
+    scaled_free(&big);
+  }
+  pelage_groom_free(groom);
+}
+
 /* The groom handle: records checked and copied once, then expanded per frame with the same bits as
    pelage_expand; every failure leaves the outputs (and *out_groom) untouched. */
-#define GROOM_EXPAND(groom, mesh, guides, first, count, params, points, capacity)                                 \
-  pelage_groom_expand(groom, mesh, guides, first, count, params, g_in.expand_arena, g_in.expand_arena_bytes, points, \
-                      16, capacity, g_in.counts_out, g_in.ids_out)
 static void test_groom_handle(void) {
   const size_t n = g_in.strand_count, per = g_in.per;
   PelageStrandGroom *grooms = malloc(n * sizeof *grooms);
   PelageStrandBinding *bindings = malloc(n * sizeof *bindings);
-  REQUIRE(grooms && bindings);
+  PelageRoot *roots = malloc(n * sizeof *roots);
+  REQUIRE(grooms && bindings && roots);
   memcpy(grooms, g_in.grooms, n * sizeof *grooms);
   memcpy(bindings, g_in.bindings, n * sizeof *bindings);
-  PelageGroom groom = NULL, canary = (PelageGroom)&g_in;
-  EXPECT(PELAGE_STATUS_OK, pelage_groom_new(g_in.strands, bindings, grooms, n, &groom));
+  memcpy(roots, g_in.strands, n * sizeof *roots);
+  PelageGroom groom = NULL, canary = (PelageGroom)(void *)&g_in;
+  PelageStrands r = records(roots, bindings, grooms, n);
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &groom));
   REQUIRE(groom != NULL);
   /* a copy: the host's arrays may change afterwards */
-  memset(grooms, 0xff, n * sizeof *grooms);
+  memset(grooms, 0xff, n * sizeof *grooms), memset(bindings, 0xff, n * sizeof *bindings);
+  memset(roots, 0xff, n * sizeof *roots);
   size_t count = 0;
   EXPECT(PELAGE_STATUS_OK, pelage_groom_strand_count(groom, &count));
   CHECK(count == n);
@@ -1546,7 +2164,7 @@ static void test_groom_handle(void) {
     PelageExpandParams p = g_in.expand_params;
     p.thread_count = threads[t];
     FILL(g_in.points_out, points_out_bytes());
-    EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, &p, g_in.points_out, n * per));
+    EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, g_in.frame, 0, n, &p, g_in.points_out, n * per));
     CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) == 0);
   }
   /* patch by patch: each range gives its slice of the whole */
@@ -1555,38 +2173,80 @@ static void test_groom_handle(void) {
     const size_t first = cuts[c], k = cuts[c + 1] - cuts[c];
     FILL(g_in.points_out, points_out_bytes());
     EXPECT(PELAGE_STATUS_OK,
-           GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, first, k, &g_in.expand_params, g_in.points_out, k * per));
+           GROOM_EXPAND(groom, g_in.frame, first, k, &g_in.expand_params, g_in.points_out, k * per));
     CHECK(memcmp(g_in.points_out, g_in.points + 4 * per * first, k * per * 16) == 0);
     CHECK(g_in.ids_out[0] == g_in.strands[first].id && g_in.counts_out[0] == per);
   }
-  EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, n, 0, &g_in.expand_params, NULL, 0));
+  EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, g_in.frame, n, 0, &g_in.expand_params, NULL, 0));
+  /* a padded stride */
+  {
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, groom_expand_(groom, g_in.frame, 0, n, &g_in.expand_params, g_in.points_out, MAXSTRIDE,
+                                           n * per, NULL, NULL));
+    size_t differ = 0;
+    for (size_t i = 0; i < n * per; ++i) differ += memcmp(g_in.points_out + i * MAXSTRIDE, g_in.points + 4 * i, 16) != 0;
+    CHECK(differ == 0);
+  }
 
   /* failures */
-  FAILS(PELAGE_STATUS_NULL_PARAMETER,
-        GROOM_EXPAND(NULL, &g_in.mesh, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER,
-        GROOM_EXPAND(groom, NULL, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER,
-        GROOM_EXPAND(groom, &g_in.mesh, NULL, 0, n, &g_in.expand_params, g_in.points_out, n * per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER,
-        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, NULL, g_in.points_out, n * per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER,
-        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, &g_in.expand_params, NULL, n * per));
+  {
+    const PelageCurves c = curves_of(g_in.points_out, 16, n * per, g_in.counts_out, g_in.ids_out);
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_expand(NULL, g_in.frame, 0, n, &g_in.expand_params, &c));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_expand(groom, NULL, 0, n, &g_in.expand_params, &c));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_expand(groom, g_in.frame, 0, n, NULL, &c));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_expand(groom, g_in.frame, 0, n, &g_in.expand_params, NULL));
+  }
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, GROOM_EXPAND(groom, g_in.frame, 0, n, &g_in.expand_params, NULL, n * per));
   FAILS(PELAGE_STATUS_OUT_OF_RANGE,
-        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 1, n, &g_in.expand_params, g_in.points_out, n * per));
+        GROOM_EXPAND(groom, g_in.frame, 1, n, &g_in.expand_params, g_in.points_out, n * per));
   FAILS(PELAGE_STATUS_OUT_OF_RANGE,
-        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, SIZE_MAX, 2, &g_in.expand_params, g_in.points_out, n * per));
+        GROOM_EXPAND(groom, g_in.frame, SIZE_MAX, 2, &g_in.expand_params, g_in.points_out, n * per));
+  FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+        GROOM_EXPAND(groom, g_in.frame, n + 1, 0, &g_in.expand_params, g_in.points_out, n * per));
   FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
-        GROOM_EXPAND(groom, &g_in.mesh, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per - 1));
-  /* a mesh with fewer triangles than a root's face, fewer guides than a binding uses */
-  PelageMeshDesc small = g_in.mesh;
-  small.triangle_count = 1;
-  FAILS(PELAGE_STATUS_OUT_OF_RANGE,
-        GROOM_EXPAND(groom, &small, &g_in.guides, 0, n, &g_in.expand_params, g_in.points_out, n * per));
-  PelageGuidesDesc fewer = g_in.guides;
-  fewer.guide_count = 2, fewer.point_count = 2 * (size_t)fewer.points_per_guide;
-  FAILS(PELAGE_STATUS_OUT_OF_RANGE,
-        GROOM_EXPAND(groom, &g_in.mesh, &fewer, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+        GROOM_EXPAND(groom, g_in.frame, 0, n, &g_in.expand_params, g_in.points_out, n * per - 1));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+        groom_expand_(groom, g_in.frame, 0, n, &g_in.expand_params, g_in.points_out, 12, n * per, NULL, NULL));
+  FAILS(PELAGE_STATUS_MISALIGNED,
+        groom_expand_(groom, g_in.frame, 0, n, &g_in.expand_params, g_in.points_out + 2, 16, n * per, NULL, NULL));
+  {
+    PelageExpandParams ep = g_in.expand_params;
+    ep.end_points = 2;
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT, GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out, n * per));
+  }
+  /* a frame with fewer triangles than a root's face, or fewer guides than a binding uses */
+  {
+    /* every guide on guide 0's root (the lowest face), on a mesh cut just after that face */
+    PelageRoot *low = malloc(g_in.guide_count * sizeof *low);
+    float(*lp)[3] = malloc(g_in.guide_count * GCVS * sizeof *lp);
+    REQUIRE(low && lp);
+    for (size_t g = 0; g < g_in.guide_count; ++g) {
+      low[g] = g_in.guide_roots[0];
+      memcpy(lp[g * GCVS], g_in.guide_points[0], GCVS * sizeof *lp);
+    }
+    PelageMeshDesc cut = g_in.mesh;
+    cut.triangle_count = (size_t)g_in.guide_roots[0].face + 1;
+    size_t past = 0;
+    for (size_t i = 0; i < n; ++i) past += g_in.strands[i].face >= cut.triangle_count;
+    REQUIRE(past > 0);
+    PelageGuidesDesc lg = g_in.guides;
+    lg.roots = low, lg.points = lp;
+    PelageFrame small = make_frame(&cut, &lg, 16, 1);
+    FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+          GROOM_EXPAND(groom, small, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+    FAILS(PELAGE_STATUS_OUT_OF_RANGE, EXPAND(small, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                             &g_in.expand_params, g_in.points_out, 16, n * per));
+    pelage_frame_free(small);
+    free(low), free(lp);
+    PelageGuidesDesc two = g_in.guides;
+    two.guide_count = 2, two.point_count = 2 * (size_t)two.points_per_guide;
+    PelageFrame fewer = make_frame(&g_in.mesh, &two, 16, 1);
+    FAILS(PELAGE_STATUS_OUT_OF_RANGE,
+          GROOM_EXPAND(groom, fewer, 0, n, &g_in.expand_params, g_in.points_out, n * per));
+    FAILS(PELAGE_STATUS_OUT_OF_RANGE, EXPAND(fewer, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                             &g_in.expand_params, g_in.points_out, 16, n * per));
+    pelage_frame_free(fewer);
+  }
   size_t count_out = 77;
   EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_strand_count(NULL, &count_out));
   CHECK(count_out == 77);
@@ -1594,32 +2254,52 @@ static void test_groom_handle(void) {
 
   /* bad records are refused when the groom is made, *out_groom untouched */
   memcpy(grooms, g_in.grooms, n * sizeof *grooms);
+  memcpy(bindings, g_in.bindings, n * sizeof *bindings);
+  memcpy(roots, g_in.strands, n * sizeof *roots);
   PelageGroom out = canary;
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(NULL, bindings, grooms, n, &out));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(g_in.strands, NULL, grooms, n, &out));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(g_in.strands, bindings, NULL, n, &out));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(g_in.strands, bindings, grooms, n, NULL));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(NULL, &out));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(&r, NULL));
+  r = records(NULL, bindings, grooms, n);
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(&r, &out));
+  r = records(roots, NULL, grooms, n);
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(&r, &out));
+  r = records(roots, bindings, NULL, n);
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_new(&r, &out));
+  r = records(roots, bindings, grooms, n);
   grooms[n / 2].kink_amplitude = NAN;
-  EXPECT(PELAGE_STATUS_NON_FINITE, pelage_groom_new(g_in.strands, bindings, grooms, n, &out));
+  EXPECT(PELAGE_STATUS_NON_FINITE, pelage_groom_new(&r, &out));
+  grooms[n / 2] = g_in.grooms[n / 2];
+  grooms[n / 2].root_radius = -0.001f;
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_groom_new(&r, &out));
+  grooms[n / 2] = g_in.grooms[n / 2];
+  grooms[n / 2].lift[0] = 3.2f; /* more than pi */
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_groom_new(&r, &out));
   grooms[n / 2] = g_in.grooms[n / 2];
   bindings[n / 3].count = 99;
-  EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_groom_new(g_in.strands, bindings, grooms, n, &out));
+  EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_groom_new(&r, &out));
   bindings[n / 3] = g_in.bindings[n / 3];
+  roots[n / 4].u = INFINITY;
+  EXPECT(PELAGE_STATUS_NON_FINITE, pelage_groom_new(&r, &out));
+  roots[n / 4] = g_in.strands[n / 4];
   CHECK(out == canary);
   /* an empty groom */
-  EXPECT(PELAGE_STATUS_OK, pelage_groom_new(NULL, NULL, NULL, 0, &out));
+  r = records(NULL, NULL, NULL, 0);
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &out));
   CHECK(out != canary && out != NULL);
   EXPECT(PELAGE_STATUS_OK, pelage_groom_strand_count(out, &count));
   CHECK(count == 0);
+  EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(out, g_in.frame, 0, 0, &g_in.expand_params, NULL, 0));
+  FAILS(PELAGE_STATUS_OUT_OF_RANGE, GROOM_EXPAND(out, g_in.frame, 0, 1, &g_in.expand_params, g_in.points_out, per));
   pelage_groom_free(out);
   pelage_groom_free(groom);
   pelage_groom_free(NULL);
-  free(grooms), free(bindings);
+  free(grooms), free(bindings), free(roots);
 }
 
 static void interp_free(void) {
+  pelage_frame_free(g_in.frame);
   free(g_in.guide_roots), free(g_in.strands), free(g_in.guide_points), free(g_in.bind_arena), free(g_in.bindings);
-  free(g_in.grooms), free(g_in.expand_arena), free(g_in.points), free(g_in.bind_out), free(g_in.groom_out);
+  free(g_in.grooms), free(g_in.points), free(g_in.bind_out), free(g_in.groom_out);
   free(g_in.points_out), free(g_in.counts_out), free(g_in.ids_out), free(g_in.index_out);
 }
 
@@ -1637,15 +2317,46 @@ static void *worker(void *arg) {
   return NULL;
 }
 
+/* A progress callback that records its calls and cancels at call `cancel_at`
+ * (never when it is 0). */
+typedef struct Progress {
+  int calls, cancel_at, decreased, outside, off_thread;
+  double first, last;
+  pthread_t thread; /* the calling thread */
+} Progress;
+
+static Progress progress_new(int cancel_at) {
+  Progress p;
+  memset(&p, 0, sizeof p);
+  p.cancel_at = cancel_at, p.first = -1.0, p.last = -1.0, p.thread = pthread_self();
+  return p;
+}
+
+static bool on_progress(void *user_data, double fraction) {
+  Progress *p = user_data;
+  if (p->calls == 0) p->first = fraction;
+  p->decreased |= p->calls > 0 && fraction < p->last;
+  p->outside |= !(fraction >= 0.0 && fraction <= 1.0);
+  p->off_thread |= !pthread_equal(p->thread, pthread_self());
+  p->last = fraction;
+  p->calls++;
+  return p->calls != p->cancel_at;
+}
+
+/* A callback that never cancelled heard a never-decreasing share in [0, 1], ending at 1, on the
+ * calling thread. */
+static int progress_rose(const Progress *p) {
+  return p->calls >= 2 && !p->decreased && !p->outside && !p->off_thread && p->last == 1.0;
+}
+
 /* Strands of `grooms` with a control point after the root deeper than 0.98
  * inside the unit sphere (the mesh lies between radius ~0.99 and 1). */
 static size_t strands_inside(const PelageStrandGroom *grooms) {
   const size_t n = g_in.strand_count, per = g_in.per;
   float *pts = malloc(n * per * 16);
   REQUIRE(pts);
-  EXPECT(PELAGE_STATUS_OK, pelage_expand(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, grooms, n,
-                                         &g_in.expand_params, g_in.expand_arena, g_in.expand_arena_bytes, pts, 16,
-                                         n * per, NULL, NULL));
+  EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, g_in.strands, g_in.bindings, grooms, n, &g_in.expand_params, pts, 16,
+                                   n * per, NULL, NULL));
   size_t inside = 0;
   for (size_t i = 0; i < n; ++i) {
     int in = 0;
@@ -1660,13 +2371,15 @@ static size_t strands_inside(const PelageStrandGroom *grooms) {
 }
 
 static void test_settle(void) {
-  const size_t n = g_in.strand_count;
+  const size_t n = g_in.strand_count, points = g_in.guide_count * GCVS;
   PelageExpandParams ep = g_in.expand_params;
   size_t bytes = 0;
   EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep, NULL));
   EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(NULL, g_in.guide_count, &ep, &bytes));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(&g_in.mesh, g_in.guide_count, NULL, &bytes));
+  CHECK(bytes == 0);
   EXPECT(PELAGE_STATUS_OK, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep, &bytes));
-  CHECK(bytes > g_in.expand_arena_bytes);
+  CHECK(bytes > 0);
   unsigned char *arena = malloc(bytes);
   PelageStrandGroom *work = malloc(n * sizeof *work), *tilted = malloc(n * sizeof *tilted),
                     *settled = malloc(n * sizeof *settled);
@@ -1675,7 +2388,7 @@ static void test_settle(void) {
   for (size_t i = 0; i < n; ++i) tilted[i] = g_in.grooms[i], tilted[i].lift[0] = 2.0f;
   const size_t before = strands_inside(tilted);
   CHECK(before > n / 2);
-  PelageSettleInfo info, again;
+  PelageSettleInfo info, again, out_info;
   memcpy(settled, tilted, n * sizeof *work);
   EXPECT(PELAGE_STATUS_OK, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, settled, n, &ep,
                                          arena, bytes, &info));
@@ -1700,51 +2413,275 @@ static void test_settle(void) {
 #define SETTLE_FAILS(want, call)                                           \
   do {                                                                     \
     memcpy(work, tilted, n * sizeof *work);                                \
-    FILL(&info, sizeof info);                                              \
+    FILL(&out_info, sizeof out_info);                                      \
     EXPECT(want, call);                                                    \
     CHECK(memcmp(work, tilted, n * sizeof *work) == 0);                    \
-    CHECK(untouched(&info, sizeof info));                                  \
+    CHECK(untouched(&out_info, sizeof out_info));                          \
   } while (0)
+#define SETTLE(mesh, guides, bindings, params) \
+  pelage_settle(mesh, guides, g_in.strands, bindings, work, n, params, arena, bytes, &out_info)
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(NULL, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &info));
+               pelage_settle(NULL, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &out_info));
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, NULL, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &info));
+               pelage_settle(&g_in.mesh, NULL, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &out_info));
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, &g_in.guides, NULL, g_in.bindings, work, n, &ep, arena, bytes, &info));
+               pelage_settle(&g_in.mesh, &g_in.guides, NULL, g_in.bindings, work, n, &ep, arena, bytes, &out_info));
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, NULL, work, n, &ep, arena, bytes, &info));
-  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, NULL, n, &ep, arena, bytes, &info));
-  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, NULL, arena, bytes, &info));
+               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, NULL, work, n, &ep, arena, bytes, &out_info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
+                                                           NULL, n, &ep, arena, bytes, &out_info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
+                                                           work, n, NULL, arena, bytes, &out_info));
   SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
-                                                              work, n, &ep, arena, bytes / 2, &info));
-  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
-               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, NULL, 0, &info));
+                                                              work, n, &ep, arena, bytes / 2, &out_info));
+  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
+                                                              work, n, &ep, NULL, 0, &out_info));
   tilted[5].lift[1] = NAN;
-  SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work,
-                                                       n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
   /* split over threads, the error still names the element in the whole array */
   ep.thread_count = 3;
   tilted[5].lift[1] = 0.0f, tilted[n - 2].kink_phase[0] = INFINITY;
-  SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work,
-                                                       n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
   char want[64];
   snprintf(want, sizeof want, "grooms at element %zu", n - 2);
   CHECK(strstr(pelage_last_error(), want) != NULL);
   tilted[n - 2] = g_in.grooms[n - 2], tilted[n - 2].lift[0] = 2.0f;
   ep.thread_count = 1;
   tilted[5].lift[1] = 3.0f; /* |lift| = sqrt(13) > pi */
-  SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
-                                                             work, n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
   tilted[5].lift[1] = 0.0f;
   ep.end_points = 9;
-  SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
-                                                             work, n, &ep, arena, bytes, &info));
+  SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
+  ep = g_in.expand_params;
+
+  /* hostile inputs: binding weights outside 0..1 (or not finite), groom values beyond 1e6, mesh and
+   * guide values beyond 1e9, orphan_length beyond 1e9: refused, the grooms untouched */
+  {
+    PelageStrandBinding *b = malloc(n * sizeof *b);
+    float(*p)[3] = malloc(g_sphere.nv * sizeof *p), (*gp)[3] = malloc(points * sizeof *gp);
+    REQUIRE(b && p && gp);
+    const size_t bound = first_bound();
+    const float weights[4] = {1e30f, -1.0f, NAN, INFINITY};
+    const PelageStatus status[4] = {PELAGE_STATUS_INVALID_ARGUMENT, PELAGE_STATUS_INVALID_ARGUMENT,
+                                    PELAGE_STATUS_NON_FINITE, PELAGE_STATUS_NON_FINITE};
+    for (int i = 0; i < 4; ++i) {
+      memcpy(b, g_in.bindings, n * sizeof *b);
+      b[bound].weights[0] = weights[i];
+      SETTLE_FAILS(status[i], SETTLE(&g_in.mesh, &g_in.guides, b, &ep));
+      ep.thread_count = 3;
+      SETTLE_FAILS(status[i], SETTLE(&g_in.mesh, &g_in.guides, b, &ep));
+      ep.thread_count = 1;
+    }
+    free(b);
+    tilted[n / 3].bend = 1e30f;
+    SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
+    tilted[n / 3].bend = g_in.grooms[n / 3].bend, tilted[n / 3].clump = -2e6f;
+    SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
+    tilted[n / 3].clump = g_in.grooms[n / 3].clump;
+    const float huge[2] = {1e30f, 3e38f};
+    for (int i = 0; i < 2; ++i) {
+      PelageMeshDesc m = g_in.mesh;
+      memcpy(p, g_sphere.p, g_sphere.nv * sizeof *p);
+      p[g_sphere.nv / 2][0] = huge[i];
+      m.positions = p;
+      SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&m, &g_in.guides, g_in.bindings, &ep));
+      EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle_query(&m, g_in.guide_count, &ep, &g_in.sizes_out[0]));
+      PelageGuidesDesc g = g_in.guides;
+      memcpy(gp, g_in.guide_points, points * sizeof *gp);
+      gp[7 * GCVS + GCVS - 1][1] += huge[i];
+      g.points = gp;
+      SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&g_in.mesh, &g, g_in.bindings, &ep));
+    }
+    ep.orphan_length = 1e30f;
+    SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
+    ep = g_in.expand_params;
+    free(p), free(gp);
+  }
+
+  /* progress: a callback that goes on changes nothing (on any thread count) and rises to 1 on the
+   * calling thread; one that stops cancels at once: no further call, info not written, and every
+   * groom either untouched or settled (which ones is unspecified) */
+  {
+    for (uint32_t threads = 1; threads < 4; threads += 2) {
+      Progress seen = progress_new(0);
+      ep.thread_count = threads;
+      ep.progress = on_progress, ep.progress_user_data = &seen;
+      memcpy(work, tilted, n * sizeof *work);
+      FILL(&again, sizeof again);
+      EXPECT(PELAGE_STATUS_OK, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
+      CHECK(memcmp(work, settled, n * sizeof *work) == 0 && memcmp(&out_info, &info, sizeof info) == 0);
+      CHECK(progress_rose(&seen));
+      if (threads == 1) {
+        printf("settle progress: %d calls, first %.3f, last %.3f\n", seen.calls, seen.first, seen.last);
+        const int stops[3] = {1, seen.calls / 2, seen.calls};
+        for (int i = 0; i < 3; ++i) {
+          Progress stop = progress_new(stops[i]);
+          ep.progress_user_data = &stop;
+          memcpy(work, tilted, n * sizeof *work);
+          FILL(&out_info, sizeof out_info);
+          EXPECT(PELAGE_STATUS_CANCELLED, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
+          CHECK(stop.calls == stops[i]);
+          CHECK(untouched(&out_info, sizeof out_info));
+          CHECK(strstr(pelage_last_error(), "cancel") != NULL);
+          size_t changed = 0, neither = 0;
+          for (size_t k = 0; k < n; ++k) {
+            const int same = memcmp(&work[k], &tilted[k], sizeof *work) == 0;
+            changed += !same;
+            neither += !same && memcmp(&work[k], &settled[k], sizeof *work) != 0;
+          }
+          printf("settle cancelled at call %d of %d: %zu of %zu grooms settled\n", stops[i], seen.calls, changed, n);
+          CHECK(neither == 0);
+        }
+      }
+    }
+    ep = g_in.expand_params;
+  }
+
+  /* the legal extremes: a sphere of radius 5e8 and groom values of 1e6 settle to finite grooms
+   * (or are refused) */
+  {
+    Scaled big = scaled_new(5e8f);
+    size_t big_bytes = 0;
+    EXPECT(PELAGE_STATUS_OK, pelage_settle_query(&big.mesh, g_in.guide_count, &ep, &big_bytes));
+    unsigned char *big_arena = malloc(big_bytes);
+    REQUIRE(big_arena);
+    for (size_t i = 0; i < n; ++i) {
+      work[i] = tilted[i];
+      work[i].length = 1e6f, work[i].bend = 1e6f, work[i].kink_amplitude = -1e6f, work[i].kink_frequency = 1e6f;
+      work[i].clump = 1e6f, work[i].root_radius = 1e6f;
+    }
+    ep.orphan_length = 1e9f;
+    const PelageStatus st = pelage_settle(&big.mesh, &big.guides, g_in.strands, g_in.bindings, work, n, &ep,
+                                          big_arena, big_bytes, &out_info);
+    size_t bad = 0;
+    for (size_t i = 0; i < n; ++i) {
+      bad += count_non_finite((const float *)(const void *)&work[i], sizeof *work / sizeof(float));
+      bad += !(work[i].lift[0] * work[i].lift[0] + work[i].lift[1] * work[i].lift[1] <= 3.1416f * 3.1416f);
+    }
+    printf("settle: radius 5e8, groom values 1e6: %s, %zu bad values\n", status_name(st), bad);
+    CHECK(st != PELAGE_STATUS_OK || bad == 0);
+    ep = g_in.expand_params;
+    free(big_arena);
+    scaled_free(&big);
+  }
+#undef SETTLE
 #undef SETTLE_FAILS
   printf("settle: %zu of %zu tilted strands inside; lifted %u (unclumped %u, turned %u, shortened %u)\n", before, n,
-         again.lifted, again.unclumped, again.turned, again.shortened);
+         info.lifted, info.unclumped, info.turned, info.shortened);
   free(arena), free(work), free(tilted), free(settled);
+}
+
+/* Progress on pelage_bind, pelage_expand and pelage_groom_expand: a callback that goes on changes no
+ * bit (on any thread count) and hears a never-decreasing share ending at 1 on the calling thread; one
+ * that returns false cancels at once (no further call). A cancelled bind writes nothing. */
+static void test_interp_progress(void) {
+  const size_t n = g_in.strand_count, per = g_in.per;
+  const unsigned threads[2] = {1, 0};
+
+  /* pelage_bind */
+  int bind_calls = 0;
+  for (int t = 0; t < 2; ++t) {
+    PelageBindParams bp = g_in.bind_params;
+    Progress seen = progress_new(0);
+    bp.thread_count = threads[t], bp.progress = on_progress, bp.progress_user_data = &seen;
+    fill_outputs();
+    EXPECT(PELAGE_STATUS_OK, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
+                                  g_in.bind_arena_bytes, g_in.bind_out, n));
+    CHECK(memcmp(g_in.bind_out, g_in.bindings, n * sizeof *g_in.bind_out) == 0);
+    CHECK(memcmp(&g_in.info_out, &g_in.info, sizeof g_in.info) == 0);
+    CHECK(progress_rose(&seen));
+    bind_calls = seen.calls;
+  }
+  printf("bind progress: %d calls\n", bind_calls);
+  {
+    const int stops[3] = {1, bind_calls / 2, bind_calls};
+    for (int i = 0; i < 3; ++i) {
+      PelageBindParams bp = g_in.bind_params;
+      Progress stop = progress_new(stops[i]);
+      bp.progress = on_progress, bp.progress_user_data = &stop;
+      FAILS(PELAGE_STATUS_CANCELLED, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
+                                          g_in.bind_arena_bytes, g_in.bind_out, n));
+      CHECK(stop.calls == stops[i]);
+      CHECK(strstr(pelage_last_error(), "cancel") != NULL);
+    }
+  }
+  /* a callback is not called when the arguments are refused */
+  {
+    PelageBindParams bp = g_in.bind_params;
+    Progress stop = progress_new(1);
+    bp.progress = on_progress, bp.progress_user_data = &stop;
+    FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
+                                                g_in.bind_arena_bytes, g_in.bind_out, n - 1));
+    CHECK(stop.calls == 0);
+  }
+
+  /* pelage_expand and pelage_groom_expand */
+  PelageGroom groom = NULL;
+  {
+    const PelageStrands r = records(g_in.strands, g_in.bindings, g_in.grooms, n);
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &groom));
+    REQUIRE(groom != NULL);
+  }
+  for (int via_groom = 0; via_groom < 2; ++via_groom) {
+    int calls = 0;
+    for (int t = 0; t < 2; ++t) {
+      PelageExpandParams ep = g_in.expand_params;
+      Progress seen = progress_new(0);
+      ep.thread_count = threads[t], ep.progress = on_progress, ep.progress_user_data = &seen;
+      FILL(g_in.points_out, points_out_bytes()), FILL(g_in.counts_out, n * 4), FILL(g_in.ids_out, n * 4);
+      EXPECT(PELAGE_STATUS_OK, via_groom ? GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out, n * per)
+                                         : EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,
+                                                  g_in.points_out, 16, n * per));
+      CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) == 0);
+      CHECK(g_in.counts_out[n - 1] == per && g_in.ids_out[n - 1] == g_in.strands[n - 1].id);
+      CHECK(progress_rose(&seen));
+      calls = seen.calls;
+    }
+    printf("%s progress: %d calls\n", via_groom ? "groom_expand" : "expand", calls);
+    const int stops[3] = {1, calls / 2, calls};
+    for (int i = 0; i < 3; ++i) {
+      PelageExpandParams ep = g_in.expand_params;
+      Progress stop = progress_new(stops[i]);
+      ep.progress = on_progress, ep.progress_user_data = &stop;
+      /* the curves are unspecified after a cancel: only the status and the calls are checked */
+      EXPECT(PELAGE_STATUS_CANCELLED, via_groom ? GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out, n * per)
+                                                : EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n,
+                                                         &ep, g_in.points_out, 16, n * per));
+      CHECK(stop.calls == stops[i]);
+      CHECK(strstr(pelage_last_error(), "cancel") != NULL);
+    }
+    /* refused arguments: no call */
+    {
+      PelageExpandParams ep = g_in.expand_params;
+      Progress stop = progress_new(1);
+      ep.progress = on_progress, ep.progress_user_data = &stop;
+      FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
+            via_groom ? GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out, n * per - 1)
+                      : EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep, g_in.points_out, 16,
+                               n * per - 1));
+      CHECK(stop.calls == 0);
+    }
+  }
+  /* a patch of the groom: the callback hears that patch's share */
+  {
+    PelageExpandParams ep = g_in.expand_params;
+    Progress seen = progress_new(0);
+    ep.progress = on_progress, ep.progress_user_data = &seen;
+    FILL(g_in.points_out, points_out_bytes());
+    EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, g_in.frame, n / 4, n / 2, &ep, g_in.points_out, (n / 2) * per));
+    CHECK(memcmp(g_in.points_out, g_in.points + 4 * per * (n / 4), (n / 2) * per * 16) == 0);
+    CHECK(progress_rose(&seen));
+  }
+  /* no strands: OK, and the share it hears still ends at 1 */
+  {
+    PelageExpandParams ep = g_in.expand_params;
+    Progress seen = progress_new(0);
+    ep.progress = on_progress, ep.progress_user_data = &seen;
+    EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, NULL, NULL, NULL, 0, &ep, NULL, 16, 0, NULL, NULL));
+    CHECK(!seen.decreased && !seen.outside && !seen.off_thread);
+    CHECK(seen.calls >= 1 && seen.last == 1.0);
+  }
+  pelage_groom_free(groom);
 }
 
 static void test_threads(void) {
@@ -1763,27 +2700,12 @@ static void test_threads(void) {
   printf("last error: this thread \"%s\"; other thread \"%s\"\n", mine, g_worker_after);
 }
 
-/* A progress callback that records its calls and cancels at call `cancel_at`
- * (never when it is 0). */
-typedef struct Progress {
-  int calls, cancel_at, decreased;
-  double last;
-} Progress;
-
-static bool on_progress(void *user_data, double fraction) {
-  Progress *p = user_data;
-  p->decreased |= p->calls > 0 && fraction < p->last;
-  p->last = fraction;
-  p->calls++;
-  return p->calls != p->cancel_at;
-}
-
 /* Progress rises to 1 without changing the roots; a false return at any call
  * cancels with nothing written. */
 static void test_progress(void) {
   const PelageMeshDesc mesh = sphere_desc(&g_sphere);
   PelageStampParams p = g_params;
-  Progress seen = {0, 0, 0, -1.0};
+  Progress seen = progress_new(0);
   p.progress = on_progress;
   p.progress_user_data = &seen;
   PelageRoot *roots = malloc(g_capacity * sizeof *roots);
@@ -1791,12 +2713,12 @@ static void test_progress(void) {
   size_t count = 0;
   EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, g_arena, g_arena_bytes, roots, g_capacity, &count, NULL));
   CHECK(count == g_count && memcmp(roots, g_roots, g_count * sizeof *roots) == 0);
-  CHECK(seen.calls >= 3 && !seen.decreased && seen.last == 1.0);
+  CHECK(seen.calls >= 3 && progress_rose(&seen));
   /* the first call, one in the middle, and the last (1.0, before any root is written) */
   const int stops[3] = {1, seen.calls / 2, seen.calls};
   for (int i = 0; i < 3; i++) {
     const int at = stops[i];
-    Progress stop = {0, at, 0, -1.0};
+    Progress stop = progress_new(at);
     p.progress_user_data = &stop;
     PelageStampInfo info;
     FILL(roots, g_capacity * sizeof *roots), FILL(&count, sizeof count), FILL(&info, sizeof info);
@@ -1823,11 +2745,14 @@ int main(void) {
   test_evaluate();
   test_interp_defaults();
   test_interp_success();
+  test_frame();
   test_interp_null_pointers();
   test_interp_capacity();
   test_interp_bad_input();
+  test_hostile();
   test_groom_handle();
   test_settle();
+  test_interp_progress();
   interp_free();
   test_threads();
   free(g_arena), free(g_roots);

@@ -54,19 +54,9 @@ impl<'a> PosedFrame<'a> {
         points_per_strand: usize,
         arena: &mut Arena<'a>,
     ) -> Result<Self, Error> {
-        if !(2..=MAX_STRAND_POINTS).contains(&points_per_strand) {
-            return Err(Error::InvalidArgument(
-                "points_per_strand must be in 2..=64",
-            ));
-        }
-        if guide_count == 0 {
-            return Err(Error::InvalidArgument("no guides"));
-        }
+        let floats = PosedFrame::check_sizes(guide_count, points_per_strand)?;
         mesh.check()?;
         let tangents = arena.alloc::<[f32; 3]>(mesh.positions.len())?;
-        let floats = guide_count
-            .checked_mul(6 * points_per_strand)
-            .ok_or(Error::InvalidArgument("guide count overflows"))?;
         let data = arena.alloc::<f32>(floats)?;
         frame::vertex_tangents(&mesh, tangents);
         Ok(PosedFrame {
@@ -77,6 +67,23 @@ impl<'a> PosedFrame<'a> {
             guides: guide_count,
             posed: false,
         })
+    }
+
+    /// Checks a guide count (at least 1) and point count (2..=64) and gives
+    /// the floats the guides take.
+    pub fn check_sizes(guide_count: usize, points_per_strand: usize) -> Result<usize, Error> {
+        if !(2..=MAX_STRAND_POINTS).contains(&points_per_strand) {
+            return Err(Error::InvalidArgument(
+                "points_per_strand must be in 2..=64",
+            ));
+        }
+        if guide_count == 0 {
+            return Err(Error::InvalidArgument("no guides"));
+        }
+        guide_count
+            .checked_mul(6 * points_per_strand)
+            .filter(|&f| f <= isize::MAX as usize / 4)
+            .ok_or(Error::InvalidArgument("guide count too large"))
     }
 
     /// [`PosedFrame::new`], then [`PosedFrame::pose`] with `guides`.

@@ -225,8 +225,8 @@ fn check_strand(
         });
     }
     if !b.weights[..count].iter().all(|w| (0.0..=1.0).contains(w)) {
-        return Err(Error::TooLarge {
-            what: "binding weights (must be in 0..=1)",
+        return Err(Error::OutOfDomain {
+            what: "binding weights (0..=1)",
             index: 0,
         });
     }
@@ -238,8 +238,8 @@ fn check_strand(
         });
     }
     if !values.iter().all(|v| v.abs() <= MAX_GROOM_VALUE) {
-        return Err(Error::TooLarge {
-            what: "grooms (values must be within 1e6)",
+        return Err(Error::OutOfDomain {
+            what: "grooms (within 1e6)",
             index: 0,
         });
     }

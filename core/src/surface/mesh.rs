@@ -167,19 +167,19 @@ impl<'a> Mesh<'a> {
                 .position(|p| p.iter().any(|c| c.abs() > MAX_COORDINATE))
         };
         for (what, values) in [
-            ("positions (beyond 1e9)", Some(self.positions)),
-            ("normals (beyond 1e9)", self.normals),
+            ("positions (within 1e9)", Some(self.positions)),
+            ("normals (within 1e9)", self.normals),
         ] {
             if let Some(index) = values.and_then(large) {
-                return Err(Error::TooLarge { what, index });
+                return Err(Error::OutOfDomain { what, index });
             }
         }
         if let Some(index) = self.uvs.and_then(|t| {
             t.iter()
                 .position(|p| p.iter().any(|c| c.abs() > MAX_COORDINATE))
         }) {
-            return Err(Error::TooLarge {
-                what: "uvs (beyond 1e9)",
+            return Err(Error::OutOfDomain {
+                what: "uvs (within 1e9)",
                 index,
             });
         }
