@@ -84,23 +84,10 @@ impl StrandBounds {
         // passes the valid ones, and the detailed checks run only on a
         // strand it rejects, to name the fault
         for (i, ((r, b), g)) in roots.iter().zip(bindings).zip(grooms).enumerate() {
-            if !strand_is_valid(faces, guides, r, b, g) {
+            let (valid, used) = strand_is_valid(faces, guides, r, b, g);
+            if !valid {
                 check_strand(faces, guides, r, b, g).map_err(|e| e.shifted(i))?;
             }
-            // the strand's largest guide + 1, without a branch per slot
-            let count = b.count as usize;
-            let clump = if b.clump == NO_GUIDE {
-                0
-            } else {
-                b.clump as usize + 1
-            };
-            let used = (0..MAX_NEIGHBOURS).fold(clump, |m, k| {
-                m.max(if k < count {
-                    b.guides[k] as usize + 1
-                } else {
-                    0
-                })
-            });
             if r.face as usize >= bounds.faces.0 {
                 bounds.faces = (r.face as usize + 1, i);
             }
@@ -157,7 +144,9 @@ pub fn check_strands(strands: &Strands, faces: usize, guides: usize) -> Result<(
     StrandBounds::new(strands)?.fits(faces, guides)
 }
 
-/// Exactly the conditions [`check_strand`] tests, without a branch.
+/// Exactly the conditions [`check_strand`] tests, without a branch; and
+/// the strand's largest guide (binding or clump) + 1, 0 without one, read
+/// in the same pass.
 #[inline]
 fn strand_is_valid(
     faces: usize,
@@ -165,16 +154,22 @@ fn strand_is_valid(
     r: &Root,
     b: &StrandBinding,
     g: &StrandGroom,
-) -> bool {
+) -> (bool, usize) {
     // comparisons are false for NaN, and an infinite coordinate fails the sum
     let e = BARYCENTRIC_SLACK;
     let root = ((r.face as usize) < faces) & (r.u >= -e) & (r.v >= -e) & (r.u + r.v <= 1.0 + e);
     let count = b.count as usize;
     let mut binding = count <= MAX_NEIGHBOURS;
+    let mut used = if b.clump == NO_GUIDE {
+        0
+    } else {
+        b.clump as usize + 1
+    };
     for k in 0..MAX_NEIGHBOURS {
-        let fine =
-            ((b.guides[k] as usize) < guides) & (b.weights[k] >= 0.0) & (b.weights[k] <= 1.0);
+        let guide = b.guides[k] as usize;
+        let fine = (guide < guides) & (b.weights[k] >= 0.0) & (b.weights[k] <= 1.0);
         binding &= (k >= count) | fine;
+        used = used.max(if k < count { guide + 1 } else { 0 });
     }
     binding &= (b.clump == NO_GUIDE) | ((b.clump as usize) < guides);
     let values: &[f32] = bytemuck::cast_slice(core::slice::from_ref(g));
@@ -187,7 +182,7 @@ fn strand_is_valid(
         & (g.tip_radius >= 0.0)
         & (g.length >= 0.0)
         & (Vec2::from(g.lift).length_squared() <= pi2);
-    root & binding & groom
+    (root & binding & groom, used)
 }
 
 /// Checks one strand, naming the first fault (element index 0).
@@ -303,7 +298,7 @@ mod tests {
                 }
             }
             let faces = mesh.triangle_count();
-            let screen = strand_is_valid(faces, 6, &r, &b, &g);
+            let screen = strand_is_valid(faces, 6, &r, &b, &g).0;
             let detailed = check_strand(faces, 6, &r, &b, &g).is_ok();
             prop_assert_eq!(screen, detailed);
             // records checked once, then only the counts: the same verdict
