@@ -5,6 +5,7 @@
 pub mod bind;
 pub mod expand;
 pub mod groom;
+pub(crate) mod lift;
 pub mod posed;
 pub mod settle;
 pub mod strand;

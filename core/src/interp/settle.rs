@@ -15,16 +15,14 @@
 
 use crate::interp::bind::StrandBinding;
 use crate::interp::groom::StrandGroom;
+use crate::interp::lift::{first_clear, toward_normal, LIFT_STEP, LIFT_STEPS};
 use crate::interp::posed::PosedFrame;
 use crate::interp::strand::{strand, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
 use crate::interp::strands::{check_strands, Strands};
 use crate::surface::body::Body;
 use crate::{Error, Root};
-use core::f32::consts::FRAC_PI_2;
 use glam::{Vec2, Vec3};
 
-/// Lift angles tried between none and a right angle.
-const LIFT_STEPS: u32 = 16;
 /// Rotation axes tried around the tangent plane when lifting toward the
 /// normal is not enough.
 const AXES: u32 = 8;
@@ -177,32 +175,15 @@ fn settle_one(
     tip: Vec3,
     clear: &mut impl FnMut(&StrandGroom) -> bool,
 ) -> (StrandGroom, Outcome) {
-    let step = FRAC_PI_2 / LIFT_STEPS as f32;
-    let h = libm::sqrtf(tip.x * tip.x + tip.y * tip.y);
-    // the axis that turns the tip toward the normal, and the angle to reach it
-    let (toward, to_normal) = if h > 0.0 {
-        (Vec2::new(tip.y, -tip.x) / h, libm::atan2f(h, tip.z))
-    } else {
-        (Vec2::X, 0.0)
-    };
+    let (toward, to_normal) = toward_normal(tip);
     let with = |axis: Vec2, angle: f32, clump: f32| StrandGroom {
         lift: (Vec2::from(groom.lift) + axis * angle).into(),
         clump,
         ..groom
     };
-    // the first clear angle of `axis` (up to `limit`), plus one step for a margin
+    // the first clear angle of `axis` (up to `limit`), with a margin
     let mut sweep = |axis: Vec2, limit: f32, clump: f32, from: u32| {
-        (from..=LIFT_STEPS)
-            .map(|k| (k as f32 * step).min(limit))
-            .find(|&a| clear(&with(axis, a, clump)))
-            .map(|a| {
-                let more = with(axis, a + step, clump);
-                if a + step <= limit && clear(&more) {
-                    more
-                } else {
-                    with(axis, a, clump)
-                }
-            })
+        first_clear(limit, from, |a| clear(&with(axis, a, clump))).map(|a| with(axis, a, clump))
     };
     if let Some(g) = sweep(toward, to_normal, groom.clump, 1) {
         return (g, Outcome::Lifted);
@@ -220,7 +201,7 @@ fn settle_one(
     let turned = (1..=LIFT_STEPS)
         .flat_map(|k| {
             axes.iter()
-                .map(move |&axis| with(axis, k as f32 * step, 0.0))
+                .map(move |&axis| with(axis, k as f32 * LIFT_STEP, 0.0))
         })
         .find(|g| clear(g));
     if let Some(g) = turned {

@@ -5,6 +5,7 @@
 
 use crate::interp::bind::{StrandBinding, NO_GUIDE};
 use crate::interp::groom::StrandGroom;
+use crate::interp::lift::lift;
 use crate::interp::posed::PosedFrame;
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
@@ -275,27 +276,6 @@ fn place<const CLUMP_KINK: bool>(
             z += (tt.z * ks + b.z * kc) * k;
         }
         out[j] = [x, y, z, r0 + dr * t[j]];
-    }
-}
-
-/// Rotates local points about the root by the rotation vector `(w.x, w.y, 0)`
-/// (Rodrigues' formula): the paper's collision push-out by rotation about
-/// the root, fixed per strand at rest in the strand's own frame, so it
-/// follows the body and does not depend on the pose.
-fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
-    let angle = libm::sqrtf(w[0] * w[0] + w[1] * w[1]);
-    // a vector too small to square turns nothing (and has no axis)
-    if angle == 0.0 {
-        return;
-    }
-    let (kx, ky) = (w[0] / angle, w[1] / angle);
-    let (s, c) = libm::sincosf(angle);
-    for j in 0..x.len() {
-        let (vx, vy, vz) = (x[j], y[j], z[j]);
-        let along = (kx * vx + ky * vy) * (1.0 - c);
-        x[j] = vx * c + ky * vz * s + kx * along;
-        y[j] = vy * c - kx * vz * s + ky * along;
-        z[j] = vz * c + (kx * vy - ky * vx) * s;
     }
 }
 

@@ -1,0 +1,66 @@
+//! The paper's push-out (3.3): a strand that enters a collider is rotated
+//! rigidly about its root, toward its normal, by the smallest of a few
+//! steps that frees it. Settling (render strands at rest, stored as the
+//! groom's `lift`) and the guide dynamics (posed guides, every step) share
+//! the rotation and the search.
+
+use core::f32::consts::FRAC_PI_2;
+use glam::{Vec2, Vec3};
+
+/// Lift angles tried between none and a right angle.
+pub(crate) const LIFT_STEPS: u32 = 16;
+
+/// The angle between two tried lifts.
+pub(crate) const LIFT_STEP: f32 = FRAC_PI_2 / LIFT_STEPS as f32;
+
+/// Rotates local points about the root by the rotation vector `(w.x, w.y, 0)`
+/// (Rodrigues' formula): the paper's collision push-out by rotation about
+/// the root, fixed per strand at rest in the strand's own frame, so it
+/// follows the body and does not depend on the pose.
+pub(crate) fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
+    let angle = libm::sqrtf(w[0] * w[0] + w[1] * w[1]);
+    // a vector too small to square turns nothing (and has no axis)
+    if angle == 0.0 {
+        return;
+    }
+    let (kx, ky) = (w[0] / angle, w[1] / angle);
+    let (s, c) = libm::sincosf(angle);
+    for j in 0..x.len() {
+        let (vx, vy, vz) = (x[j], y[j], z[j]);
+        let along = (kx * vx + ky * vy) * (1.0 - c);
+        x[j] = vx * c + ky * vz * s + kx * along;
+        y[j] = vy * c - kx * vz * s + ky * along;
+        z[j] = vz * c + (kx * vy - ky * vx) * s;
+    }
+}
+
+/// The lift that turns a strand whose root-frame tip is `tip` toward the
+/// normal: its axis in the tangent plane (a rotation vector direction) and
+/// the angle that brings the tip onto the normal (0 for a tip on it).
+pub(crate) fn toward_normal(tip: Vec3) -> (Vec2, f32) {
+    let h = libm::sqrtf(tip.x * tip.x + tip.y * tip.y);
+    if h > 0.0 {
+        (Vec2::new(tip.y, -tip.x) / h, libm::atan2f(h, tip.z))
+    } else {
+        (Vec2::X, 0.0)
+    }
+}
+
+/// The first angle `from * LIFT_STEP, (from + 1) * LIFT_STEP, ...` (each at
+/// most `limit`, up to the right angle) that `clear` accepts, then one step
+/// more when that is clear too and within `limit` (a margin against the
+/// surface); `None` when none is clear.
+pub(crate) fn first_clear(
+    limit: f32,
+    from: u32,
+    mut clear: impl FnMut(f32) -> bool,
+) -> Option<f32> {
+    let a = (from..=LIFT_STEPS)
+        .map(|k| (k as f32 * LIFT_STEP).min(limit))
+        .find(|&a| clear(a))?;
+    Some(if a + LIFT_STEP <= limit && clear(a + LIFT_STEP) {
+        a + LIFT_STEP
+    } else {
+        a
+    })
+}
