@@ -16,6 +16,8 @@
 //!   ([`interp::posed::PosedFrame`]), the strand kernel
 //!   ([`interp::strand`]), strand records and their checks
 //!   ([`interp::strands`]) and the expansion driver ([`interp::expand`]).
+//! - [`dynamics`]: guide simulation (paper 3): tip spring, CCD IK,
+//!   Catmull-Rom output, tip links, colliders and push-out, the state.
 //! - Shared data and memory: [`arena`], [`error`], [`guides`], [`root`],
 //!   [`rng`], [`strided`].
 //!
@@ -30,6 +32,7 @@
 #![deny(missing_docs)]
 
 pub mod arena;
+pub mod dynamics;
 pub mod error;
 pub mod guides;
 pub mod interp;

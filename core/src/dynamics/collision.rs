@@ -1,0 +1,273 @@
+//! Colliders and the push-out (paper 3.3): a posed guide with a point
+//! inside a collider is rotated rigidly about its root, toward its normal,
+//! by the smallest tried angle that frees every point (the rotation and the
+//! search are settle's, `interp::lift`).
+//!
+//! Colliders: spheres, capsules and half-spaces (planes) given per step, the
+//! deforming body itself (its inside test), and a host's signed distance
+//! field (a level set, a cloth's distance: anything that answers distances).
+
+use crate::interp::lift::{first_clear, lift, toward_normal, LIFT_STEP, LIFT_STEPS};
+use crate::surface::body::Body;
+use crate::surface::frame::Frame;
+use crate::surface::mesh::MAX_COORDINATE;
+use crate::Error;
+use bytemuck::{Pod, Zeroable};
+use core::f32::consts::FRAC_PI_2;
+use glam::{Vec2, Vec3};
+
+/// A solid sphere.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Sphere {
+    /// Centre.
+    pub centre: [f32; 3],
+    /// Radius (>= 0).
+    pub radius: f32,
+}
+
+/// A solid capsule: the points within `radius` of the segment `a`-`b`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Capsule {
+    /// One end of the axis.
+    pub a: [f32; 3],
+    /// The other end.
+    pub b: [f32; 3],
+    /// Radius (>= 0).
+    pub radius: f32,
+}
+
+/// A solid half-space: the points `p` with `dot(normal, p) < offset`
+/// (`normal` need not be unit length; the test uses it as given).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Plane {
+    /// Outward normal (not zero).
+    pub normal: [f32; 3],
+    /// `dot(normal, p)` on the surface.
+    pub offset: f32,
+}
+
+/// A host's signed distance field: negative inside. Called from the
+/// threads a step runs on, with a guide's points at a time.
+pub trait SignedDistance: Sync {
+    /// Writes the signed distance of each of `points` to `out` (as long).
+    fn distances(&self, points: &[Vec3], out: &mut [f32]);
+}
+
+/// Everything the guides collide with in one step.
+#[derive(Clone, Copy, Default)]
+pub struct Colliders<'r> {
+    /// Spheres.
+    pub spheres: &'r [Sphere],
+    /// Capsules.
+    pub capsules: &'r [Capsule],
+    /// Half-spaces.
+    pub planes: &'r [Plane],
+    /// The deforming body (built on this step's mesh), or none.
+    pub body: Option<&'r Body<'r>>,
+    /// A host's signed distance field, or none.
+    pub field: Option<&'r dyn SignedDistance>,
+}
+
+impl Colliders<'_> {
+    /// Checks that every shape is finite, within the coordinate range, with
+    /// radii >= 0 and planes with a normal.
+    pub fn check(&self) -> Result<(), Error> {
+        let fine = |v: &[f32]| v.iter().all(|c| c.abs() <= MAX_COORDINATE);
+        for (i, s) in self.spheres.iter().enumerate() {
+            if !(fine(&s.centre) && fine(&[s.radius]) && s.radius >= 0.0) {
+                return Err(Error::OutOfDomain {
+                    what: "spheres (finite, within 1e9, radius >= 0)",
+                    index: i,
+                });
+            }
+        }
+        for (i, c) in self.capsules.iter().enumerate() {
+            if !(fine(&c.a) && fine(&c.b) && fine(&[c.radius]) && c.radius >= 0.0) {
+                return Err(Error::OutOfDomain {
+                    what: "capsules (finite, within 1e9, radius >= 0)",
+                    index: i,
+                });
+            }
+        }
+        for (i, p) in self.planes.iter().enumerate() {
+            if !(fine(&p.normal) && fine(&[p.offset]) && Vec3::from(p.normal) != Vec3::ZERO) {
+                return Err(Error::OutOfDomain {
+                    what: "planes (finite, within 1e9, normal not zero)",
+                    index: i,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Distance from `p` to the segment `a`-`b`.
+fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + ab * t)
+}
+
+/// The shapes of `Colliders` that a strand of `reach` rooted at `root` can
+/// touch, and the body and field (which are asked per point).
+struct Near<'c, 'r> {
+    all: &'c Colliders<'r>,
+    spheres: [u16; MAX_NEAR],
+    capsules: [u16; MAX_NEAR],
+    planes: [u16; MAX_NEAR],
+    counts: [usize; 3],
+}
+
+/// Most shapes of each kind one strand is tested against (the nearest
+/// come first in the caller's order; more is a scene no fur survives).
+const MAX_NEAR: usize = 64;
+
+impl<'c, 'r> Near<'c, 'r> {
+    fn new(all: &'c Colliders<'r>, root: Vec3, reach: f32) -> Self {
+        let mut near = Near {
+            all,
+            spheres: [0; MAX_NEAR],
+            capsules: [0; MAX_NEAR],
+            planes: [0; MAX_NEAR],
+            counts: [0; 3],
+        };
+        for (i, s) in all.spheres.iter().enumerate() {
+            if Vec3::from(s.centre).distance(root) < s.radius + reach && near.counts[0] < MAX_NEAR {
+                near.spheres[near.counts[0]] = i as u16;
+                near.counts[0] += 1;
+            }
+        }
+        for (i, c) in all.capsules.iter().enumerate() {
+            let d = segment_distance(root, c.a.into(), c.b.into());
+            if d < c.radius + reach && near.counts[1] < MAX_NEAR {
+                near.capsules[near.counts[1]] = i as u16;
+                near.counts[1] += 1;
+            }
+        }
+        for (i, p) in all.planes.iter().enumerate() {
+            let n = Vec3::from(p.normal);
+            if n.dot(root) - p.offset < reach * n.length() && near.counts[2] < MAX_NEAR {
+                near.planes[near.counts[2]] = i as u16;
+                near.counts[2] += 1;
+            }
+        }
+        near
+    }
+
+    /// True when nothing can touch the strand.
+    fn is_empty(&self) -> bool {
+        self.counts == [0; 3] && self.all.body.is_none() && self.all.field.is_none()
+    }
+
+    /// True when no point of `points` is inside a shape.
+    fn clear(&self, points: &[Vec3]) -> bool {
+        let all = self.all;
+        for &p in points {
+            for &i in &self.spheres[..self.counts[0]] {
+                let s = &all.spheres[i as usize];
+                if p.distance(Vec3::from(s.centre)) < s.radius {
+                    return false;
+                }
+            }
+            for &i in &self.capsules[..self.counts[1]] {
+                let c = &all.capsules[i as usize];
+                if segment_distance(p, c.a.into(), c.b.into()) < c.radius {
+                    return false;
+                }
+            }
+            for &i in &self.planes[..self.counts[2]] {
+                let s = &all.planes[i as usize];
+                if Vec3::from(s.normal).dot(p) < s.offset {
+                    return false;
+                }
+            }
+            if all.body.is_some_and(|b| b.contains(p)) {
+                return false;
+            }
+        }
+        if let Some(field) = all.field {
+            let mut d = [0.0f32; MAX_POINTS];
+            let d = &mut d[..points.len()];
+            field.distances(points, d);
+            // NaN from a host field counts as inside: never trusted as clear
+            if !d.iter().all(|&x| x >= 0.0) {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// Most points of one posed guide.
+pub const MAX_POINTS: usize = 64;
+
+/// Axes of the tangent plane tried when turning toward the normal is not
+/// enough (as settle does).
+const AXES: u32 = 8;
+
+/// Pushes a posed guide out of the colliders. `local` holds its points in
+/// its root frame `frame` (`local[0]` the root), and `reach` bounds its
+/// length. Unchanged when every point after the root is outside; else
+/// rotated rigidly about the root toward the normal by the smallest clear
+/// angle, or about another axis of the tangent plane, or (when nothing
+/// frees it) fully toward the normal. Returns whether it moved.
+pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach: f32) -> bool {
+    let n = local.len().min(MAX_POINTS);
+    if n < 2 {
+        return false;
+    }
+    let near = Near::new(colliders, frame.origin, reach);
+    if near.is_empty() {
+        return false;
+    }
+    let mut world = [Vec3::ZERO; MAX_POINTS];
+    for (w, l) in world.iter_mut().zip(&local[..n]) {
+        *w = frame.to_world(*l);
+    }
+    if near.clear(&world[1..n]) {
+        return false;
+    }
+    let mut x = [0.0f32; MAX_POINTS];
+    let mut y = [0.0f32; MAX_POINTS];
+    let mut z = [0.0f32; MAX_POINTS];
+    for (j, l) in local[..n].iter().enumerate() {
+        (x[j], y[j], z[j]) = (l.x, l.y, l.z);
+    }
+    let turned = |w: Vec2, out: &mut [Vec3]| {
+        let (mut tx, mut ty, mut tz) = (x, y, z);
+        lift(w.into(), &mut tx[..n], &mut ty[..n], &mut tz[..n]);
+        for j in 0..n {
+            out[j] = Vec3::new(tx[j], ty[j], tz[j]);
+        }
+    };
+    let mut clear = |w: Vec2| {
+        let mut trial = [Vec3::ZERO; MAX_POINTS];
+        turned(w, &mut trial[..n]);
+        for (p, l) in world.iter_mut().zip(&trial[..n]) {
+            *p = frame.to_world(*l);
+        }
+        near.clear(&world[1..n])
+    };
+    let (toward, to_normal) = toward_normal(local[n - 1]);
+    let lifted = first_clear(to_normal, 1, |a| clear(toward * a)).map(|a| toward * a);
+    let chosen = lifted.or_else(|| {
+        (1..=LIFT_STEPS).find_map(|k| {
+            (0..AXES).find_map(|m| {
+                let (s, c) = libm::sincosf(m as f32 * core::f32::consts::TAU / AXES as f32);
+                let axis = Vec2::new(toward.x * c - toward.y * s, toward.x * s + toward.y * c);
+                let w = axis * (k as f32 * LIFT_STEP).min(FRAC_PI_2);
+                clear(w).then_some(w)
+            })
+        })
+    });
+    turned(chosen.unwrap_or(toward * to_normal), &mut local[..n]);
+    true
+}

@@ -1,0 +1,1135 @@
+//! The simulation: guides' state across steps, and one step (paper 3.1).
+//!
+//! Per guide and step: (1) the neutral configuration, the guide's rest
+//! shape carried by its root frame on the step's mesh; (2) the tip spring
+//! toward the neutral tip; the tip links relax the spring targets;
+//! (3) CCD IK bends the guide toward its target; (4) a Catmull-Rom curve
+//! through the joints, resampled; then the push-out from the colliders.
+//!
+//! A step runs in three phases over ranges of guides (a host splits each
+//! over threads; any split gives the same bits): [`StepContext::advance`]
+//! (neutral pose, spring, target), the link relaxations
+//! ([`StepContext::snapshot`] then [`StepContext::relax`]), and
+//! [`StepContext::finish`] (IK, curve, push-out). The state that carries
+//! from step to step is a few floats per guide, saved to and restored
+//! from bytes ([`Sim::save`], [`Sim::restore`]).
+
+use super::collision::{push_out, Colliders};
+use super::ik::{self, IkParams};
+use super::links::{LinkParams, Links};
+use super::spline;
+use super::spring::TipSpring;
+use crate::arena::{Arena, ArenaLayout};
+use crate::guides::Guides;
+use crate::interp::posed::PosedFrame;
+use crate::surface::frame::Frame;
+use crate::surface::map::ScalarMap;
+use crate::{Error, Mesh, Root};
+use glam::Vec3;
+
+/// Most joints a guide is simulated with, and most points it is written with.
+pub const MAX_JOINTS: usize = ik::MAX_JOINTS;
+
+/// Simulation parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct SimParams<'m> {
+    /// Joints per guide (2..=64): the guides are resampled to it.
+    pub joints: usize,
+    /// Points per posed guide written (2..=64): the Catmull-Rom curve
+    /// through the joints, resampled (equal to `joints`: the joints).
+    pub points: usize,
+    /// Tip spring frequency per guide in hertz (0..=1000), at its root.
+    pub frequency: ScalarMap<'m>,
+    /// Tip spring amplitude per guide (0..=1), at its root.
+    pub amplitude: ScalarMap<'m>,
+    /// Tip spring decay rate per guide in 1/s (0..=10000), at its root.
+    pub decay: ScalarMap<'m>,
+    /// IK.
+    pub ik: IkParams,
+    /// Tip links.
+    pub links: LinkParams,
+    /// A root that moves more than this many times its guide's length in
+    /// one step has teleported (a cut, a reset of the animation): its tip
+    /// state is carried rigidly with its root frame, without a whip
+    /// (> 0).
+    pub teleport: f32,
+}
+
+impl Default for SimParams<'_> {
+    fn default() -> Self {
+        let spring = TipSpring::default();
+        SimParams {
+            joints: 16,
+            points: 16,
+            frequency: ScalarMap::Constant(spring.frequency),
+            amplitude: ScalarMap::Constant(spring.amplitude),
+            decay: ScalarMap::Constant(spring.decay),
+            ik: IkParams::default(),
+            links: LinkParams::default(),
+            teleport: 20.0,
+        }
+    }
+}
+
+impl SimParams<'_> {
+    /// Checks the counts and constants (map values are checked per guide
+    /// by [`Sim::new`]).
+    pub fn check(&self) -> Result<(), Error> {
+        if !(2..=MAX_JOINTS).contains(&self.joints) || !(2..=MAX_JOINTS).contains(&self.points) {
+            return Err(Error::InvalidArgument(
+                "joints and points must be in 2..=64",
+            ));
+        }
+        if !self.ik.is_valid() {
+            return Err(Error::InvalidArgument(
+                "IK: tolerance 0..=1, max_iterations 1..=256, stiffness 0..1",
+            ));
+        }
+        if !self.links.is_valid() {
+            return Err(Error::InvalidArgument(
+                "links: radius 0..=1e9, max_links 0..=16, iterations 0..=16, stiffness 0..=1",
+            ));
+        }
+        if !(self.teleport > 0.0 && self.teleport <= 1e9) {
+            return Err(Error::InvalidArgument("teleport must be in (0, 1e9]"));
+        }
+        Ok(())
+    }
+}
+
+// the per-guide block: the state carried between steps, then the step's
+// scratch and output
+/// Tip offset from the neutral tip.
+const Y: usize = 0;
+/// Its velocity.
+const V: usize = 3;
+/// The neutral tip at the last step.
+const TIP: usize = 6;
+/// The neutral tip's velocity over the last step.
+const TIP_VELOCITY: usize = 9;
+/// The root frame at the last step: origin, t, b, n.
+const FRAME: usize = 12;
+/// 1 once the guide has stepped (0 after init or reset).
+const STARTED: usize = 24;
+/// Floats of state saved per guide.
+pub const STATE_FLOATS: usize = 25;
+/// The spring target after links (world).
+const TARGET: usize = 25;
+/// The posed points in the root frame.
+const POSED: usize = 28;
+
+/// Save-file magic, "PLGS" (pelage guide state).
+const MAGIC: [u8; 4] = *b"PLGS";
+/// Save-file format version.
+pub const STATE_VERSION: u32 = 1;
+/// Bytes before the state: magic, version, guides, joints, points, reserved.
+const HEADER: usize = 24;
+
+/// One guide's constants.
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct GuideConstants {
+    spring_frequency: f32,
+    spring_amplitude: f32,
+    spring_decay: f32,
+    /// Sum of the segment lengths.
+    reach: f32,
+}
+
+/// Simulated guides.
+pub struct Sim<'a> {
+    params: SimParams<'static>,
+    roots: &'a [Root],
+    /// Rest joints in their root frames, 3 floats each.
+    rest: &'a [f32],
+    /// Segment lengths, `joints - 1` per guide.
+    lengths: &'a [f32],
+    constants: &'a [GuideConstants],
+    links: Links<'a>,
+    blocks: &'a mut [f32],
+    snapshot: &'a mut [[f32; 3]],
+    faces: usize,
+}
+
+impl<'a> Sim<'a> {
+    /// Floats each guide's block takes.
+    fn block_floats(params: &SimParams) -> usize {
+        POSED + 3 * params.points
+    }
+
+    /// Adds the arena bytes [`Sim::new`] needs for `guides` guides on a
+    /// rest mesh of `vertices` vertices.
+    pub fn layout(layout: &mut ArenaLayout, vertices: usize, guides: usize, params: &SimParams) {
+        PosedFrame::layout(layout, vertices, guides, params.joints);
+        layout.add::<Root>(guides);
+        layout.add::<f32>(guides.saturating_mul(3 * params.joints));
+        layout.add::<f32>(guides.saturating_mul(params.joints.saturating_sub(1)));
+        layout.add::<GuideConstants>(guides);
+        Links::layout(layout, guides, &params.links);
+        layout.add::<f32>(guides.saturating_mul(Self::block_floats(params)));
+        layout.add::<[f32; 3]>(guides);
+    }
+
+    /// Sets up the simulation of `guides` at rest on `rest` (the rest mesh)
+    /// with `params`, every guide at its neutral pose. The maps are sampled
+    /// at the guides' roots; a value out of its range is an error naming
+    /// the guide.
+    pub fn new(
+        rest: Mesh<'a>,
+        guides: &Guides,
+        params: &SimParams,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        params.check()?;
+        for (map, what) in [
+            (&params.frequency, "frequency map"),
+            (&params.amplitude, "amplitude map"),
+            (&params.decay, "decay map"),
+        ] {
+            map.validate(&rest, what)?;
+        }
+        let frame = PosedFrame::with_guides(rest, guides, params.joints, arena)?;
+        let n = guides.len();
+        let j = params.joints;
+        let roots = arena.alloc::<Root>(n)?;
+        roots.copy_from_slice(guides.roots);
+        let local = arena.alloc::<f32>(n * 3 * j)?;
+        let lengths = arena.alloc::<f32>(n * (j - 1))?;
+        let constants = arena.alloc::<GuideConstants>(n)?;
+        for g in 0..n {
+            let r = &roots[g];
+            let (face, u, v) = (r.face as usize, r.u, r.v);
+            let spring = TipSpring {
+                frequency: params.frequency.sample(&rest, face, u, v),
+                amplitude: params.amplitude.sample(&rest, face, u, v),
+                decay: params.decay.sample(&rest, face, u, v),
+            };
+            if !spring.is_valid() {
+                return Err(Error::OutOfDomain {
+                    what: "guide springs (frequency 0..=1000, amplitude 0..=1, decay 0..=10000)",
+                    index: g,
+                });
+            }
+            let mut reach = 0.0;
+            for k in 0..j {
+                let p = frame.local_point(g, k);
+                local[(g * j + k) * 3..(g * j + k) * 3 + 3].copy_from_slice(&p.to_array());
+                if k > 0 {
+                    let len = p.distance(frame.local_point(g, k - 1));
+                    lengths[g * (j - 1) + k - 1] = len;
+                    reach += len;
+                }
+            }
+            constants[g] = GuideConstants {
+                spring_frequency: spring.frequency,
+                spring_amplitude: spring.amplitude,
+                spring_decay: spring.decay,
+                reach,
+            };
+        }
+        // the links are made at rest, between the guides' rest tips
+        let rest_tips = arena.alloc::<[f32; 3]>(n)?;
+        for (g, t) in rest_tips.iter_mut().enumerate() {
+            *t = frame.world_point(g, j - 1).to_array();
+        }
+        let links = Links::new(rest_tips, &params.links, arena)?;
+        let blocks = arena.alloc::<f32>(n * Self::block_floats(params))?;
+        blocks.fill(0.0);
+        Ok(Sim {
+            params: SimParams {
+                frequency: ScalarMap::Constant(0.0),
+                amplitude: ScalarMap::Constant(0.0),
+                decay: ScalarMap::Constant(0.0),
+                ..*params
+            },
+            roots,
+            rest: local,
+            lengths,
+            constants,
+            links,
+            blocks,
+            snapshot: rest_tips,
+            faces: rest.triangle_count(),
+        })
+    }
+
+    /// Number of guides.
+    pub fn len(&self) -> usize {
+        self.roots.len()
+    }
+
+    /// True without guides (never: [`Sim::new`] needs one).
+    pub fn is_empty(&self) -> bool {
+        self.roots.is_empty()
+    }
+
+    /// Points per posed guide.
+    pub fn points(&self) -> usize {
+        self.params.points
+    }
+
+    /// The guides' roots.
+    pub fn roots(&self) -> &[Root] {
+        self.roots
+    }
+
+    /// The link network.
+    pub fn links(&self) -> &Links<'a> {
+        &self.links
+    }
+
+    /// Posed point `k` of guide `g` after the last step, in world space
+    /// (zero before the first step).
+    pub fn posed(&self, g: usize, k: usize) -> Vec3 {
+        self.root_frame(g).to_world(self.posed_local(g, k))
+    }
+
+    /// Posed point `k` of guide `g` after the last step, in its root frame.
+    pub fn posed_local(&self, g: usize, k: usize) -> Vec3 {
+        let b = self.block(g);
+        Vec3::new(b[POSED + 3 * k], b[POSED + 3 * k + 1], b[POSED + 3 * k + 2])
+    }
+
+    /// Guide `g`'s root frame at the last step.
+    pub fn root_frame(&self, g: usize) -> Frame {
+        last_frame(self.block(g))
+    }
+
+    /// The spring target of guide `g` at the last step (after the links).
+    pub fn target(&self, g: usize) -> Vec3 {
+        let b = self.block(g);
+        Vec3::new(b[TARGET], b[TARGET + 1], b[TARGET + 2])
+    }
+
+    fn block(&self, g: usize) -> &[f32] {
+        let per = Self::block_floats(&self.params);
+        &self.blocks[g * per..(g + 1) * per]
+    }
+
+    /// Forgets the motion: the next step starts from the neutral pose.
+    pub fn reset(&mut self) {
+        self.blocks.fill(0.0);
+    }
+
+    /// Checks the step's inputs and splits the simulation into what the
+    /// step's phases read and the per-guide blocks they write (see the
+    /// module docs); [`Sim::step`] runs every phase on one thread.
+    pub fn begin<'s>(
+        &'s mut self,
+        frame: &'s PosedFrame,
+        colliders: &'s Colliders<'s>,
+        dt: f32,
+    ) -> Result<Step<'s>, Error> {
+        if !(dt > 0.0 && dt <= 1.0) {
+            return Err(Error::InvalidArgument("dt must be in (0, 1] seconds"));
+        }
+        if frame.mesh().triangle_count() != self.faces {
+            return Err(Error::InvalidArgument(
+                "the frame's mesh has another triangle count than the rest mesh",
+            ));
+        }
+        colliders.check()?;
+        let block = Self::block_floats(&self.params);
+        Ok(Step {
+            context: StepContext {
+                params: &self.params,
+                roots: self.roots,
+                rest: self.rest,
+                lengths: self.lengths,
+                constants: self.constants,
+                links: &self.links,
+                frame,
+                colliders,
+                dt,
+                block,
+            },
+            blocks: &mut *self.blocks,
+            snapshot: &mut *self.snapshot,
+        })
+    }
+
+    /// One step of `dt` seconds on `frame` (the step's deformed mesh) with
+    /// `colliders`, on the calling thread.
+    pub fn step(
+        &mut self,
+        frame: &PosedFrame,
+        colliders: &Colliders,
+        dt: f32,
+    ) -> Result<(), Error> {
+        let Step {
+            context: ctx,
+            blocks,
+            snapshot,
+        } = self.begin(frame, colliders, dt)?;
+        ctx.advance(0, blocks);
+        for _ in 0..ctx.link_iterations() {
+            ctx.snapshot(blocks, snapshot);
+            ctx.relax(0, blocks, snapshot);
+        }
+        ctx.finish(0, blocks);
+        Ok(())
+    }
+
+    /// Bytes [`Sim::save`] writes.
+    pub fn state_bytes(&self) -> usize {
+        HEADER + self.len() * STATE_FLOATS * 4 + 4
+    }
+
+    /// Writes the state carried between steps to `out` (at least
+    /// [`Sim::state_bytes`]): little-endian, a header (magic "PLGS",
+    /// version, guide count, joints, points), the floats, a CRC-32 of all
+    /// before it. Returns the bytes written.
+    pub fn save(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let needed = self.state_bytes();
+        if out.len() < needed {
+            return Err(Error::OutputTooSmall {
+                needed,
+                available: out.len(),
+            });
+        }
+        let out = &mut out[..needed];
+        out[..4].copy_from_slice(&MAGIC);
+        let words = [
+            STATE_VERSION,
+            self.len() as u32,
+            self.params.joints as u32,
+            self.params.points as u32,
+            0,
+        ];
+        for (i, w) in words.iter().enumerate() {
+            out[4 + 4 * i..8 + 4 * i].copy_from_slice(&w.to_le_bytes());
+        }
+        let per = Self::block_floats(&self.params);
+        let mut at = HEADER;
+        for g in 0..self.len() {
+            for &x in &self.blocks[g * per..g * per + STATE_FLOATS] {
+                out[at..at + 4].copy_from_slice(&x.to_le_bytes());
+                at += 4;
+            }
+        }
+        let crc = crc32fast::hash(&out[..at]);
+        out[at..at + 4].copy_from_slice(&crc.to_le_bytes());
+        Ok(needed)
+    }
+
+    /// Restores a state [`Sim::save`] wrote for a simulation of the same
+    /// guides and counts. Checks everything first (length, magic, version,
+    /// counts, checksum, finite values) and changes nothing on error.
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        if bytes.len() < HEADER + 4 {
+            return Err(Error::Corrupt {
+                what: "state truncated before its header ends",
+            });
+        }
+        if bytes[..4] != MAGIC {
+            return Err(Error::VersionMismatch {
+                found: 0,
+                supported: STATE_VERSION,
+            });
+        }
+        let word =
+            |i: usize| u32::from_le_bytes(bytes[4 + 4 * i..8 + 4 * i].try_into().unwrap_or([0; 4]));
+        if word(0) != STATE_VERSION {
+            return Err(Error::VersionMismatch {
+                found: word(0),
+                supported: STATE_VERSION,
+            });
+        }
+        if bytes.len() != self.state_bytes() {
+            return Err(Error::Corrupt {
+                what: "state length does not match its guide count",
+            });
+        }
+        let body = bytes.len() - 4;
+        let crc = u32::from_le_bytes(bytes[body..].try_into().unwrap_or([0; 4]));
+        if crc32fast::hash(&bytes[..body]) != crc {
+            return Err(Error::Corrupt {
+                what: "state checksum mismatch",
+            });
+        }
+        if word(1) as usize != self.len()
+            || word(2) as usize != self.params.joints
+            || word(3) as usize != self.params.points
+        {
+            return Err(Error::InvalidArgument(
+                "the state is of another guide set (guide, joint or point count)",
+            ));
+        }
+        let floats = bytes[HEADER..body]
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]));
+        if !floats.clone().all(f32::is_finite) {
+            return Err(Error::Corrupt {
+                what: "state holds a non-finite value",
+            });
+        }
+        let per = Self::block_floats(&self.params);
+        for (i, x) in floats.enumerate() {
+            let (g, k) = (i / STATE_FLOATS, i % STATE_FLOATS);
+            self.blocks[g * per + k] = x;
+        }
+        Ok(())
+    }
+}
+
+/// Joint `k` of guide `g` at rest, in its root frame.
+fn rest_joint(rest: &[f32], joints: usize, g: usize, k: usize) -> Vec3 {
+    let at = (g * joints + k) * 3;
+    Vec3::new(rest[at], rest[at + 1], rest[at + 2])
+}
+
+/// The root frame a block stored at its last step.
+fn last_frame(b: &[f32]) -> Frame {
+    let at = |o: usize| Vec3::new(b[o], b[o + 1], b[o + 2]);
+    Frame {
+        origin: at(FRAME),
+        t: at(FRAME + 3),
+        b: at(FRAME + 6),
+        n: at(FRAME + 9),
+    }
+}
+
+/// A step begun: what its phases read, and what they write.
+pub struct Step<'s> {
+    /// What every phase reads.
+    pub context: StepContext<'s>,
+    /// Every guide's block, [`StepContext::block_floats`] floats each.
+    pub blocks: &'s mut [f32],
+    /// One target per guide, for the link relaxations.
+    pub snapshot: &'s mut [[f32; 3]],
+}
+
+/// What every phase of a step reads (see [`Sim::begin`]).
+pub struct StepContext<'s> {
+    params: &'s SimParams<'static>,
+    roots: &'s [Root],
+    rest: &'s [f32],
+    lengths: &'s [f32],
+    constants: &'s [GuideConstants],
+    links: &'s Links<'s>,
+    frame: &'s PosedFrame<'s>,
+    colliders: &'s Colliders<'s>,
+    dt: f32,
+    block: usize,
+}
+
+impl StepContext<'_> {
+    /// Floats per guide block: a range of `n` guides takes `n` blocks.
+    pub fn block_floats(&self) -> usize {
+        self.block
+    }
+
+    /// Link relaxations this step runs.
+    pub fn link_iterations(&self) -> u32 {
+        if self.links.is_empty() {
+            0
+        } else {
+            self.params.links.iterations
+        }
+    }
+
+    /// Phase 1 for the guides `first ..` whose blocks `blocks` holds: the
+    /// neutral pose, the tip spring, the target.
+    pub fn advance(&self, first: usize, blocks: &mut [f32]) {
+        let j = self.params.joints;
+        for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
+            let g = first + i;
+            let r = &self.roots[g];
+            let frame = self.frame.root_frame(r.face as usize, r.u, r.v);
+            let tip = frame.to_world(rest_joint(self.rest, j, g, j - 1));
+            let at = |b: &[f32], o: usize| Vec3::new(b[o], b[o + 1], b[o + 2]);
+            let c = self.constants[g];
+            let spring = TipSpring {
+                frequency: c.spring_frequency,
+                amplitude: c.spring_amplitude,
+                decay: c.spring_decay,
+            };
+            let (mut y, mut v, mut velocity) = (at(b, Y), at(b, V), Vec3::ZERO);
+            if b[STARTED] != 0.0 {
+                let last = last_frame(b);
+                if frame.origin.distance(last.origin) > self.params.teleport * c.reach {
+                    // a cut: the swing rides along with the root frame
+                    let carry = |w: Vec3| {
+                        let l = Vec3::new(w.dot(last.t), w.dot(last.b), w.dot(last.n));
+                        frame.t * l.x + frame.b * l.y + frame.n * l.z
+                    };
+                    y = carry(y);
+                    v = carry(v);
+                    velocity = carry(at(b, TIP_VELOCITY));
+                } else {
+                    velocity = (tip - at(b, TIP)) / self.dt;
+                    // the tip keeps its velocity; the neutral tip's changed
+                    v += at(b, TIP_VELOCITY) - velocity;
+                }
+                (y, v) = spring.advance(y, v, self.dt);
+                // bounded whatever the motion: the tip can never be farther
+                // than twice the reach from the neutral tip
+                let reach = 2.0 * c.reach;
+                if y.length() > reach {
+                    y = y.normalize_or_zero() * reach;
+                }
+                let speed = reach
+                    * (core::f32::consts::TAU * spring.frequency + spring.decay + 1.0 / self.dt);
+                if v.length() > speed {
+                    v = v.normalize_or_zero() * speed;
+                }
+            }
+            let put = |b: &mut [f32], o: usize, w: Vec3| b[o..o + 3].copy_from_slice(&w.to_array());
+            put(b, Y, y);
+            put(b, V, v);
+            put(b, TIP, tip);
+            put(b, TIP_VELOCITY, velocity);
+            put(b, FRAME, frame.origin);
+            put(b, FRAME + 3, frame.t);
+            put(b, FRAME + 6, frame.b);
+            put(b, FRAME + 9, frame.n);
+            b[STARTED] = 1.0;
+            put(b, TARGET, tip + y * spring.amplitude);
+        }
+    }
+
+    /// Copies every guide's target from `blocks` (all of them) to `snapshot`.
+    pub fn snapshot(&self, blocks: &[f32], snapshot: &mut [[f32; 3]]) {
+        for (b, s) in blocks.chunks_exact(self.block).zip(snapshot.iter_mut()) {
+            *s = [b[TARGET], b[TARGET + 1], b[TARGET + 2]];
+        }
+    }
+
+    /// Phase 2, one relaxation, for the guides `first ..` whose blocks
+    /// `blocks` holds, against the `snapshot` of every target.
+    pub fn relax(&self, first: usize, blocks: &mut [f32], snapshot: &[[f32; 3]]) {
+        let stiffness = self.params.links.stiffness;
+        for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
+            let t = self.links.relaxed(first + i, snapshot, stiffness);
+            b[TARGET..TARGET + 3].copy_from_slice(&t.to_array());
+        }
+    }
+
+    /// Phase 3 for the guides `first ..` whose blocks `blocks` holds: IK
+    /// toward the target, the Catmull-Rom curve, the push-out.
+    pub fn finish(&self, first: usize, blocks: &mut [f32]) {
+        let (j, m) = (self.params.joints, self.params.points);
+        let mut joints = [Vec3::ZERO; MAX_JOINTS];
+        let mut posed = [Vec3::ZERO; MAX_JOINTS];
+        // in the root frame: the neutral joints are the rest joints, and
+        // lengths hold to the last bit whatever the world coordinates
+        for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
+            let g = first + i;
+            for (k, p) in joints[..j].iter_mut().enumerate() {
+                *p = rest_joint(self.rest, j, g, k);
+            }
+            let frame = last_frame(b);
+            let target = frame.to_local(Vec3::new(b[TARGET], b[TARGET + 1], b[TARGET + 2]));
+            let reach = self.constants[g].reach;
+            let lengths = &self.lengths[g * (j - 1)..(g + 1) * (j - 1)];
+            ik::solve(&mut joints[..j], lengths, target, reach, &self.params.ik);
+            spline::resample(&joints[..j], &mut posed[..m]);
+            push_out(self.colliders, &frame, &mut posed[..m], reach);
+            for (k, p) in posed[..m].iter().enumerate() {
+                b[POSED + 3 * k..POSED + 3 * k + 3].copy_from_slice(&p.to_array());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::collision::{Capsule, Plane, SignedDistance, Sphere};
+    use crate::guides::CvLayout;
+    use crate::surface::body::Body;
+    use crate::testmesh::{roots, sphere, straight_guides, TestMesh};
+    use crate::Strided;
+    use glam::Quat;
+
+    const JOINTS: usize = 8;
+
+    /// A unit sphere with straight guides of length 0.3 along the normals.
+    struct Scene {
+        rest: TestMesh,
+        guide_roots: Vec<Root>,
+        guide_points: Vec<[f32; 3]>,
+    }
+
+    impl Scene {
+        fn new(guides: u32) -> Scene {
+            let rest = sphere(16, 32);
+            let guide_roots = roots(rest.mesh(), guides, 3);
+            let guide_points = straight_guides(&rest.mesh(), &guide_roots, JOINTS, 0.3);
+            Scene {
+                rest,
+                guide_roots,
+                guide_points,
+            }
+        }
+
+        fn guides(&self) -> Guides<'_> {
+            Guides {
+                roots: &self.guide_roots,
+                points: Strided::from_slice(&self.guide_points),
+                layout: CvLayout::Fixed(JOINTS),
+            }
+        }
+
+        fn sim<'a>(&'a self, params: &SimParams, buf: &'a mut Vec<u8>) -> Sim<'a> {
+            let mut layout = ArenaLayout::new();
+            Sim::layout(
+                &mut layout,
+                self.rest.p.len(),
+                self.guide_roots.len(),
+                params,
+            );
+            *buf = vec![0u8; layout.bytes()];
+            Sim::new(
+                self.rest.mesh(),
+                &self.guides(),
+                params,
+                &mut Arena::new(buf),
+            )
+            .unwrap()
+        }
+    }
+
+    /// The rest sphere moved rigidly.
+    fn moved(rest: &TestMesh, turn: Quat, shift: Vec3) -> TestMesh {
+        TestMesh {
+            p: rest
+                .p
+                .iter()
+                .map(|&p| (turn * Vec3::from(p) + shift).into())
+                .collect(),
+            n: rest
+                .n
+                .iter()
+                .map(|&n| (turn * Vec3::from(n)).into())
+                .collect(),
+            ..rest.clone()
+        }
+    }
+
+    /// Steps `sim` on `mesh` with `colliders` and `dt`.
+    fn step(sim: &mut Sim, mesh: &TestMesh, colliders: &Colliders, dt: f32) {
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, mesh.p.len(), 1, 2);
+        let mut buf = vec![0u8; layout.bytes()];
+        let frame = PosedFrame::new(mesh.mesh(), 1, 2, &mut Arena::new(&mut buf)).unwrap();
+        sim.step(&frame, colliders, dt).unwrap();
+    }
+
+    fn posed(sim: &Sim) -> Vec<Vec3> {
+        (0..sim.len())
+            .flat_map(|g| (0..sim.points()).map(move |k| (g, k)))
+            .map(|(g, k)| sim.posed(g, k))
+            .collect()
+    }
+
+    /// Every point finite, every segment at its rest length (within 1e-5
+    /// of the guide's length), every tip within reach of its root.
+    fn assert_sound(sim: &Sim, what: &str) {
+        let j = JOINTS;
+        for g in 0..sim.len() {
+            let reach = sim.constants[g].reach;
+            let p: Vec<Vec3> = (0..j).map(|k| sim.posed_local(g, k)).collect();
+            assert!(
+                p.iter().all(|q| q.is_finite()),
+                "{what}: guide {g} not finite"
+            );
+            for k in 0..j - 1 {
+                let (len, rest) = (p[k].distance(p[k + 1]), sim.lengths[g * (j - 1) + k]);
+                assert!(
+                    (len - rest).abs() <= 1e-5 * reach.max(1.0),
+                    "{what}: guide {g} segment {k}: {len} vs {rest}"
+                );
+            }
+            assert!(
+                p[j - 1].distance(p[0]) <= reach * (1.0 + 1e-5),
+                "{what}: guide {g} tip beyond reach"
+            );
+        }
+    }
+
+    fn neutral_distance(sim: &Sim, scene_mesh: &TestMesh) -> f32 {
+        // distance of every tip from its neutral tip on `scene_mesh`
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, scene_mesh.p.len(), 1, 2);
+        let mut buf = vec![0u8; layout.bytes()];
+        let frame = PosedFrame::new(scene_mesh.mesh(), 1, 2, &mut Arena::new(&mut buf)).unwrap();
+        let j = JOINTS;
+        (0..sim.len())
+            .map(|g| {
+                let r = &sim.roots[g];
+                let f = frame.root_frame(r.face as usize, r.u, r.v);
+                let l = &sim.rest[(g * j + j - 1) * 3..(g * j + j) * 3];
+                f.to_world(Vec3::new(l[0], l[1], l[2]))
+                    .distance(sim.posed(g, j - 1))
+            })
+            .fold(0.0, f32::max)
+    }
+
+    fn params() -> SimParams<'static> {
+        SimParams {
+            joints: JOINTS,
+            points: JOINTS,
+            ..SimParams::default()
+        }
+    }
+
+    #[test]
+    fn a_still_character_stays_bitwise_still() {
+        let s = Scene::new(60);
+        let mut buf = vec![];
+        let mut sim = s.sim(&params(), &mut buf);
+        step(&mut sim, &s.rest, &Colliders::default(), 1.0 / 24.0);
+        let first = posed(&sim);
+        for _ in 0..10 {
+            step(&mut sim, &s.rest, &Colliders::default(), 1.0 / 24.0);
+            assert!(posed(&sim) == first);
+        }
+        assert_sound(&sim, "still");
+        assert!(neutral_distance(&sim, &s.rest) < 1e-5);
+    }
+
+    #[test]
+    fn violent_motion_stays_finite_bounded_and_settles() {
+        let s = Scene::new(80);
+        for spring in [
+            TipSpring::default(),
+            TipSpring {
+                frequency: 0.0,
+                amplitude: 1.0,
+                decay: 0.0,
+            },
+            TipSpring {
+                frequency: 1000.0,
+                amplitude: 1.0,
+                decay: 0.0,
+            },
+            TipSpring {
+                frequency: 2.0,
+                amplitude: 1.0,
+                decay: 10000.0,
+            },
+        ] {
+            let p = SimParams {
+                frequency: ScalarMap::Constant(spring.frequency),
+                amplitude: ScalarMap::Constant(spring.amplitude),
+                decay: ScalarMap::Constant(spring.decay),
+                ..params()
+            };
+            let mut buf = vec![];
+            let mut sim = s.sim(&p, &mut buf);
+            let mut t = 0.0f32;
+            let mut last = s.rest.clone();
+            for frame in 0..120 {
+                // dt jumps between 1/240 and 1/12; a walk, a spin of half a
+                // turn in one frame, a teleport of 100 m, a dead stop
+                let dt = if frame % 3 == 0 {
+                    1.0 / 12.0
+                } else {
+                    1.0 / 240.0
+                };
+                t += dt;
+                let (turn, shift) = match frame {
+                    0..=29 => (Quat::IDENTITY, Vec3::new(2.0 * t, 0.0, 0.0)),
+                    30..=39 => (
+                        Quat::from_rotation_y(core::f32::consts::PI),
+                        Vec3::new(2.0 * t, 0.0, 0.0),
+                    ),
+                    40..=59 => (
+                        Quat::from_rotation_y(core::f32::consts::PI),
+                        Vec3::new(100.0, 0.0, 0.0),
+                    ),
+                    _ => (Quat::from_rotation_z(1.0), Vec3::new(100.0, 5.0, 0.0)),
+                };
+                last = moved(&s.rest, turn, shift);
+                step(&mut sim, &last, &Colliders::default(), dt);
+                assert_sound(&sim, motion_name(frame));
+            }
+            // standing still from frame 60 on, long enough to settle
+            for _ in 0..240 {
+                step(&mut sim, &last, &Colliders::default(), 1.0 / 24.0);
+            }
+            assert_sound(&sim, "after the stop");
+            let off = neutral_distance(&sim, &last);
+            if spring.frequency > 0.0 && spring.decay > 0.0 {
+                assert!(off < 1e-3, "{spring:?} still {off} from neutral");
+            } else {
+                assert!(off <= 2.0 * 0.3 + 1e-4, "{spring:?}: {off}");
+            }
+        }
+    }
+
+    fn motion_name(frame: usize) -> &'static str {
+        match frame {
+            0..=29 => "walk",
+            30..=39 => "spin",
+            40..=59 => "teleport",
+            _ => "stop",
+        }
+    }
+
+    #[test]
+    fn a_teleport_carries_the_tip_without_a_whip() {
+        let s = Scene::new(40);
+        let mut buf = vec![];
+        let mut sim = s.sim(&params(), &mut buf);
+        step(&mut sim, &s.rest, &Colliders::default(), 1.0 / 24.0);
+        let far = moved(
+            &s.rest,
+            Quat::from_rotation_x(0.7),
+            Vec3::new(0.0, 100.0, 0.0),
+        );
+        step(&mut sim, &far, &Colliders::default(), 1.0 / 24.0);
+        // the guides were at rest: they arrive at rest, in the new place
+        assert!(neutral_distance(&sim, &far) < 1e-4);
+    }
+
+    #[test]
+    fn bits_do_not_depend_on_ranges_or_on_a_save_and_restore() {
+        let s = Scene::new(90);
+        let p = SimParams {
+            links: LinkParams {
+                radius: 0.5,
+                ..LinkParams::default()
+            },
+            ..params()
+        };
+        let poses: Vec<TestMesh> = (0..12)
+            .map(|k| {
+                moved(
+                    &s.rest,
+                    Quat::from_rotation_y(0.2 * k as f32),
+                    Vec3::new(0.1 * (k * k) as f32, 0.0, 0.0),
+                )
+            })
+            .collect();
+        let dt = 1.0 / 24.0;
+        let mut buf = vec![];
+        let mut whole = s.sim(&p, &mut buf);
+        let mut saved = vec![];
+        let mut reference = vec![];
+        for (k, m) in poses.iter().enumerate() {
+            step(&mut whole, m, &Colliders::default(), dt);
+            reference.push(posed(&whole));
+            if k == 5 {
+                saved = vec![0u8; whole.state_bytes()];
+                whole.save(&mut saved).unwrap();
+            }
+        }
+        // the same steps run in three uneven ranges per phase
+        let mut buf2 = vec![];
+        let mut split = s.sim(&p, &mut buf2);
+        for (k, m) in poses.iter().enumerate() {
+            let mut layout = ArenaLayout::new();
+            PosedFrame::layout(&mut layout, m.p.len(), 1, 2);
+            let mut fbuf = vec![0u8; layout.bytes()];
+            let frame = PosedFrame::new(m.mesh(), 1, 2, &mut Arena::new(&mut fbuf)).unwrap();
+            let colliders = Colliders::default();
+            let Step {
+                context: ctx,
+                blocks,
+                snapshot,
+            } = split.begin(&frame, &colliders, dt).unwrap();
+            let per = ctx.block_floats();
+            let cuts = [0, 7, 50, 90];
+            for w in cuts.windows(2) {
+                ctx.advance(w[0], &mut blocks[w[0] * per..w[1] * per]);
+            }
+            for _ in 0..ctx.link_iterations() {
+                ctx.snapshot(blocks, snapshot);
+                for w in cuts.windows(2) {
+                    ctx.relax(w[0], &mut blocks[w[0] * per..w[1] * per], snapshot);
+                }
+            }
+            for w in cuts.windows(2) {
+                ctx.finish(w[0], &mut blocks[w[0] * per..w[1] * per]);
+            }
+            assert!(posed(&split) == reference[k], "step {k}");
+        }
+        // a fresh simulation restored from step 5 gives steps 6.. bit for bit
+        let mut buf3 = vec![];
+        let mut resumed = s.sim(&p, &mut buf3);
+        resumed.restore(&saved).unwrap();
+        for (k, m) in poses.iter().enumerate().skip(6) {
+            step(&mut resumed, m, &Colliders::default(), dt);
+            assert!(posed(&resumed) == reference[k], "resumed step {k}");
+        }
+    }
+
+    #[test]
+    fn a_damaged_state_is_refused_and_changes_nothing() {
+        let s = Scene::new(20);
+        let mut buf = vec![];
+        let mut sim = s.sim(&params(), &mut buf);
+        let moved_mesh = moved(&s.rest, Quat::IDENTITY, Vec3::new(0.2, 0.0, 0.0));
+        step(&mut sim, &moved_mesh, &Colliders::default(), 0.05);
+        let mut good = vec![0u8; sim.state_bytes()];
+        sim.save(&mut good).unwrap();
+        let before = posed(&sim);
+        let mut flipped = good.clone();
+        flipped[40] ^= 1;
+        assert!(matches!(sim.restore(&flipped), Err(Error::Corrupt { .. })));
+        assert!(matches!(
+            sim.restore(&good[..good.len() - 1]),
+            Err(Error::Corrupt { .. })
+        ));
+        assert!(matches!(
+            sim.restore(&good[..10]),
+            Err(Error::Corrupt { .. })
+        ));
+        let mut magic = good.clone();
+        magic[0] = b'X';
+        assert!(matches!(
+            sim.restore(&magic),
+            Err(Error::VersionMismatch { found: 0, .. })
+        ));
+        let mut version = good.clone();
+        version[4] = 9;
+        assert!(matches!(
+            sim.restore(&version),
+            Err(Error::VersionMismatch { found: 9, .. })
+        ));
+        let mut short = vec![0u8; 10];
+        assert!(matches!(
+            sim.save(&mut short),
+            Err(Error::OutputTooSmall { .. })
+        ));
+        // nothing changed: the next step is the one the good state gives
+        step(&mut sim, &moved_mesh, &Colliders::default(), 0.05);
+        let mut buf2 = vec![];
+        let mut other = s.sim(&params(), &mut buf2);
+        other.restore(&good).unwrap();
+        step(&mut other, &moved_mesh, &Colliders::default(), 0.05);
+        assert!(posed(&sim) == posed(&other));
+        assert!(before.iter().all(|p| p.is_finite()));
+    }
+
+    struct Ball;
+
+    impl SignedDistance for Ball {
+        fn distances(&self, points: &[Vec3], out: &mut [f32]) {
+            for (p, d) in points.iter().zip(out) {
+                *d = p.distance(Vec3::new(0.0, 1.3, 0.0)) - 0.2;
+            }
+        }
+    }
+
+    #[test]
+    fn no_posed_point_ends_inside_a_collider() {
+        let s = Scene::new(400);
+        let mut buf = vec![];
+        let mut sim = s.sim(&params(), &mut buf);
+        // every collider clear of the skin (no root inside) but in the
+        // guides' way (they are 0.3 long)
+        let spheres = [Sphere {
+            centre: [1.35, 0.0, 0.0],
+            radius: 0.2,
+        }];
+        let capsules = [Capsule {
+            a: [0.0, 0.0, 1.25],
+            b: [0.0, 0.5, 1.25],
+            radius: 0.12,
+        }];
+        let planes = [Plane {
+            normal: [0.0, 1.0, 0.0],
+            offset: -1.1,
+        }];
+        let ball = Ball;
+        // the body: a second, small shell (an ear, a horn) beside the skin
+        let ear = TestMesh {
+            p: s.rest
+                .p
+                .iter()
+                .map(|&p| (Vec3::from(p) * 0.15 + Vec3::new(-0.8, 0.0, 0.8)).into())
+                .collect(),
+            ..s.rest.clone()
+        };
+        let ear_mesh = ear.mesh();
+        let mut body_buf = vec![0u8; Body::required_bytes(&ear_mesh).unwrap()];
+        let body = Body::new(&ear_mesh, &mut Arena::new(&mut body_buf)).unwrap();
+        let inside = |p: Vec3| {
+            p.distance(Vec3::from(spheres[0].centre)) < 0.2
+                || Vec3::new(p.x, p.y - p.y.clamp(0.0, 0.5), p.z - 1.25).length() < 0.12
+                || p.y < -1.1
+                || body.contains(p)
+                || p.distance(Vec3::new(0.0, 1.3, 0.0)) < 0.2
+        };
+        let colliders = Colliders {
+            spheres: &spheres,
+            capsules: &capsules,
+            planes: &planes,
+            body: Some(&body),
+            field: Some(&ball),
+        };
+        step(&mut sim, &s.rest, &Colliders::default(), 1.0 / 24.0);
+        let crossing = |sim: &Sim| {
+            (0..sim.len())
+                .filter(|&g| (1..JOINTS).any(|k| inside(sim.posed(g, k))))
+                .count()
+        };
+        let before = crossing(&sim);
+        assert!(
+            before > 20,
+            "the scene must put guides in the colliders ({before})"
+        );
+        step(&mut sim, &s.rest, &colliders, 1.0 / 24.0);
+        assert_sound(&sim, "collided");
+        assert_eq!(crossing(&sim), 0);
+    }
+
+    #[test]
+    fn links_reduce_strain_and_move_linked_tips_together() {
+        let s = Scene::new(200);
+        let p = SimParams {
+            links: LinkParams {
+                radius: 0.6,
+                max_links: 4,
+                iterations: 4,
+                stiffness: 1.0,
+            },
+            ..params()
+        };
+        let mut buf = vec![];
+        let mut sim = s.sim(&p, &mut buf);
+        assert!(!sim.links().is_empty());
+        // a jolt that throws the tips around
+        step(&mut sim, &s.rest, &Colliders::default(), 1.0 / 24.0);
+        let jolted = moved(
+            &s.rest,
+            Quat::from_rotation_z(0.6),
+            Vec3::new(0.5, -0.3, 0.0),
+        );
+        let mesh = jolted.mesh();
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, jolted.p.len(), 1, 2);
+        let mut fbuf = vec![0u8; layout.bytes()];
+        let frame = PosedFrame::new(mesh, 1, 2, &mut Arena::new(&mut fbuf)).unwrap();
+        let colliders = Colliders::default();
+        let Step {
+            context: ctx,
+            blocks,
+            snapshot,
+        } = sim.begin(&frame, &colliders, 1.0 / 24.0).unwrap();
+        ctx.advance(0, blocks);
+        ctx.snapshot(blocks, snapshot);
+        let before: Vec<[f32; 3]> = snapshot.to_vec();
+        let mut strains = vec![];
+        for _ in 0..4 {
+            ctx.snapshot(blocks, snapshot);
+            strains.push(ctx.links.strain(snapshot));
+            ctx.relax(0, blocks, snapshot);
+        }
+        ctx.snapshot(blocks, snapshot);
+        strains.push(ctx.links.strain(snapshot));
+        assert!(strains.windows(2).all(|w| w[1] <= w[0]), "{strains:?}");
+        assert!(strains[4] < 0.7 * strains[0], "{strains:?}");
+        // linked tips moved toward each other's motion: the spread of their
+        // moves shrank
+        let moves: Vec<Vec3> = before
+            .iter()
+            .zip(snapshot.iter())
+            .map(|(a, b)| Vec3::from(*b) - Vec3::from(*a))
+            .collect();
+        assert!(moves.iter().any(|m| m.length() > 0.0));
+    }
+}
