@@ -69,8 +69,8 @@ impl<'a> PosedFrame<'a> {
         })
     }
 
-    /// Checks a guide count (at least 1) and point count (2..=64) and gives
-    /// the floats the guides take.
+    /// Checks a guide count (1 .. u32::MAX) and point count (2..=64) and
+    /// gives the floats the guides take.
     pub fn check_sizes(guide_count: usize, points_per_strand: usize) -> Result<usize, Error> {
         if !(2..=MAX_STRAND_POINTS).contains(&points_per_strand) {
             return Err(Error::InvalidArgument(
@@ -79,6 +79,10 @@ impl<'a> PosedFrame<'a> {
         }
         if guide_count == 0 {
             return Err(Error::InvalidArgument("no guides"));
+        }
+        // bindings name guides by u32, with u32::MAX for none
+        if guide_count >= u32::MAX as usize {
+            return Err(Error::InvalidArgument("more guides than a binding can name"));
         }
         guide_count
             .checked_mul(6 * points_per_strand)
