@@ -102,6 +102,9 @@ typedef struct PelageFrameTy PelageFrameTy;
 // The opaque object a `PelageGroom` points to.
 typedef struct PelageGroomTy PelageGroomTy;
 
+// The opaque object a `PelageSim` points to.
+typedef struct PelageSimTy PelageSimTy;
+
 // Parting regions: a strand only uses guides of its own region id.
 typedef struct PelageRegionMap {
   // Storage kind: a PelageRegionKind value.
@@ -389,6 +392,108 @@ typedef struct PelageSettleInfo {
   uint32_t unresolved;
 } PelageSettleInfo;
 
+// Simulation parameters; start from pelage_sim_params_defaults().
+typedef struct PelageSimParams {
+  // Joints per guide (2..64): the guides are resampled to it.
+  uint32_t joints;
+  // Points per posed guide (2..64): a Catmull-Rom curve through the
+  // joints, resampled; equal to `joints`, the joints themselves.
+  uint32_t points_per_guide;
+  // Tip spring natural frequency in hertz (0..1000), per guide at its root.
+  struct PelageMap frequency;
+  // Share of the spring's lag the tip shows (0: the neutral pose, 1: the
+  // full lag), per guide.
+  struct PelageMap amplitude;
+  // Exponential decay rate of the swing in 1/s (0..10000), per guide.
+  struct PelageMap decay;
+  // IK stops when the tip is this share of the guide's length from its
+  // target (0..1).
+  float ik_tolerance;
+  // Most IK sweeps per step (1..256).
+  uint32_t ik_max_iterations;
+  // Stiffness of the root joint (0 <= s < 1): the share of its turn a
+  // joint does not take per sweep. Root 0 and tip 0 is pure CCD, which
+  // bends the tip first; a stiff tip moves the bend toward the root.
+  float root_stiffness;
+  // Stiffness of the last joint; the joints between go linearly.
+  float tip_stiffness;
+  // Tips closer than this at rest may be linked (world units; 0: none).
+  float link_radius;
+  // Most links a tip makes to its nearest tips (0..16).
+  uint32_t max_links;
+  // Link relaxations per step (0..16).
+  uint32_t link_iterations;
+  // Share of its links' mean correction a tip takes per relaxation (0..1).
+  float link_stiffness;
+  // A root that moves more than this many times its guide's length in
+  // one step has teleported: its swing is carried along rigidly (> 0).
+  float teleport;
+} PelageSimParams;
+
+// Simulated guides: the state of the tip springs across frames, the rest
+// shapes, the tip links. Created by `pelage_sim_new` in memory the host
+// provides (sized by `pelage_sim_query`), stepped frame by frame by
+// `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
+// bytes; released by `pelage_sim_free`.
+typedef struct PelageSimTy *PelageSim;
+
+// A solid sphere collider.
+typedef struct PelageSphere {
+  // Centre.
+  float centre[3];
+  // Radius (>= 0).
+  float radius;
+} PelageSphere;
+
+// A solid capsule collider: the points within `radius` of the segment a-b.
+typedef struct PelageCapsule {
+  // One end of the axis.
+  float a[3];
+  // The other end.
+  float b[3];
+  // Radius (>= 0).
+  float radius;
+} PelageCapsule;
+
+// A solid half-space collider: the points p with dot(normal, p) < offset
+// (normal not zero, used as given).
+typedef struct PelagePlane {
+  // Outward normal.
+  float normal[3];
+  // dot(normal, p) on the surface.
+  float offset;
+} PelagePlane;
+
+// A host's signed distance field (negative inside): writes the distance
+// of each of `count` points (x, y, z floats, packed) to `distances`.
+// Called from the threads a step runs on, possibly at once: it must be
+// safe to call concurrently.
+typedef void (*PelageDistanceFn)(void *user_data, const float *points, size_t count, float *distances);
+
+// What the guides collide with in one step; every array may be NULL with
+// a count of 0.
+typedef struct PelageColliders {
+  // Spheres.
+  const struct PelageSphere *spheres;
+  // Number of spheres.
+  size_t sphere_count;
+  // Capsules.
+  const struct PelageCapsule *capsules;
+  // Number of capsules.
+  size_t capsule_count;
+  // Half-spaces.
+  const struct PelagePlane *planes;
+  // Number of half-spaces.
+  size_t plane_count;
+  // Nonzero: collide with the body itself, the frame's (deformed) mesh
+  // as a solid (its grid is built each step).
+  uint32_t body;
+  // A signed distance field, or NULL.
+  PelageDistanceFn distance;
+  // Passed unchanged to `distance`.
+  void *distance_user_data;
+} PelageColliders;
+
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
   // Number of roots wanted on the whole mesh (at most 2^28; unused when
@@ -668,6 +773,108 @@ enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, si
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and grooms.
 enum PelageStatus pelage_settle(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, struct PelageSettleInfo *info);
+
+// Defaults: 16 joints and points, frequency 1.5 Hz, amplitude 1, decay
+// 3/s, IK tolerance 1e-3 with 12 sweeps, stiffness 0 at the root and 0.9
+// at the tip, no links (radius 0; 4 links, 2 relaxations, stiffness 0.5
+// once a radius is set), teleport at 20 guide lengths.
+//
+// Thread safety: may be called from any thread at any time.
+struct PelageSimParams pelage_sim_params_defaults(void);
+
+// Memory bytes pelage_sim_new needs for `guide_count` guides on
+// `rest_mesh` with `params`.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
+// OUT_OF_RANGE, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_sim_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, const struct PelageSimParams *params, size_t *memory_bytes);
+
+// Creates a simulation of `rest_guides` on `rest_mesh` (both at rest:
+// the guides' shapes in their root frames are their neutral pose) in the
+// host's `memory` (`memory_bytes` from pelage_sim_query, any alignment),
+// which must stay valid and untouched until pelage_sim_free. The maps are
+// sampled at the guide roots; tips within `link_radius` are linked. Every
+// guide starts at its neutral pose. On failure `*out_sim` is untouched.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a parameter, or a map
+// value out of its range at some guide), NON_FINITE, OUT_OF_RANGE,
+// CAPACITY_EXCEEDED (the memory), MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_sim_new(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageSimParams *params, void *memory, size_t memory_bytes, PelageSim *out_sim);
+
+// Releases a simulation (its memory is the host's again). NULL is
+// accepted and does nothing.
+//
+// Thread safety: no other call may use `sim` during or after this one.
+void pelage_sim_free(PelageSim sim);
+
+// Advances the simulation by `dt` seconds (0 < dt <= 1; it may change
+// from step to step) to `frame` (this frame's deformed mesh; its guides
+// are not read), colliding with `colliders` (NULL: none). Per guide: the
+// neutral pose (the rest shape carried by the root frame), the tip spring,
+// the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
+// `thread_count` threads (0: all cores); the bits do not depend on it.
+// Everything is checked first; on failure the state is unchanged.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
+// another mesh), MISALIGNED, CAPACITY_EXCEEDED (the body grid's memory),
+// PANIC.
+//
+// Thread safety: no other call may use `sim` during this one; the frame
+// may be read by other calls meanwhile.
+enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct PelageColliders *colliders, float dt, uint32_t thread_count);
+
+// Writes the posed guides of the last step (world space; all zero before
+// the first step): `points_per_guide` float3 per guide, guide after guide,
+// `point_stride` bytes apart (>= 12, a multiple of 4), capacity
+// `point_capacity` points. Hand them to pelage_frame_set_guides (with the
+// simulated guides' roots) to expand render hairs from them.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (stride),
+// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+//
+// Thread safety: concurrent reads of one sim are safe; not during a step.
+enum PelageStatus pelage_sim_read(PelageSim sim, void *points, size_t point_stride, size_t point_capacity);
+
+// Forgets the motion: the next step starts every guide from its neutral
+// pose (a cut, the start of a shot).
+//
+// Returns OK, NULL_PARAMETER, PANIC.
+//
+// Thread safety: no other call may use `sim` during this one.
+enum PelageStatus pelage_sim_reset(PelageSim sim);
+
+// Writes the bytes pelage_sim_save needs to `*state_bytes`.
+//
+// Returns OK, NULL_PARAMETER, PANIC.
+//
+// Thread safety: concurrent with reads of `sim`; not during a step.
+enum PelageStatus pelage_sim_state_size(PelageSim sim, size_t *state_bytes);
+
+// Saves the state carried between steps (little-endian: magic "PLGS",
+// version, counts, the state, a CRC-32) to `out` (capacity `capacity`
+// bytes), so that a farm task can restore it and go on with the same bits
+// as an uninterrupted run. `*written` gets the size.
+//
+// Returns OK, NULL_PARAMETER, CAPACITY_EXCEEDED (the needed size is in
+// `*written`), PANIC.
+//
+// Thread safety: concurrent with reads of `sim`; not during a step.
+enum PelageStatus pelage_sim_save(PelageSim sim, void *out, size_t capacity, size_t *written);
+
+// Restores a state pelage_sim_save wrote, for a simulation made with the
+// same guides and parameters. Everything is checked first (length, magic,
+// version, counts, checksum, finite values); on failure nothing changes.
+//
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values),
+// VERSION_MISMATCH (magic or format version), INVALID_ARGUMENT (another
+// guide set), PANIC.
+//
+// Thread safety: no other call may use `sim` during this one.
+enum PelageStatus pelage_sim_restore(PelageSim sim, const void *state, size_t state_bytes);
 
 // Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
 // seed 0, target_count 0, radius 0 (derived from the count), no progress

@@ -19,6 +19,7 @@ mod mesh;
 mod region;
 mod roots;
 mod settle;
+mod sim;
 mod stamp;
 mod threads;
 
@@ -46,6 +47,12 @@ pub use mesh::PelageMeshDesc;
 pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};
+pub use sim::{
+    pelage_sim_free, pelage_sim_new, pelage_sim_params_defaults, pelage_sim_query, pelage_sim_read,
+    pelage_sim_reset, pelage_sim_restore, pelage_sim_save, pelage_sim_state_size, pelage_sim_step,
+    PelageCapsule, PelageColliders, PelageDistanceFn, PelagePlane, PelageSim, PelageSimParams,
+    PelageSimTy, PelageSphere,
+};
 pub use stamp::{
     pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageProgressFn,
     PelageStampInfo, PelageStampParams,

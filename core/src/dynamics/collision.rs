@@ -52,8 +52,9 @@ pub struct Plane {
 /// A host's signed distance field: negative inside. Called from the
 /// threads a step runs on, with a guide's points at a time.
 pub trait SignedDistance: Sync {
-    /// Writes the signed distance of each of `points` to `out` (as long).
-    fn distances(&self, points: &[Vec3], out: &mut [f32]);
+    /// Writes the signed distance of each of `points` (x, y, z) to `out`
+    /// (as long).
+    fn distances(&self, points: &[[f32; 3]], out: &mut [f32]);
 }
 
 /// Everything the guides collide with in one step.
@@ -195,8 +196,13 @@ impl<'c, 'r> Near<'c, 'r> {
         }
         if let Some(field) = all.field {
             let mut d = [0.0f32; MAX_POINTS];
-            let d = &mut d[..points.len()];
-            field.distances(points, d);
+            let mut xyz = [[0.0f32; 3]; MAX_POINTS];
+            let n = points.len().min(MAX_POINTS);
+            for (o, p) in xyz.iter_mut().zip(&points[..n]) {
+                *o = p.to_array();
+            }
+            let d = &mut d[..n];
+            field.distances(&xyz[..n], d);
             // NaN from a host field counts as inside: never trusted as clear
             if !d.iter().all(|&x| x >= 0.0) {
                 return false;

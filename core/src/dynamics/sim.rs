@@ -175,7 +175,7 @@ impl<'a> Sim<'a> {
     /// at the guides' roots; a value out of its range is an error naming
     /// the guide.
     pub fn new(
-        rest: Mesh<'a>,
+        rest: Mesh<'_>,
         guides: &Guides,
         params: &SimParams,
         arena: &mut Arena<'a>,
@@ -1007,9 +1007,9 @@ mod tests {
     struct Ball;
 
     impl SignedDistance for Ball {
-        fn distances(&self, points: &[Vec3], out: &mut [f32]) {
+        fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
             for (p, d) in points.iter().zip(out) {
-                *d = p.distance(Vec3::new(0.0, 1.3, 0.0)) - 0.2;
+                *d = Vec3::from(*p).distance(Vec3::new(0.0, 1.3, 0.0)) - 0.2;
             }
         }
     }

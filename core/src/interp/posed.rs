@@ -31,7 +31,7 @@ pub struct PosedFrame<'a> {
     posed: bool,
 }
 
-impl<'a> PosedFrame<'a> {
+impl<'m> PosedFrame<'m> {
     /// Adds the arena bytes [`PosedFrame::new`] needs for a mesh of
     /// `vertices` vertices and `guides` guides.
     pub fn layout(
@@ -48,8 +48,8 @@ impl<'a> PosedFrame<'a> {
     /// Checks the deformed `mesh`, computes its vertex tangents and makes
     /// room for `guide_count` guides of `points_per_strand` points (2..=64).
     /// The frame has no guides until [`PosedFrame::pose`].
-    pub fn new(
-        mesh: Mesh<'a>,
+    pub fn new<'a: 'm>(
+        mesh: Mesh<'m>,
         guide_count: usize,
         points_per_strand: usize,
         arena: &mut Arena<'a>,
@@ -82,7 +82,9 @@ impl<'a> PosedFrame<'a> {
         }
         // bindings name guides by u32, with u32::MAX for none
         if guide_count >= u32::MAX as usize {
-            return Err(Error::InvalidArgument("more guides than a binding can name"));
+            return Err(Error::InvalidArgument(
+                "more guides than a binding can name",
+            ));
         }
         guide_count
             .checked_mul(6 * points_per_strand)
@@ -91,8 +93,8 @@ impl<'a> PosedFrame<'a> {
     }
 
     /// [`PosedFrame::new`], then [`PosedFrame::pose`] with `guides`.
-    pub fn with_guides(
-        mesh: Mesh<'a>,
+    pub fn with_guides<'a: 'm>(
+        mesh: Mesh<'m>,
         guides: &Guides,
         points_per_strand: usize,
         arena: &mut Arena<'a>,
@@ -149,7 +151,7 @@ impl<'a> PosedFrame<'a> {
     }
 
     /// The deformed mesh (checked).
-    pub fn mesh(&self) -> &Mesh<'a> {
+    pub fn mesh(&self) -> &Mesh<'m> {
         &self.mesh
     }
 

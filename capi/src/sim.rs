@@ -1,0 +1,494 @@
+//! The simulation handle: guide dynamics across frames (paper 3).
+
+use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, Float3Out};
+use crate::frame::frame_ref;
+use crate::status::Failure;
+use crate::threads::split_over_threads;
+use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
+use pelage_core::arena::ArenaLayout;
+use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance, Sphere};
+use pelage_core::dynamics::ik::IkParams;
+use pelage_core::dynamics::links::LinkParams;
+use pelage_core::dynamics::sim::{Sim, SimParams, Step};
+use pelage_core::surface::body::Body;
+use pelage_core::Arena;
+use std::ffi::c_void;
+
+/// The opaque object a `PelageSim` points to.
+// not repr(C): cbindgen declares it in C without a definition
+pub struct PelageSimTy {
+    _private: [u8; 0],
+}
+
+/// Simulated guides: the state of the tip springs across frames, the rest
+/// shapes, the tip links. Created by `pelage_sim_new` in memory the host
+/// provides (sized by `pelage_sim_query`), stepped frame by frame by
+/// `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
+/// bytes; released by `pelage_sim_free`.
+pub type PelageSim = *mut PelageSimTy;
+
+/// Simulation parameters; start from pelage_sim_params_defaults().
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageSimParams {
+    /// Joints per guide (2..64): the guides are resampled to it.
+    pub joints: u32,
+    /// Points per posed guide (2..64): a Catmull-Rom curve through the
+    /// joints, resampled; equal to `joints`, the joints themselves.
+    pub points_per_guide: u32,
+    /// Tip spring natural frequency in hertz (0..1000), per guide at its root.
+    pub frequency: PelageMap,
+    /// Share of the spring's lag the tip shows (0: the neutral pose, 1: the
+    /// full lag), per guide.
+    pub amplitude: PelageMap,
+    /// Exponential decay rate of the swing in 1/s (0..10000), per guide.
+    pub decay: PelageMap,
+    /// IK stops when the tip is this share of the guide's length from its
+    /// target (0..1).
+    pub ik_tolerance: f32,
+    /// Most IK sweeps per step (1..256).
+    pub ik_max_iterations: u32,
+    /// Stiffness of the root joint (0 <= s < 1): the share of its turn a
+    /// joint does not take per sweep. Root 0 and tip 0 is pure CCD, which
+    /// bends the tip first; a stiff tip moves the bend toward the root.
+    pub root_stiffness: f32,
+    /// Stiffness of the last joint; the joints between go linearly.
+    pub tip_stiffness: f32,
+    /// Tips closer than this at rest may be linked (world units; 0: none).
+    pub link_radius: f32,
+    /// Most links a tip makes to its nearest tips (0..16).
+    pub max_links: u32,
+    /// Link relaxations per step (0..16).
+    pub link_iterations: u32,
+    /// Share of its links' mean correction a tip takes per relaxation (0..1).
+    pub link_stiffness: f32,
+    /// A root that moves more than this many times its guide's length in
+    /// one step has teleported: its swing is carried along rigidly (> 0).
+    pub teleport: f32,
+}
+
+/// Defaults: 16 joints and points, frequency 1.5 Hz, amplitude 1, decay
+/// 3/s, IK tolerance 1e-3 with 12 sweeps, stiffness 0 at the root and 0.9
+/// at the tip, no links (radius 0; 4 links, 2 relaxations, stiffness 0.5
+/// once a radius is set), teleport at 20 guide lengths.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_sim_params_defaults() -> PelageSimParams {
+    let d = SimParams::default();
+    let constant = |m: &pelage_core::ScalarMap| match m {
+        pelage_core::ScalarMap::Constant(c) => PelageMap::constant(*c),
+        _ => PelageMap::constant(0.0),
+    };
+    PelageSimParams {
+        joints: d.joints as u32,
+        points_per_guide: d.points as u32,
+        frequency: constant(&d.frequency),
+        amplitude: constant(&d.amplitude),
+        decay: constant(&d.decay),
+        ik_tolerance: d.ik.tolerance,
+        ik_max_iterations: d.ik.max_iterations,
+        root_stiffness: d.ik.root_stiffness,
+        tip_stiffness: d.ik.tip_stiffness,
+        link_radius: d.links.radius,
+        max_links: d.links.max_links,
+        link_iterations: d.links.iterations,
+        link_stiffness: d.links.stiffness,
+        teleport: d.teleport,
+    }
+}
+
+fn core_params<'a>(p: &'a PelageSimParams, vertex_count: usize) -> Result<SimParams<'a>, Failure> {
+    let params = SimParams {
+        joints: p.joints as usize,
+        points: p.points_per_guide as usize,
+        frequency: p.frequency.view(vertex_count, "frequency map")?,
+        amplitude: p.amplitude.view(vertex_count, "amplitude map")?,
+        decay: p.decay.view(vertex_count, "decay map")?,
+        ik: IkParams {
+            tolerance: p.ik_tolerance,
+            max_iterations: p.ik_max_iterations,
+            root_stiffness: p.root_stiffness,
+            tip_stiffness: p.tip_stiffness,
+        },
+        links: LinkParams {
+            radius: p.link_radius,
+            max_links: p.max_links,
+            iterations: p.link_iterations,
+            stiffness: p.link_stiffness,
+        },
+        teleport: p.teleport,
+    };
+    params.check()?;
+    Ok(params)
+}
+
+/// What a [`PelageSim`] points to.
+struct SimBox {
+    /// Lives in the host's memory, which outlives the handle (the header's
+    /// contract).
+    sim: Sim<'static>,
+    /// The body grid of the last step that collided with the body.
+    body_arena: Vec<u8>,
+}
+
+fn sim_mut<'a>(sim: PelageSim) -> Result<&'a mut SimBox, Failure> {
+    req_mut(sim.cast::<SimBox>(), "sim")
+}
+
+/// Memory bytes pelage_sim_new needs for `guide_count` guides on
+/// `rest_mesh` with `params`.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
+/// OUT_OF_RANGE, PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_sim_query(
+    rest_mesh: *const PelageMeshDesc,
+    guide_count: usize,
+    params: *const PelageSimParams,
+    memory_bytes: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
+        let p = core_params(req(params, "params")?, mesh.positions.len())?;
+        let out = req_mut(memory_bytes, "memory_bytes")?;
+        let mut layout = ArenaLayout::new();
+        Sim::layout(&mut layout, mesh.positions.len(), guide_count, &p);
+        *out = layout.bytes();
+        Ok(())
+    }
+}
+
+/// Creates a simulation of `rest_guides` on `rest_mesh` (both at rest:
+/// the guides' shapes in their root frames are their neutral pose) in the
+/// host's `memory` (`memory_bytes` from pelage_sim_query, any alignment),
+/// which must stay valid and untouched until pelage_sim_free. The maps are
+/// sampled at the guide roots; tips within `link_radius` are linked. Every
+/// guide starts at its neutral pose. On failure `*out_sim` is untouched.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a parameter, or a map
+/// value out of its range at some guide), NON_FINITE, OUT_OF_RANGE,
+/// CAPACITY_EXCEEDED (the memory), MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_sim_new(
+    rest_mesh: *const PelageMeshDesc,
+    rest_guides: *const PelageGuidesDesc,
+    params: *const PelageSimParams,
+    memory: *mut c_void,
+    memory_bytes: usize,
+    out_sim: *mut PelageSim,
+) -> PelageStatus {
+    ffi_boundary! {
+        let out = req_mut(out_sim, "out_sim")?;
+        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
+        let guides = req(rest_guides, "rest_guides")?.view()?;
+        let p = core_params(req(params, "params")?, mesh.positions.len())?;
+        // the memory outlives the handle (the header's contract), so the
+        // simulation may borrow it for as long as the handle lives
+        let memory: &'static mut [u8] = bytes_mut(memory, memory_bytes, "memory")?;
+        // the rest mesh is read only while the simulation is made: the
+        // guides' rest shapes and roots are copied into its memory
+        let sim = Sim::new(mesh, &guides, &p, &mut Arena::new(memory))?;
+        *out = Box::into_raw(Box::new(SimBox { sim, body_arena: Vec::new() })).cast::<PelageSimTy>();
+        Ok(())
+    }
+}
+
+/// Releases a simulation (its memory is the host's again). NULL is
+/// accepted and does nothing.
+///
+/// Thread safety: no other call may use `sim` during or after this one.
+#[no_mangle]
+pub extern "C" fn pelage_sim_free(sim: PelageSim) {
+    if sim.is_null() {
+        return;
+    }
+    // dropping plain data cannot panic; the boundary is kept so that no
+    // exported body can unwind into the host
+    let _ = std::panic::catch_unwind(|| {
+        // SAFETY: `sim` came from pelage_sim_new and is freed once, as the
+        // header requires.
+        drop(unsafe { Box::from_raw(sim.cast::<SimBox>()) });
+    });
+}
+
+/// A solid sphere collider.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PelageSphere {
+    /// Centre.
+    pub centre: [f32; 3],
+    /// Radius (>= 0).
+    pub radius: f32,
+}
+
+/// A solid capsule collider: the points within `radius` of the segment a-b.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PelageCapsule {
+    /// One end of the axis.
+    pub a: [f32; 3],
+    /// The other end.
+    pub b: [f32; 3],
+    /// Radius (>= 0).
+    pub radius: f32,
+}
+
+/// A solid half-space collider: the points p with dot(normal, p) < offset
+/// (normal not zero, used as given).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PelagePlane {
+    /// Outward normal.
+    pub normal: [f32; 3],
+    /// dot(normal, p) on the surface.
+    pub offset: f32,
+}
+
+same_layout!(PelageSphere, Sphere, centre, radius);
+same_layout!(PelageCapsule, Capsule, a, b, radius);
+same_layout!(PelagePlane, Plane, normal, offset);
+
+/// A host's signed distance field (negative inside): writes the distance
+/// of each of `count` points (x, y, z floats, packed) to `distances`.
+/// Called from the threads a step runs on, possibly at once: it must be
+/// safe to call concurrently.
+pub type PelageDistanceFn = Option<
+    unsafe extern "C" fn(
+        user_data: *mut c_void,
+        points: *const f32,
+        count: usize,
+        distances: *mut f32,
+    ),
+>;
+
+/// What the guides collide with in one step; every array may be NULL with
+/// a count of 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageColliders {
+    /// Spheres.
+    pub spheres: *const PelageSphere,
+    /// Number of spheres.
+    pub sphere_count: usize,
+    /// Capsules.
+    pub capsules: *const PelageCapsule,
+    /// Number of capsules.
+    pub capsule_count: usize,
+    /// Half-spaces.
+    pub planes: *const PelagePlane,
+    /// Number of half-spaces.
+    pub plane_count: usize,
+    /// Nonzero: collide with the body itself, the frame's (deformed) mesh
+    /// as a solid (its grid is built each step).
+    pub body: u32,
+    /// A signed distance field, or NULL.
+    pub distance: PelageDistanceFn,
+    /// Passed unchanged to `distance`.
+    pub distance_user_data: *mut c_void,
+}
+
+/// The host's distance callback as a core field.
+struct HostField {
+    callback: unsafe extern "C" fn(*mut c_void, *const f32, usize, *mut f32),
+    user_data: *mut c_void,
+}
+
+// SAFETY: the header requires the callback to be safe to call from any
+// thread at once with its user data; pelage only passes the pointer on.
+unsafe impl Sync for HostField {}
+
+impl SignedDistance for HostField {
+    fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
+        let n = points.len().min(out.len());
+        // SAFETY: the host's callback, with `n` packed points and room for
+        // `n` distances, as its contract says.
+        unsafe { (self.callback)(self.user_data, points.as_ptr().cast(), n, out.as_mut_ptr()) };
+    }
+}
+
+/// Advances the simulation by `dt` seconds (0 < dt <= 1; it may change
+/// from step to step) to `frame` (this frame's deformed mesh; its guides
+/// are not read), colliding with `colliders` (NULL: none). Per guide: the
+/// neutral pose (the rest shape carried by the root frame), the tip spring,
+/// the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
+/// `thread_count` threads (0: all cores); the bits do not depend on it.
+/// Everything is checked first; on failure the state is unchanged.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
+/// another mesh), MISALIGNED, CAPACITY_EXCEEDED (the body grid's memory),
+/// PANIC.
+///
+/// Thread safety: no other call may use `sim` during this one; the frame
+/// may be read by other calls meanwhile.
+#[no_mangle]
+pub extern "C" fn pelage_sim_step(
+    sim: PelageSim,
+    frame: PelageFrame,
+    colliders: *const PelageColliders,
+    dt: f32,
+    thread_count: u32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let sim = sim_mut(sim)?;
+        let frame = frame_ref(frame)?;
+        let host = match colliders.is_null() {
+            true => None,
+            false => Some(req(colliders, "colliders")?),
+        };
+        let spheres: &[Sphere] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.spheres, c.sphere_count, "colliders.spheres"))?);
+        let capsules: &[Capsule] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.capsules, c.capsule_count, "colliders.capsules"))?);
+        let planes: &[Plane] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.planes, c.plane_count, "colliders.planes"))?);
+        let field = host.and_then(|c| c.distance.map(|callback| HostField { callback, user_data: c.distance_user_data }));
+        let mesh = frame.posed.mesh();
+        let body = if host.is_some_and(|c| c.body != 0) {
+            let bytes = Body::required_bytes(mesh)?;
+            if sim.body_arena.len() < bytes {
+                sim.body_arena.resize(bytes, 0);
+            }
+            Some(Body::new(mesh, &mut Arena::new(&mut sim.body_arena))?)
+        } else {
+            None
+        };
+        let colliders = Colliders {
+            spheres,
+            capsules,
+            planes,
+            body: body.as_ref(),
+            field: field.as_ref().map(|f| f as &dyn SignedDistance),
+        };
+        let Step { context, blocks, snapshot } = sim.sim.begin(&frame.posed, &colliders, dt)?;
+        let (n, per) = (snapshot.len(), context.block_floats());
+        split_over_threads(n, thread_count, &mut *blocks, per, |range, part| context.advance(range.start, part))?;
+        for _ in 0..context.link_iterations() {
+            context.snapshot(blocks, snapshot);
+            let snapshot = &*snapshot;
+            split_over_threads(n, thread_count, &mut *blocks, per, |range, part| context.relax(range.start, part, snapshot))?;
+        }
+        split_over_threads(n, thread_count, &mut *blocks, per, |range, part| context.finish(range.start, part))?;
+        Ok(())
+    }
+}
+
+/// Writes the posed guides of the last step (world space; all zero before
+/// the first step): `points_per_guide` float3 per guide, guide after guide,
+/// `point_stride` bytes apart (>= 12, a multiple of 4), capacity
+/// `point_capacity` points. Hand them to pelage_frame_set_guides (with the
+/// simulated guides' roots) to expand render hairs from them.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (stride),
+/// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+///
+/// Thread safety: concurrent reads of one sim are safe; not during a step.
+#[no_mangle]
+pub extern "C" fn pelage_sim_read(
+    sim: PelageSim,
+    points: *mut c_void,
+    point_stride: usize,
+    point_capacity: usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let sim = &sim_mut(sim)?.sim;
+        let (n, m) = (sim.len(), sim.points());
+        let needed = n * m;
+        if point_capacity < needed {
+            return Err(Failure::new(PelageStatus::CapacityExceeded, format!("points: {needed} needed, {point_capacity} available")));
+        }
+        if points.is_null() {
+            return Err(Failure::new(PelageStatus::NullParameter, "points is NULL"));
+        }
+        if let Some(mut out) = Float3Out::new(points, point_stride, needed, "points")? {
+            for g in 0..n {
+                for k in 0..m {
+                    out.set(g * m + k, sim.posed(g, k).to_array());
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Forgets the motion: the next step starts every guide from its neutral
+/// pose (a cut, the start of a shot).
+///
+/// Returns OK, NULL_PARAMETER, PANIC.
+///
+/// Thread safety: no other call may use `sim` during this one.
+#[no_mangle]
+pub extern "C" fn pelage_sim_reset(sim: PelageSim) -> PelageStatus {
+    ffi_boundary! {
+        sim_mut(sim)?.sim.reset();
+        Ok(())
+    }
+}
+
+/// Writes the bytes pelage_sim_save needs to `*state_bytes`.
+///
+/// Returns OK, NULL_PARAMETER, PANIC.
+///
+/// Thread safety: concurrent with reads of `sim`; not during a step.
+#[no_mangle]
+pub extern "C" fn pelage_sim_state_size(sim: PelageSim, state_bytes: *mut usize) -> PelageStatus {
+    ffi_boundary! {
+        let size = sim_mut(sim)?.sim.state_bytes();
+        *req_mut(state_bytes, "state_bytes")? = size;
+        Ok(())
+    }
+}
+
+/// Saves the state carried between steps (little-endian: magic "PLGS",
+/// version, counts, the state, a CRC-32) to `out` (capacity `capacity`
+/// bytes), so that a farm task can restore it and go on with the same bits
+/// as an uninterrupted run. `*written` gets the size.
+///
+/// Returns OK, NULL_PARAMETER, CAPACITY_EXCEEDED (the needed size is in
+/// `*written`), PANIC.
+///
+/// Thread safety: concurrent with reads of `sim`; not during a step.
+#[no_mangle]
+pub extern "C" fn pelage_sim_save(
+    sim: PelageSim,
+    out: *mut c_void,
+    capacity: usize,
+    written: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let sim = &sim_mut(sim)?.sim;
+        let written = req_mut(written, "written")?;
+        let needed = sim.state_bytes();
+        if capacity < needed {
+            *written = needed;
+            return Err(Failure::new(PelageStatus::CapacityExceeded, format!("state: {needed} bytes needed, {capacity} available")));
+        }
+        let out = bytes_mut(out, needed, "out")?;
+        *written = sim.save(out)?;
+        Ok(())
+    }
+}
+
+/// Restores a state pelage_sim_save wrote, for a simulation made with the
+/// same guides and parameters. Everything is checked first (length, magic,
+/// version, counts, checksum, finite values); on failure nothing changes.
+///
+/// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values),
+/// VERSION_MISMATCH (magic or format version), INVALID_ARGUMENT (another
+/// guide set), PANIC.
+///
+/// Thread safety: no other call may use `sim` during this one.
+#[no_mangle]
+pub extern "C" fn pelage_sim_restore(
+    sim: PelageSim,
+    state: *const c_void,
+    state_bytes: usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let sim = sim_mut(sim)?;
+        let state = bytes(state, state_bytes, "state")?;
+        sim.sim.restore(state)?;
+        Ok(())
+    }
+}
