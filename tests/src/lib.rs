@@ -1,4 +1,5 @@
 //! Test assets and helpers shared by pelage's end-to-end tests and benchmarks.
 
+pub mod animated;
 pub mod creature;
 pub mod measure;

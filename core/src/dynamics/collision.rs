@@ -224,22 +224,22 @@ const AXES: u32 = 8;
 /// length. Unchanged when every point after the root is outside; else
 /// rotated rigidly about the root toward the normal by the smallest clear
 /// angle, or about another axis of the tangent plane, or (when nothing
-/// frees it) fully toward the normal. Returns whether it moved.
-pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach: f32) -> bool {
+/// frees it) fully toward the normal.
+pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach: f32) -> PushOut {
     let n = local.len().min(MAX_POINTS);
     if n < 2 {
-        return false;
+        return PushOut::Clear;
     }
     let near = Near::new(colliders, frame.origin, reach);
     if near.is_empty() {
-        return false;
+        return PushOut::Clear;
     }
     let mut world = [Vec3::ZERO; MAX_POINTS];
     for (w, l) in world.iter_mut().zip(&local[..n]) {
         *w = frame.to_world(*l);
     }
     if near.clear(&world[1..n]) {
-        return false;
+        return PushOut::Clear;
     }
     let mut x = [0.0f32; MAX_POINTS];
     let mut y = [0.0f32; MAX_POINTS];
@@ -275,5 +275,20 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
         })
     });
     turned(chosen.unwrap_or(toward * to_normal), &mut local[..n]);
-    true
+    if chosen.is_some() {
+        PushOut::Freed
+    } else {
+        PushOut::Stuck
+    }
+}
+
+/// What [`push_out`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PushOut {
+    /// Nothing was inside: the guide is unchanged.
+    Clear,
+    /// The guide was rotated out.
+    Freed,
+    /// No tried rotation freed it; it was turned fully toward the normal.
+    Stuck,
 }

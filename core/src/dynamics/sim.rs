@@ -14,7 +14,7 @@
 //! from step to step is a few floats per guide, saved to and restored
 //! from bytes ([`Sim::save`], [`Sim::restore`]).
 
-use super::collision::{push_out, Colliders};
+use super::collision::{push_out, Colliders, PushOut};
 use super::ik::{self, IkParams};
 use super::links::{LinkParams, Links};
 use super::spline;
@@ -624,7 +624,15 @@ impl StepContext<'_> {
             let lengths = &self.lengths[g * (j - 1)..(g + 1) * (j - 1)];
             ik::solve(&mut joints[..j], lengths, target, reach, &self.params.ik);
             spline::resample(&joints[..j], &mut posed[..m]);
-            push_out(self.colliders, &frame, &mut posed[..m], reach);
+            if push_out(self.colliders, &frame, &mut posed[..m], reach) == PushOut::Stuck {
+                // bent into a place no rotation leaves (a crease, a landing):
+                // the groomed shape, pushed out in turn
+                for (k, p) in joints[..j].iter_mut().enumerate() {
+                    *p = rest_joint(self.rest, j, g, k);
+                }
+                spline::resample(&joints[..j], &mut posed[..m]);
+                push_out(self.colliders, &frame, &mut posed[..m], reach);
+            }
             for (k, p) in posed[..m].iter().enumerate() {
                 b[POSED + 3 * k..POSED + 3 * k + 3].copy_from_slice(&p.to_array());
             }
