@@ -775,7 +775,7 @@ enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, si
 enum PelageStatus pelage_settle(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, struct PelageSettleInfo *info);
 
 // Defaults: 16 joints and points, frequency 1.5 Hz, amplitude 1, decay
-// 3/s, IK tolerance 1e-3 with 12 sweeps, stiffness 0 at the root and 0.9
+// 3/s, IK tolerance 1e-2 (of the guide length) with 8 sweeps, stiffness 0 at the root and 0.9
 // at the tip, no links (radius 0; 4 links, 2 relaxations, stiffness 0.5
 // once a radius is set), teleport at 20 guide lengths.
 //

@@ -5,7 +5,10 @@
 //! share it.
 
 use crate::creature::CreatureMesh;
+use crate::measure::mesh_view;
 use glam::{Quat, Vec3};
+use pelage::PelageCapsule;
+use pelage_core::Root;
 
 /// Frames per second of the shot.
 pub const FPS: f32 = 24.0;
@@ -51,4 +54,45 @@ pub fn pose(rest: &CreatureMesh, frame: u32) -> CreatureMesh {
             .collect(),
         ..rest.clone()
     }
+}
+
+/// Sixteen capsules that ride with the creature's lower body (props,
+/// straps, a held stick), 0.03 off the skin, in the guides' way but clear
+/// of every root of `guide_roots` (a root inside a collider has no way
+/// out); placed at `frame` of the shot.
+pub fn capsules(rest: &CreatureMesh, guide_roots: &[Root], frame: u32) -> Vec<PelageCapsule> {
+    let mesh = mesh_view(rest);
+    let roots: Vec<Vec3> = guide_roots
+        .iter()
+        .map(|r| mesh.point(r.face as usize, r.u, r.v))
+        .collect();
+    let (turn, shift) = placement(frame);
+    let at = |p: Vec3| (turn * p + shift).to_array();
+    // vertices below the sway (which bends only the upper body)
+    let low: Vec<usize> = (0..rest.positions.len())
+        .filter(|&i| rest.positions[i][1] < -0.05)
+        .collect();
+    (0..)
+        .map(|k: usize| {
+            let v = low[(k * 7919 + 13) % low.len()];
+            let (p, n) = (Vec3::from(rest.positions[v]), Vec3::from(rest.normals[v]));
+            let centre = p + n * 0.06;
+            let along = n.any_orthonormal_vector() * 0.03;
+            (centre - along, centre + along)
+        })
+        .filter(|&(a, b)| roots.iter().all(|&r| segment_distance(r, a, b) > 0.035))
+        .take(16)
+        .map(|(a, b)| PelageCapsule {
+            a: at(a),
+            b: at(b),
+            radius: 0.03,
+        })
+        .collect()
+}
+
+/// Distance from `p` to the segment `a`-`b`.
+pub fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
 }

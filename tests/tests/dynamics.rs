@@ -8,7 +8,7 @@ use glam::Vec3;
 use pelage::*;
 use pelage_core::surface::body::Body;
 use pelage_core::{Arena, Root};
-use pelage_tests::animated::{placement, pose, FRAMES};
+use pelage_tests::animated::{capsules, pose, segment_distance, FRAMES};
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
     combed_guides, frame, guides_desc, mesh_desc, mesh_view, stamp_roots, Frame,
@@ -93,41 +93,6 @@ impl Drop for SimHandle {
     }
 }
 
-/// Sixteen capsules that ride with the creature's lower body (props,
-/// straps, a held stick), 0.03 off the skin, in the guides' way but clear
-/// of every root (a root inside a collider has no way out); placed at
-/// `frame` of the shot.
-fn capsules(shot: &Shot, frame: u32) -> Vec<PelageCapsule> {
-    let (rest, mesh) = (&shot.rest, mesh_view(&shot.rest));
-    let roots: Vec<Vec3> = shot
-        .roots
-        .iter()
-        .map(|r| mesh.point(r.face as usize, r.u, r.v))
-        .collect();
-    let (turn, shift) = placement(frame);
-    let at = |p: Vec3| (turn * p + shift).to_array();
-    // vertices below the sway (which bends only the upper body)
-    let low: Vec<usize> = (0..rest.positions.len())
-        .filter(|&i| rest.positions[i][1] < -0.05)
-        .collect();
-    (0..)
-        .map(|k: usize| {
-            let v = low[(k * 7919 + 13) % low.len()];
-            let (p, n) = (Vec3::from(rest.positions[v]), Vec3::from(rest.normals[v]));
-            let centre = p + n * 0.06;
-            let along = n.any_orthonormal_vector() * 0.03;
-            (centre - along, centre + along)
-        })
-        .filter(|&(a, b)| roots.iter().all(|&r| segment_distance(r, a, b) > 0.035))
-        .take(16)
-        .map(|(a, b)| PelageCapsule {
-            a: at(a),
-            b: at(b),
-            radius: 0.03,
-        })
-        .collect()
-}
-
 /// Steps `sim` through frames `range` of the shot with `threads`, calling
 /// `each` with every frame's posed mesh and the simulated guides.
 fn run(
@@ -141,7 +106,7 @@ fn run(
     for f in range {
         let mesh = pose(&shot.rest, f);
         let handle: Frame = frame(&mesh_desc(&mesh), &guides, JOINTS as u32, threads).unwrap();
-        let caps = capsules(shot, f);
+        let caps = capsules(&shot.rest, &shot.roots, f);
         let colliders = PelageColliders {
             spheres: std::ptr::null(),
             sphere_count: 0,
@@ -159,12 +124,6 @@ fn run(
     }
 }
 
-fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
-    let ab = b - a;
-    let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
-    p.distance(a + ab * t)
-}
-
 #[test]
 fn a_violent_shot_stays_sound_clear_and_repeatable() {
     let shot = Shot::new();
@@ -176,7 +135,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
         .map(|w| Vec3::from(w[0]).distance(Vec3::from(w[1])))
         .collect();
     // the capsules are in the way: at rest, groomed guides pass through them
-    let at_rest = capsules(&shot, 0);
+    let at_rest = capsules(&shot.rest, &shot.roots, 0);
     let in_the_way = (0..n)
         .filter(|&g| {
             shot.points[g * JOINTS + 1..(g + 1) * JOINTS]

@@ -31,8 +31,8 @@ pub struct IkParams {
 impl Default for IkParams {
     fn default() -> Self {
         IkParams {
-            tolerance: 1e-3,
-            max_iterations: 12,
+            tolerance: 1e-2,
+            max_iterations: 8,
             root_stiffness: 0.0,
             tip_stiffness: 0.9,
         }
@@ -61,6 +61,16 @@ pub fn solve(joints: &mut [Vec3], lengths: &[f32], target: Vec3, reach: f32, par
         return;
     }
     let tolerance = params.tolerance * reach;
+    let total: f32 = lengths[..n - 1].iter().sum();
+    let out = target - joints[0];
+    if out.length_squared() >= total * total {
+        // out of reach: the closest pose is the chain stretched toward it
+        let direction = out.normalize_or_zero();
+        for i in 0..n - 1 {
+            joints[i + 1] = joints[i] + direction * lengths[i];
+        }
+        return;
+    }
     let mut turns = [Quat::IDENTITY; MAX_JOINTS];
     let last = (n - 2).max(1) as f32;
     for _ in 0..params.max_iterations {
@@ -78,39 +88,47 @@ pub fn solve(joints: &mut [Vec3], lengths: &[f32], target: Vec3, reach: f32, par
             turns[i] = turn;
         }
         // segment i turned by every turn about joints 0..=i, the nearest
-        // the root last; rebuilt at its exact length
+        // the root last (rotations keep lengths to rounding; the lengths
+        // are made exact once, below)
         let mut turned = Quat::IDENTITY;
         let mut before = joints[0];
         for i in 0..n - 1 {
             turned *= turns[i];
             let segment = joints[i + 1] - before;
             before = joints[i + 1];
-            joints[i + 1] = joints[i] + (turned * segment).normalize_or_zero() * lengths[i];
+            joints[i + 1] = joints[i] + turned * segment;
         }
+    }
+    let mut before = joints[0];
+    for i in 0..n - 1 {
+        let segment = joints[i + 1] - before;
+        before = joints[i + 1];
+        joints[i + 1] = joints[i] + segment.normalize_or_zero() * lengths[i];
     }
 }
 
 /// The rotation that turns `from` toward `to`, taken by the share `amount`
-/// (normalized linear interpolation from no turn: no trigonometry).
+/// (normalized linear interpolation from no turn): two square roots and
+/// no trigonometry, without normalizing either vector first.
+#[inline]
 fn partial_arc(from: Vec3, to: Vec3, amount: f32) -> Quat {
-    let (a, b) = (from.normalize_or_zero(), to.normalize_or_zero());
-    if a == Vec3::ZERO || b == Vec3::ZERO {
+    let lengths = libm::sqrtf(from.length_squared() * to.length_squared());
+    if lengths == 0.0 {
         return Quat::IDENTITY;
     }
-    let d = a.dot(b);
-    let full = if d < -0.9999 {
+    let d = from.dot(to);
+    // (|a||b| + a.b, a x b) is the half-angle quaternion scaled by 2 |a||b| cos(angle / 2)
+    let (w, v) = if d < -0.9999 * lengths {
         // opposite: half a turn about any axis across them
-        let axis = a.any_orthonormal_vector();
-        Quat::from_xyzw(axis.x, axis.y, axis.z, 0.0)
+        (0.0, from.any_orthonormal_vector())
     } else {
-        let c = a.cross(b);
-        Quat::from_xyzw(c.x, c.y, c.z, 1.0 + d).normalize()
+        (lengths + d, from.cross(to))
     };
-    if amount >= 1.0 {
-        full
-    } else {
-        Quat::IDENTITY.lerp(full, amount)
-    }
+    // the share of the turn: blend with no turn, both at the same scale
+    let scale = libm::sqrtf(w * w + v.length_squared());
+    let (w, v) = ((1.0 - amount) * scale + amount * w, v * amount);
+    let norm = libm::sqrtf(w * w + v.length_squared());
+    Quat::from_xyzw(v.x / norm, v.y / norm, v.z / norm, w / norm)
 }
 
 #[cfg(test)]
@@ -139,7 +157,7 @@ mod tests {
             root_stiffness: 0.0,
             tip_stiffness: 0.0,
             max_iterations: 64,
-            ..IkParams::default()
+            tolerance: 1e-3,
         };
         solve(&mut joints, &lengths, target, 1.5, &pure);
         assert!(joints[15].distance(target) <= 1.5e-3, "{}", joints[15]);
@@ -182,7 +200,7 @@ mod tests {
             root_stiffness: 0.0,
             tip_stiffness: 0.0,
             max_iterations: 64,
-            ..IkParams::default()
+            tolerance: 1e-3,
         };
         let profiled = IkParams {
             tip_stiffness: 0.95,

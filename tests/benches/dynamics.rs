@@ -1,0 +1,281 @@
+//! Guide dynamics at the paper's gorilla scale: 13,030 simulation guides x
+//! 16 joints on the animated creature (walk, turn, jump, sway), through the
+//! C API at 1 and 2 threads. Reports the time per step with tip links and
+//! 16 capsules, the extra cost of colliding with the deforming body, a
+//! floor measured in the same run (reading every guide's neutral pose and
+//! writing it as the posed guide, split over the same threads), and the
+//! full frame: simulate, then expand 979,526 render hairs from the
+//! simulated guides. The paper: 7 frames/s for the simulation alone.
+
+use pelage::*;
+use pelage_core::interp::bind::{self, BindParams, StrandBinding};
+use pelage_core::interp::groom::{GroomMaps, StrandGroom};
+use pelage_core::interp::posed::PosedFrame;
+use pelage_core::{Arena, ArenaLayout, Root, ScalarMap};
+use pelage_tests::animated::{capsules, pose, FRAMES};
+use pelage_tests::creature::default_creature;
+use pelage_tests::measure::{
+    combed_guides, curves_desc, frame, guides_desc, mesh_desc, mesh_view, stamp_roots, strands_desc,
+};
+use std::hint::black_box;
+use std::ptr::null_mut;
+use std::time::Instant;
+
+const GUIDES: u32 = 13_030;
+const HAIRS: u32 = 979_526;
+const JOINTS: usize = 16;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let rest = default_creature();
+    let mesh = mesh_view(&rest);
+    let roots = stamp_roots(mesh, GUIDES, 1);
+    let points = combed_guides(&mesh, &roots, JOINTS, 0.06);
+    let desc = mesh_desc(&rest);
+    let guides = guides_desc(&roots, &points);
+    let params = PelageSimParams {
+        joints: JOINTS as u32,
+        points_per_guide: JOINTS as u32,
+        link_radius: 0.05,
+        ..pelage_sim_params_defaults()
+    };
+    let mut bytes = 0;
+    assert_eq!(
+        pelage_sim_query(&desc, roots.len(), &params, &mut bytes),
+        PelageStatus::Ok
+    );
+    let mut memory = vec![0u8; bytes];
+    let t = Instant::now();
+    let mut sim = null_mut();
+    let s = pelage_sim_new(
+        &desc,
+        &guides,
+        &params,
+        memory.as_mut_ptr().cast(),
+        bytes,
+        &mut sim,
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let t_new = t.elapsed().as_secs_f64();
+    // the shot's meshes and frames, made before timing (a host has them)
+    let meshes: Vec<_> = (0..FRAMES).map(|f| pose(&rest, f)).collect();
+    let descs: Vec<_> = meshes.iter().map(mesh_desc).collect();
+    let frames: Vec<_> = descs
+        .iter()
+        .map(|d| frame(d, &guides, JOINTS as u32, 2).unwrap())
+        .collect();
+    let props: Vec<_> = (0..FRAMES).map(|f| capsules(&rest, &roots, f)).collect();
+    println!(
+        "creature: {} triangles; {} guides x {JOINTS} joints; sim memory {:.1} MB, made in {:.0} ms",
+        rest.triangles.len(),
+        roots.len(),
+        bytes as f64 / 1e6,
+        t_new * 1e3
+    );
+    println!(
+        "{:>34} {:>7} | {:>9} {:>9} | {:>8}",
+        "step (median over the shot)", "threads", "ms", "frames/s", "x floor"
+    );
+    let mut posed = vec![[0.0f32; 3]; roots.len() * JOINTS];
+    for threads in [1u32, 2] {
+        let floor = median(
+            (0..FRAMES as usize)
+                .map(|f| {
+                    let t = Instant::now();
+                    neutral_floor(&meshes[f], &roots, &points, &mut posed, threads as usize);
+                    black_box(&posed);
+                    t.elapsed().as_secs_f64()
+                })
+                .collect(),
+        );
+        let run = |body: u32| {
+            assert_eq!(pelage_sim_reset(sim), PelageStatus::Ok);
+            median(
+                (0..FRAMES as usize)
+                    .map(|f| {
+                        let caps = &props[f];
+                        let colliders = PelageColliders {
+                            spheres: std::ptr::null(),
+                            sphere_count: 0,
+                            capsules: caps.as_ptr(),
+                            capsule_count: caps.len(),
+                            planes: std::ptr::null(),
+                            plane_count: 0,
+                            body,
+                            distance: None,
+                            distance_user_data: null_mut(),
+                        };
+                        let t = Instant::now();
+                        let s = pelage_sim_step(sim, frames[f].0, &colliders, 1.0 / 24.0, threads);
+                        let e = t.elapsed().as_secs_f64();
+                        assert_eq!(s, PelageStatus::Ok);
+                        e
+                    })
+                    .collect(),
+            )
+        };
+        let with_capsules = run(0);
+        let with_body = run(1);
+        for (name, t) in [
+            ("links + 16 capsules", with_capsules),
+            ("links + 16 capsules + body", with_body),
+            ("floor: neutral read, posed written", floor),
+        ] {
+            println!(
+                "{name:>34} {threads:>7} | {:>9.2} {:>9.0} | {:>7.2}x",
+                t * 1e3,
+                1.0 / t,
+                t / floor
+            );
+        }
+        println!(
+            "{:>34} {threads:>7} | {:>9.2} ms more for the body",
+            "",
+            (with_body - with_capsules) * 1e3
+        );
+    }
+    full_frame(sim, &rest, &roots, &points, &frames, &props);
+    pelage_sim_free(sim);
+    println!("paper: 7 frames/s for the guide simulation, 2 frames/s with interpolation");
+}
+
+/// The floor: every guide's neutral pose (its rest shape carried by its
+/// root frame on the posed mesh) written as a posed guide, over `threads`.
+fn neutral_floor(
+    mesh: &pelage_tests::creature::CreatureMesh,
+    roots: &[Root],
+    points: &[[f32; 3]],
+    out: &mut [[f32; 3]],
+    threads: usize,
+) {
+    let m = mesh_view(mesh);
+    let mut layout = ArenaLayout::new();
+    PosedFrame::layout(&mut layout, mesh.positions.len(), 1, 2);
+    let mut buf = vec![0u8; layout.bytes()];
+    let frame = PosedFrame::new(m, 1, 2, &mut Arena::new(&mut buf)).unwrap();
+    let chunk = roots.len().div_ceil(threads);
+    std::thread::scope(|s| {
+        for (c, part) in out.chunks_mut(chunk * JOINTS).enumerate() {
+            let frame = &frame;
+            s.spawn(move || {
+                for (i, guide) in part.chunks_mut(JOINTS).enumerate() {
+                    let g = c * chunk + i;
+                    let r = &roots[g];
+                    let f = frame.root_frame(r.face as usize, r.u, r.v);
+                    for (k, o) in guide.iter_mut().enumerate() {
+                        *o = f
+                            .to_world(glam::Vec3::from(points[g * JOINTS + k]))
+                            .to_array();
+                    }
+                }
+            });
+        }
+    });
+}
+
+/// The full frame on 2 threads: step the simulation (links, capsules),
+/// read the posed guides, pose a render frame with them and expand
+/// 979,526 hairs bound to the simulation guides.
+fn full_frame(
+    sim: PelageSim,
+    rest: &pelage_tests::creature::CreatureMesh,
+    roots: &[Root],
+    points: &[[f32; 3]],
+    frames: &[pelage_tests::measure::Frame],
+    props: &[Vec<PelageCapsule>],
+) {
+    let mesh = mesh_view(rest);
+    let hairs: Vec<Root> = {
+        let mut h = stamp_roots(mesh, HAIRS + HAIRS / 50, 2);
+        h.retain(|r| r.rank < HAIRS);
+        h
+    };
+    let rest_guides = pelage_core::guides::Guides {
+        roots,
+        points: pelage_core::Strided::from_slice(points),
+        layout: pelage_core::guides::CvLayout::Fixed(JOINTS),
+    };
+    let mut arena = vec![0u8; bind::required_bytes(&mesh, roots.len()).unwrap()];
+    let mut bindings = vec![StrandBinding::default(); hairs.len()];
+    bind::bind(
+        &mesh,
+        &rest_guides,
+        &hairs,
+        &BindParams::default(),
+        &mut Arena::new(&mut arena),
+        &mut bindings,
+    )
+    .unwrap();
+    let mut grooms = vec![StrandGroom::default(); hairs.len()];
+    let maps = GroomMaps {
+        kink_amplitude: ScalarMap::Constant(0.03),
+        clump: ScalarMap::Constant(0.2),
+        ..GroomMaps::default()
+    };
+    maps.evaluate(&mesh, &hairs, 0, &mut grooms).unwrap();
+    let strands = strands_desc(
+        &hairs,
+        bytemuck::cast_slice(&bindings),
+        bytemuck::cast_slice(&grooms),
+    );
+    let mut groom = null_mut();
+    assert_eq!(pelage_groom_new(&strands, &mut groom), PelageStatus::Ok);
+    let ep = PelageExpandParams {
+        points_per_strand: JOINTS as u32,
+        thread_count: 2,
+        ..pelage_expand_params_defaults()
+    };
+    let mut per = 0;
+    assert_eq!(pelage_expand_query(&ep, &mut per), PelageStatus::Ok);
+    let mut out = vec![[0.0f32; 4]; hairs.len() * per];
+    let mut posed = vec![[0.0f32; 3]; roots.len() * JOINTS];
+    assert_eq!(pelage_sim_reset(sim), PelageStatus::Ok);
+    let mut times = vec![];
+    for (f, handle) in frames.iter().enumerate() {
+        let caps = &props[f];
+        let colliders = PelageColliders {
+            spheres: std::ptr::null(),
+            sphere_count: 0,
+            capsules: caps.as_ptr(),
+            capsule_count: caps.len(),
+            planes: std::ptr::null(),
+            plane_count: 0,
+            body: 0,
+            distance: None,
+            distance_user_data: null_mut(),
+        };
+        let t = Instant::now();
+        assert_eq!(
+            pelage_sim_step(sim, handle.0, &colliders, 1.0 / 24.0, 2),
+            PelageStatus::Ok
+        );
+        assert_eq!(
+            pelage_sim_read(sim, posed.as_mut_ptr().cast(), 12, posed.len()),
+            PelageStatus::Ok
+        );
+        let simulated = guides_desc(roots, &posed);
+        assert_eq!(
+            pelage_frame_set_guides(handle.0, &simulated, 2),
+            PelageStatus::Ok
+        );
+        let curves = curves_desc(&mut out, None);
+        assert_eq!(
+            pelage_groom_expand(groom, handle.0, 0, hairs.len(), &ep, &curves),
+            PelageStatus::Ok
+        );
+        black_box(&out);
+        times.push(t.elapsed().as_secs_f64());
+    }
+    pelage_groom_free(groom);
+    let t = median(times);
+    println!(
+        "full frame, 2 threads (step with links and capsules, read, pose, expand {} hairs): {:.1} ms, {:.1} frames/s",
+        hairs.len(),
+        t * 1e3,
+        1.0 / t
+    );
+}
