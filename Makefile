@@ -3,7 +3,7 @@
 
 BUILD ?= build
 JOBS ?= 2
-APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev valgrind binutils
+APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev libopenvdb-dev libboost-dev valgrind binutils
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
 .PHONY: demo test deps rust-test rust-lint rust-miri cmake-test header-check bench
