@@ -11,6 +11,7 @@ use pelage::*;
 use pelage_core::interp::bind::{self, BindParams, StrandBinding};
 use pelage_core::interp::groom::{GroomMaps, StrandGroom};
 use pelage_core::interp::posed::PosedFrame;
+use pelage_core::surface::body::Body;
 use pelage_core::{Arena, ArenaLayout, Root, ScalarMap};
 use pelage_tests::animated::{capsules, pose, FRAMES};
 use pelage_tests::creature::default_creature;
@@ -79,6 +80,22 @@ fn main() {
     println!(
         "{:>34} {:>7} | {:>9} {:>9} | {:>8}",
         "step (median over the shot)", "threads", "ms", "frames/s", "x floor"
+    );
+    let body_build = median(
+        meshes
+            .iter()
+            .map(|m| {
+                let view = mesh_view(m);
+                let mut memory = vec![0u8; Body::required_bytes(&view).unwrap()];
+                let t = Instant::now();
+                black_box(Body::new(&view, &mut Arena::new(&mut memory)).unwrap());
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    println!(
+        "the body's grid, built per step for the body collider: {:.1} ms (one thread)",
+        body_build * 1e3
     );
     let mut posed = vec![[0.0f32; 3]; roots.len() * JOINTS];
     for threads in [1u32, 2] {
