@@ -3,7 +3,7 @@
 use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, Float3Out};
 use crate::frame::frame_ref;
 use crate::status::Failure;
-use crate::threads::split_over_threads;
+use crate::threads::split_in_chunks;
 use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance, Sphere};
@@ -363,13 +363,13 @@ pub extern "C" fn pelage_sim_step(
         };
         let Step { context, blocks, snapshot } = sim.sim.begin(&frame.posed, &colliders, dt)?;
         let (n, per) = (snapshot.len(), context.block_floats());
-        split_over_threads(n, thread_count, &mut *blocks, per, |range, part| context.advance(range.start, part))?;
+        split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.advance(range.start, part))?;
         for _ in 0..context.link_iterations() {
             context.snapshot(blocks, snapshot);
             let snapshot = &*snapshot;
-            split_over_threads(n, thread_count, &mut *blocks, per, |range, part| context.relax(range.start, part, snapshot))?;
+            split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.relax(range.start, part, snapshot))?;
         }
-        split_over_threads(n, thread_count, &mut *blocks, per, |range, part| context.finish(range.start, part))?;
+        split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.finish(range.start, part))?;
         Ok(())
     }
 }

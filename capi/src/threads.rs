@@ -179,3 +179,40 @@ pub(crate) fn split_with_progress<T: Send, R: Send>(
     }
     Ok(results)
 }
+
+/// Strands (or guides) per chunk of [`split_in_chunks`].
+const CHUNK: usize = 256;
+
+/// Runs `work` on chunks of `0..n` ([`CHUNK`] items, `per` elements of
+/// `out` each), the threads taking the next chunk as they free up: for
+/// work whose cost varies along the items (guides in a crease, or far from
+/// their target), where equal ranges would leave a thread idle. Each chunk
+/// is a pure function of its items, so the bits do not depend on who ran it.
+pub(crate) fn split_in_chunks<T: Send>(
+    n: usize,
+    thread_count: u32,
+    out: &mut [T],
+    per: usize,
+    work: impl Fn(Range<usize>, &mut [T]) + Sync,
+) -> Result<(), Failure> {
+    let threads = thread_total(thread_count).clamp(1, n.div_ceil(CHUNK).max(1));
+    if threads == 1 {
+        work(0..n, out);
+        return Ok(());
+    }
+    let parts: Vec<std::sync::Mutex<Option<&mut [T]>>> = out
+        .chunks_mut(CHUNK * per)
+        .map(|p| std::sync::Mutex::new(Some(p)))
+        .collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let run = || loop {
+        let c = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let Some(slot) = parts.get(c) else { break };
+        // each chunk is taken once, by the thread that drew its number
+        if let Some(part) = slot.lock().ok().and_then(|mut p| p.take()) {
+            work(c * CHUNK..((c + 1) * CHUNK).min(n), part);
+        }
+    };
+    split_over_threads(threads, threads as u32, &mut [0u8; 0], 0, |_, _| run())?;
+    Ok(())
+}
