@@ -428,6 +428,11 @@ typedef struct PelageSimParams {
   // A root that moves more than this many times its guide's length in
   // one step has teleported: its swing is carried along rigidly (> 0).
   float teleport;
+  // Where another simulator takes over (0..1 per guide at its root): the
+  // share of the host's curves (pelage_sim_step's `external_points`) in
+  // the posed guide; a map that fades blends across the region's border.
+  // Default constant 0: pelage's dynamics everywhere.
+  struct PelageMap external;
 } PelageSimParams;
 
 // Simulated guides: the state of the tip springs across frames, the rest
@@ -817,7 +822,11 @@ void pelage_sim_free(PelageSim sim);
 // neutral pose (the rest shape carried by the root frame), the tip spring,
 // the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
 // `thread_count` threads (0: all cores); the bits do not depend on it.
-// Everything is checked first; on failure the state is unchanged.
+// `external_points` (NULL: none) holds another simulator's curves, float3
+// world points `external_stride` bytes apart, points_per_guide per guide:
+// the guides `params.external` selects take their shape from them
+// (blended, lengths kept). Everything is checked first; on failure the
+// state is unchanged.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
 // another mesh), MISALIGNED, CAPACITY_EXCEEDED (the body grid's memory),
@@ -825,7 +834,7 @@ void pelage_sim_free(PelageSim sim);
 //
 // Thread safety: no other call may use `sim` during this one; the frame
 // may be read by other calls meanwhile.
-enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct PelageColliders *colliders, float dt, uint32_t thread_count);
+enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct PelageColliders *colliders, const void *external_points, size_t external_stride, float dt, uint32_t thread_count);
 
 // Writes the posed guides of the last step (world space; all zero before
 // the first step): `points_per_guide` float3 per guide, guide after guide,

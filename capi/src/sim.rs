@@ -1,6 +1,6 @@
 //! The simulation handle: guide dynamics across frames (paper 3).
 
-use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, Float3Out};
+use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, strided, Float3Out};
 use crate::frame::frame_ref;
 use crate::status::Failure;
 use crate::threads::split_in_chunks;
@@ -65,6 +65,11 @@ pub struct PelageSimParams {
     /// A root that moves more than this many times its guide's length in
     /// one step has teleported: its swing is carried along rigidly (> 0).
     pub teleport: f32,
+    /// Where another simulator takes over (0..1 per guide at its root): the
+    /// share of the host's curves (pelage_sim_step's `external_points`) in
+    /// the posed guide; a map that fades blends across the region's border.
+    /// Default constant 0: pelage's dynamics everywhere.
+    pub external: PelageMap,
 }
 
 /// Defaults: 16 joints and points, frequency 1.5 Hz, amplitude 1, decay
@@ -95,6 +100,7 @@ pub extern "C" fn pelage_sim_params_defaults() -> PelageSimParams {
         link_iterations: d.links.iterations,
         link_stiffness: d.links.stiffness,
         teleport: d.teleport,
+        external: constant(&d.external),
     }
 }
 
@@ -118,6 +124,7 @@ fn core_params<'a>(p: &'a PelageSimParams, vertex_count: usize) -> Result<SimPar
             stiffness: p.link_stiffness,
         },
         teleport: p.teleport,
+        external: p.external.view(vertex_count, "external map")?,
     };
     params.check()?;
     Ok(params)
@@ -317,7 +324,11 @@ impl SignedDistance for HostField {
 /// neutral pose (the rest shape carried by the root frame), the tip spring,
 /// the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
 /// `thread_count` threads (0: all cores); the bits do not depend on it.
-/// Everything is checked first; on failure the state is unchanged.
+/// `external_points` (NULL: none) holds another simulator's curves, float3
+/// world points `external_stride` bytes apart, points_per_guide per guide:
+/// the guides `params.external` selects take their shape from them
+/// (blended, lengths kept). Everything is checked first; on failure the
+/// state is unchanged.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
 /// another mesh), MISALIGNED, CAPACITY_EXCEEDED (the body grid's memory),
@@ -330,6 +341,8 @@ pub extern "C" fn pelage_sim_step(
     sim: PelageSim,
     frame: PelageFrame,
     colliders: *const PelageColliders,
+    external_points: *const c_void,
+    external_stride: usize,
     dt: f32,
     thread_count: u32,
 ) -> PelageStatus {
@@ -361,7 +374,11 @@ pub extern "C" fn pelage_sim_step(
             body: body.as_ref(),
             field: field.as_ref().map(|f| f as &dyn SignedDistance),
         };
-        let Step { context, blocks, snapshot } = sim.sim.begin(&frame.posed, &colliders, dt)?;
+        let external = match external_points.is_null() {
+            true => None,
+            false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),
+        };
+        let Step { context, blocks, snapshot } = sim.sim.begin(&frame.posed, &colliders, external, dt)?;
         let (n, per) = (snapshot.len(), context.block_floats());
         split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.advance(range.start, part))?;
         for _ in 0..context.link_iterations() {

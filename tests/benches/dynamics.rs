@@ -127,7 +127,15 @@ fn main() {
                             distance_user_data: null_mut(),
                         };
                         let t = Instant::now();
-                        let s = pelage_sim_step(sim, frames[f].0, &colliders, 1.0 / 24.0, threads);
+                        let s = pelage_sim_step(
+                            sim,
+                            frames[f].0,
+                            &colliders,
+                            std::ptr::null(),
+                            0,
+                            1.0 / 24.0,
+                            threads,
+                        );
                         let e = t.elapsed().as_secs_f64();
                         assert_eq!(s, PelageStatus::Ok);
                         e
@@ -267,7 +275,15 @@ fn full_frame(
         };
         let t = Instant::now();
         assert_eq!(
-            pelage_sim_step(sim, handle.0, &colliders, 1.0 / 24.0, 2),
+            pelage_sim_step(
+                sim,
+                handle.0,
+                &colliders,
+                std::ptr::null(),
+                0,
+                1.0 / 24.0,
+                2
+            ),
             PelageStatus::Ok
         );
         assert_eq!(

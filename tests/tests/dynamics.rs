@@ -118,7 +118,15 @@ fn run(
             distance: None,
             distance_user_data: null_mut(),
         };
-        let s = pelage_sim_step(sim.sim, handle.0, &colliders, 1.0 / 24.0, threads);
+        let s = pelage_sim_step(
+            sim.sim,
+            handle.0,
+            &colliders,
+            std::ptr::null(),
+            0,
+            1.0 / 24.0,
+            threads,
+        );
         assert_eq!(s, PelageStatus::Ok, "frame {f}");
         each(f, &mesh, &sim.read(shot.roots.len()), &caps);
     }
@@ -234,4 +242,56 @@ fn save(sim: &SimHandle) -> Vec<u8> {
     let s = pelage_sim_save(sim.sim, out.as_mut_ptr().cast(), out.len(), &mut written);
     assert_eq!((s, written), (PelageStatus::Ok, size));
     out
+}
+
+#[test]
+fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
+    let shot = Shot::new();
+    let n = shot.roots.len();
+    let mut params = shot.params();
+    params.external.constant = 1.0;
+    let sim = SimHandle::new(&shot, &params);
+    let guides = guides_desc(&shot.roots, &shot.points);
+    // the creature turned a quarter and moved: the host's curves are the
+    // groomed guides, carried along by the same motion
+    let mesh = pose(&shot.rest, 40);
+    let (turn, shift) = pelage_tests::animated::placement(40);
+    let sway_free: Vec<[f32; 3]> = shot
+        .points
+        .iter()
+        .map(|&p| (turn * Vec3::from(p) + shift).to_array())
+        .collect();
+    let handle = frame(&mesh_desc(&mesh), &guides, JOINTS as u32, 2).unwrap();
+    let mut bad = sway_free.clone();
+    bad[5][1] = f32::NAN;
+    let step = |points: &[[f32; 3]]| {
+        pelage_sim_step(
+            sim.sim,
+            handle.0,
+            std::ptr::null(),
+            points.as_ptr().cast(),
+            12,
+            1.0 / 24.0,
+            2,
+        )
+    };
+    assert_eq!(step(&bad), PelageStatus::InvalidArgument);
+    assert!(
+        sim.read(n).iter().all(|p| *p == [0.0; 3]),
+        "a refused step changed the state"
+    );
+    assert_eq!(step(&sway_free), PelageStatus::Ok);
+    let posed = sim.read(n);
+    // every segment along the host's (the roots sit on the posed mesh,
+    // which sways: compare directions)
+    let mut worst = 0.0f32;
+    for g in 0..n {
+        for k in 1..JOINTS {
+            let d = Vec3::from(posed[g * JOINTS + k]) - Vec3::from(posed[g * JOINTS + k - 1]);
+            let h =
+                Vec3::from(sway_free[g * JOINTS + k]) - Vec3::from(sway_free[g * JOINTS + k - 1]);
+            worst = worst.max(d.normalize().distance(h.normalize()));
+        }
+    }
+    assert!(worst < 1e-3, "segments off the host's by {worst}");
 }

@@ -24,7 +24,7 @@ use crate::guides::Guides;
 use crate::interp::posed::PosedFrame;
 use crate::surface::frame::Frame;
 use crate::surface::map::ScalarMap;
-use crate::{Error, Mesh, Root};
+use crate::{Error, Mesh, Root, Strided};
 use glam::Vec3;
 
 /// Most joints a guide is simulated with, and most points it is written with.
@@ -53,6 +53,12 @@ pub struct SimParams<'m> {
     /// state is carried rigidly with its root frame, without a whip
     /// (> 0).
     pub teleport: f32,
+    /// Where another simulator takes over (paper 3.3: regions re-simulated
+    /// in Maya nHair from the cached data), per guide at its root, 0..=1:
+    /// the share of the host's curves ([`Sim::begin`]'s `external`) in the
+    /// posed guide; 0 (the default) is pelage's dynamics alone, and a map
+    /// that fades blends the two across the region's border.
+    pub external: ScalarMap<'m>,
 }
 
 impl Default for SimParams<'_> {
@@ -67,6 +73,7 @@ impl Default for SimParams<'_> {
             ik: IkParams::default(),
             links: LinkParams::default(),
             teleport: 20.0,
+            external: ScalarMap::Constant(0.0),
         }
     }
 }
@@ -134,6 +141,8 @@ struct GuideConstants {
     spring_decay: f32,
     /// Sum of the segment lengths.
     reach: f32,
+    /// Share of the host's curves in the posed guide.
+    external: f32,
 }
 
 /// Simulated guides.
@@ -185,6 +194,7 @@ impl<'a> Sim<'a> {
             (&params.frequency, "frequency map"),
             (&params.amplitude, "amplitude map"),
             (&params.decay, "decay map"),
+            (&params.external, "external map"),
         ] {
             map.validate(&rest, what)?;
         }
@@ -204,6 +214,13 @@ impl<'a> Sim<'a> {
                 amplitude: params.amplitude.sample(&rest, face, u, v),
                 decay: params.decay.sample(&rest, face, u, v),
             };
+            let external = params.external.sample(&rest, face, u, v);
+            if !(0.0..=1.0).contains(&external) {
+                return Err(Error::OutOfDomain {
+                    what: "external map (0..=1)",
+                    index: g,
+                });
+            }
             if !spring.is_valid() {
                 return Err(Error::OutOfDomain {
                     what: "guide springs (frequency 0..=1000, amplitude 0..=1, decay 0..=10000)",
@@ -225,6 +242,7 @@ impl<'a> Sim<'a> {
                 spring_amplitude: spring.amplitude,
                 spring_decay: spring.decay,
                 reach,
+                external,
             };
         }
         // the links are made at rest, between the guides' rest tips
@@ -240,6 +258,7 @@ impl<'a> Sim<'a> {
                 frequency: ScalarMap::Constant(0.0),
                 amplitude: ScalarMap::Constant(0.0),
                 decay: ScalarMap::Constant(0.0),
+                external: ScalarMap::Constant(0.0),
                 ..*params
             },
             roots,
@@ -314,10 +333,16 @@ impl<'a> Sim<'a> {
     /// Checks the step's inputs and splits the simulation into what the
     /// step's phases read and the per-guide blocks they write (see the
     /// module docs); [`Sim::step`] runs every phase on one thread.
+    ///
+    /// `external` holds the host's curves for the guides the `external`
+    /// map selects (world space, `points` per guide, guide after guide;
+    /// checked finite and within 1e9 where the map is above 0); without
+    /// them, those guides keep pelage's dynamics.
     pub fn begin<'s>(
         &'s mut self,
         frame: &'s PosedFrame,
         colliders: &'s Colliders<'s>,
+        external: Option<Strided<'s, [f32; 3]>>,
         dt: f32,
     ) -> Result<Step<'s>, Error> {
         if !(dt > 0.0 && dt <= 1.0) {
@@ -329,6 +354,24 @@ impl<'a> Sim<'a> {
             ));
         }
         colliders.check()?;
+        if let Some(curves) = external {
+            let m = self.params.points;
+            if curves.len() != self.len() * m {
+                return Err(Error::InvalidArgument(
+                    "external curves need points_per_guide points per guide",
+                ));
+            }
+            let limit = crate::surface::mesh::MAX_COORDINATE;
+            for (g, c) in self.constants.iter().enumerate() {
+                let bad = (0..m).any(|k| curves.get(g * m + k).iter().any(|x| !(x.abs() <= limit)));
+                if c.external > 0.0 && bad {
+                    return Err(Error::OutOfDomain {
+                        what: "external curves (finite, within 1e9)",
+                        index: g,
+                    });
+                }
+            }
+        }
         let block = Self::block_floats(&self.params);
         Ok(Step {
             context: StepContext {
@@ -340,6 +383,7 @@ impl<'a> Sim<'a> {
                 links: &self.links,
                 frame,
                 colliders,
+                external,
                 dt,
                 block,
             },
@@ -360,7 +404,7 @@ impl<'a> Sim<'a> {
             context: ctx,
             blocks,
             snapshot,
-        } = self.begin(frame, colliders, dt)?;
+        } = self.begin(frame, colliders, None, dt)?;
         ctx.advance(0, blocks);
         for _ in 0..ctx.link_iterations() {
             ctx.snapshot(blocks, snapshot);
@@ -472,6 +516,27 @@ impl<'a> Sim<'a> {
     }
 }
 
+/// Blends the posed guide `g` (root frame) toward the host's curve by
+/// `share`: each segment turns toward the host curve's and keeps its length.
+fn blend(frame: &Frame, curves: Strided<[f32; 3]>, g: usize, share: f32, posed: &mut [Vec3]) {
+    let m = posed.len();
+    let host = |k: usize| frame.to_local(Vec3::from(curves.get(g * m + k)));
+    let mut from = posed[0];
+    for k in 1..m {
+        let own = posed[k] - from;
+        from = posed[k];
+        let direction = (own.normalize_or_zero() * (1.0 - share)
+            + (host(k) - host(k - 1)).normalize_or_zero() * share)
+            .normalize_or_zero();
+        posed[k] = posed[k - 1]
+            + if direction == Vec3::ZERO {
+                own
+            } else {
+                direction * own.length()
+            };
+    }
+}
+
 /// Joint `k` of guide `g` at rest, in its root frame.
 fn rest_joint(rest: &[f32], joints: usize, g: usize, k: usize) -> Vec3 {
     let at = (g * joints + k) * 3;
@@ -509,6 +574,7 @@ pub struct StepContext<'s> {
     links: &'s Links<'s>,
     frame: &'s PosedFrame<'s>,
     colliders: &'s Colliders<'s>,
+    external: Option<Strided<'s, [f32; 3]>>,
     dt: f32,
     block: usize,
 }
@@ -624,6 +690,10 @@ impl StepContext<'_> {
             let lengths = &self.lengths[g * (j - 1)..(g + 1) * (j - 1)];
             ik::solve(&mut joints[..j], lengths, target, reach, &self.params.ik);
             spline::resample(&joints[..j], &mut posed[..m]);
+            let share = self.constants[g].external;
+            if let (Some(curves), true) = (self.external, share > 0.0) {
+                blend(&frame, curves, g, share, &mut posed[..m]);
+            }
             if push_out(self.colliders, &frame, &mut posed[..m], reach) == PushOut::Stuck {
                 // bent into a place no rotation leaves (a crease, a landing):
                 // the groomed shape, pushed out in turn
@@ -937,7 +1007,7 @@ mod tests {
                 context: ctx,
                 blocks,
                 snapshot,
-            } = split.begin(&frame, &colliders, dt).unwrap();
+            } = split.begin(&frame, &colliders, None, dt).unwrap();
             let per = ctx.block_floats();
             let cuts = [0, 7, 50, 90];
             for w in cuts.windows(2) {
@@ -1086,6 +1156,70 @@ mod tests {
     }
 
     #[test]
+    fn regions_of_another_simulator_take_its_curves_and_keep_the_lengths() {
+        let s = Scene::new(60);
+        // the host's curves: every guide laid over along a fixed direction
+        let host: Vec<[f32; 3]> = s
+            .guide_points
+            .chunks(JOINTS)
+            .flat_map(|g| {
+                let root = Vec3::from(g[0]);
+                (0..JOINTS).map(move |k| (root + Vec3::new(0.03, 0.03, 0.0) * k as f32).to_array())
+            })
+            .collect();
+        let run = |share: f32, with_host: bool| {
+            let p = SimParams {
+                external: ScalarMap::Constant(share),
+                ..params()
+            };
+            let mut buf = vec![];
+            let mut sim = s.sim(&p, &mut buf);
+            let mut layout = ArenaLayout::new();
+            PosedFrame::layout(&mut layout, s.rest.p.len(), 1, 2);
+            let mut fbuf = vec![0u8; layout.bytes()];
+            let frame = PosedFrame::new(s.rest.mesh(), 1, 2, &mut Arena::new(&mut fbuf)).unwrap();
+            let colliders = Colliders::default();
+            let external = with_host.then(|| Strided::from_slice(&host));
+            let Step {
+                context,
+                blocks,
+                snapshot,
+            } = sim.begin(&frame, &colliders, external, 0.04).unwrap();
+            context.advance(0, blocks);
+            let _ = snapshot;
+            context.finish(0, blocks);
+            assert_sound(&sim, "external");
+            posed(&sim)
+        };
+        let own = run(0.0, false);
+        assert!(run(0.0, true) == own, "a zero share changes nothing");
+        let taken = run(1.0, true);
+        for (g, points) in taken.chunks(JOINTS).enumerate() {
+            for k in 1..JOINTS {
+                let d = (points[k] - points[k - 1]).normalize();
+                let want = (Vec3::from(host[g * JOINTS + k])
+                    - Vec3::from(host[g * JOINTS + k - 1]))
+                .normalize();
+                assert!(
+                    d.distance(want) < 1e-4,
+                    "guide {g} segment {k}: {d} vs {want}"
+                );
+            }
+        }
+        // half way: every segment between the two
+        let half = run(0.5, true);
+        for ((a, b), c) in own
+            .chunks(JOINTS)
+            .zip(taken.chunks(JOINTS))
+            .zip(half.chunks(JOINTS))
+        {
+            let (da, db, dc) = (a[3] - a[2], b[3] - b[2], c[3] - c[2]);
+            let (x, y) = (da.angle_between(dc), db.angle_between(dc));
+            assert!((x - y).abs() < 1e-3, "{x} vs {y}");
+        }
+    }
+
+    #[test]
     fn links_reduce_strain_and_move_linked_tips_together() {
         let s = Scene::new(200);
         let p = SimParams {
@@ -1117,7 +1251,7 @@ mod tests {
             context: ctx,
             blocks,
             snapshot,
-        } = sim.begin(&frame, &colliders, 1.0 / 24.0).unwrap();
+        } = sim.begin(&frame, &colliders, None, 1.0 / 24.0).unwrap();
         ctx.advance(0, blocks);
         ctx.snapshot(blocks, snapshot);
         let before: Vec<[f32; 3]> = snapshot.to_vec();
