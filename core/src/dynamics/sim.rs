@@ -363,7 +363,12 @@ impl<'a> Sim<'a> {
             }
             let limit = crate::surface::mesh::MAX_COORDINATE;
             for (g, c) in self.constants.iter().enumerate() {
-                let bad = (0..m).any(|k| curves.get(g * m + k).iter().any(|x| !(x.abs() <= limit)));
+                let bad = (0..m).any(|k| {
+                    curves
+                        .get(g * m + k)
+                        .iter()
+                        .any(|x| x.is_nan() || x.abs() > limit)
+                });
                 if c.external > 0.0 && bad {
                     return Err(Error::OutOfDomain {
                         what: "external curves (finite, within 1e9)",
