@@ -77,10 +77,6 @@ fn main() {
         bytes as f64 / 1e6,
         t_new * 1e3
     );
-    println!(
-        "{:>34} {:>7} | {:>9} {:>9} | {:>8}",
-        "step (median over the shot)", "threads", "ms", "frames/s", "x floor"
-    );
     let body_build = median(
         meshes
             .iter()
@@ -96,6 +92,10 @@ fn main() {
     println!(
         "the body's grid, built per step for the body collider: {:.1} ms (one thread)",
         body_build * 1e3
+    );
+    println!(
+        "{:>34} {:>7} | {:>9} {:>9} | {:>8}",
+        "step (median over the shot)", "threads", "ms", "frames/s", "x floor"
     );
     let mut posed = vec![[0.0f32; 3]; roots.len() * JOINTS];
     for threads in [1u32, 2] {
