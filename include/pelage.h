@@ -790,8 +790,8 @@ struct PelageSimParams pelage_sim_params_defaults(void);
 // Memory bytes pelage_sim_new needs for `guide_count` guides on
 // `rest_mesh` with `params`.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
-// OUT_OF_RANGE, PANIC.
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also a guide count of 0
+// or of u32::MAX and above), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_sim_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, const struct PelageSimParams *params, size_t *memory_bytes);
@@ -816,7 +816,7 @@ enum PelageStatus pelage_sim_new(const struct PelageMeshDesc *rest_mesh, const s
 // Thread safety: no other call may use `sim` during or after this one.
 void pelage_sim_free(PelageSim sim);
 
-// Advances the simulation by `dt` seconds (0 < dt <= 1; it may change
+// Advances the simulation by `dt` seconds (1e-5 <= dt <= 1; it may change
 // from step to step) to `frame` (this frame's deformed mesh; its guides
 // are not read), colliding with `colliders` (NULL: none). Per guide: the
 // neutral pose (the rest shape carried by the root frame), the tip spring,

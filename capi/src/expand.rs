@@ -189,7 +189,7 @@ pub extern "C" fn pelage_expand(
             let (start, b) = part?;
             bounds = bounds.merge(b, start);
         }
-        run(&frame.posed, all, &bounds, p, req(curves, "curves")?)
+        run(frame.posed(), all, &bounds, p, req(curves, "curves")?)
     }
 }
 

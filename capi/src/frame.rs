@@ -33,10 +33,13 @@ impl<T> Buffer<T> {
     }
 
     /// The contents, for as long as the frame that owns this buffer lives.
-    fn borrow(&self) -> &'static mut [T] {
+    ///
+    /// # Safety
+    /// Called once per buffer, and the borrow must end before the buffer
+    /// is dropped (the frame declared before it in `Frame` holds it).
+    unsafe fn borrow(&self) -> &'static mut [T] {
         // SAFETY: the pointer came from Box::into_raw and is freed only in
-        // drop; each buffer is borrowed once, by the frame declared before
-        // it in `Frame`, which is dropped first.
+        // drop; the caller borrows it once, for less than its life.
         unsafe { &mut *self.0 }
     }
 }
@@ -51,12 +54,19 @@ impl<T> Drop for Buffer<T> {
 /// What a [`PelageFrame`] points to.
 pub(crate) struct Frame {
     /// Borrows the buffers below; declared first, so dropped first.
-    pub posed: PosedFrame<'static>,
+    posed: PosedFrame<'static>,
     _positions: Buffer<[f32; 3]>,
     _triangles: Buffer<[u32; 3]>,
     _uvs: Option<Buffer<[f32; 2]>>,
     _normals: Option<Buffer<[f32; 3]>>,
     _arena: Buffer<u8>,
+}
+
+impl Frame {
+    /// The posed frame, for no longer than this handle lives.
+    pub(crate) fn posed(&self) -> &PosedFrame<'_> {
+        &self.posed
+    }
 }
 
 /// The frame behind a handle, or NULL_PARAMETER. A non-NULL handle must
@@ -110,13 +120,20 @@ pub extern "C" fn pelage_frame_new(
         let triangles = copy(host.triangles);
         let uvs = host.uvs.map(copy);
         let normals = host.normals.map(copy);
-        let mut mesh = Mesh::new(
-            Strided::from_slice(positions.borrow()),
-            Strided::from_slice(triangles.borrow()),
-        );
-        mesh.uvs = uvs.as_ref().map(|b| Strided::from_slice(b.borrow()));
-        mesh.normals = normals.as_ref().map(|b| Strided::from_slice(b.borrow()));
-        let posed = PosedFrame::new(mesh, guide_count, points, &mut Arena::new(arena.borrow()))?;
+        // SAFETY: each buffer is borrowed once, by the frame made below,
+        // which the handle drops before them.
+        let mut mesh = unsafe {
+            Mesh::new(
+                Strided::from_slice(positions.borrow()),
+                Strided::from_slice(triangles.borrow()),
+            )
+        };
+        // SAFETY: as above.
+        mesh.uvs = uvs.as_ref().map(|b| Strided::from_slice(unsafe { b.borrow() }));
+        // SAFETY: as above.
+        mesh.normals = normals.as_ref().map(|b| Strided::from_slice(unsafe { b.borrow() }));
+        // SAFETY: as above.
+        let posed = PosedFrame::new(mesh, guide_count, points, &mut Arena::new(unsafe { arena.borrow() }))?;
         let frame = Box::new(Frame {
             posed,
             _positions: positions,

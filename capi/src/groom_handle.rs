@@ -146,6 +146,6 @@ pub extern "C" fn pelage_groom_expand(
             Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
         })?;
         let p = req(params, "params")?;
-        run(&frame.posed, groom.strands().range(range), &groom.bounds, p, req(curves, "curves")?)
+        run(frame.posed(), groom.strands().range(range), &groom.bounds, p, req(curves, "curves")?)
     }
 }

@@ -10,6 +10,7 @@ use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance
 use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
 use pelage_core::dynamics::sim::{Sim, SimParams, Step};
+use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::Body;
 use pelage_core::Arena;
 use std::ffi::c_void;
@@ -143,11 +144,17 @@ fn sim_mut<'a>(sim: PelageSim) -> Result<&'a mut SimBox, Failure> {
     req_mut(sim.cast::<SimBox>(), "sim")
 }
 
+/// The simulation behind a handle, shared: for the calls that only read
+/// it, which may run at once.
+fn sim_ref<'a>(sim: PelageSim) -> Result<&'a SimBox, Failure> {
+    req(sim.cast::<SimBox>().cast_const(), "sim")
+}
+
 /// Memory bytes pelage_sim_new needs for `guide_count` guides on
 /// `rest_mesh` with `params`.
 ///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
-/// OUT_OF_RANGE, PANIC.
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also a guide count of 0
+/// or of u32::MAX and above), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -161,6 +168,7 @@ pub extern "C" fn pelage_sim_query(
         let mesh = req(rest_mesh, "rest_mesh")?.view()?;
         let p = core_params(req(params, "params")?, mesh.positions.len())?;
         let out = req_mut(memory_bytes, "memory_bytes")?;
+        PosedFrame::check_sizes(guide_count, p.joints)?;
         let mut layout = ArenaLayout::new();
         Sim::layout(&mut layout, mesh.positions.len(), guide_count, &p);
         *out = layout.bytes();
@@ -318,7 +326,7 @@ impl SignedDistance for HostField {
     }
 }
 
-/// Advances the simulation by `dt` seconds (0 < dt <= 1; it may change
+/// Advances the simulation by `dt` seconds (1e-5 <= dt <= 1; it may change
 /// from step to step) to `frame` (this frame's deformed mesh; its guides
 /// are not read), colliding with `colliders` (NULL: none). Per guide: the
 /// neutral pose (the rest shape carried by the root frame), the tip spring,
@@ -357,7 +365,7 @@ pub extern "C" fn pelage_sim_step(
         let capsules: &[Capsule] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.capsules, c.capsule_count, "colliders.capsules"))?);
         let planes: &[Plane] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.planes, c.plane_count, "colliders.planes"))?);
         let field = host.and_then(|c| c.distance.map(|callback| HostField { callback, user_data: c.distance_user_data }));
-        let mesh = frame.posed.mesh();
+        let mesh = frame.posed().mesh();
         let body = if host.is_some_and(|c| c.body != 0) {
             let bytes = Body::required_bytes(mesh)?;
             if sim.body_arena.len() < bytes {
@@ -378,7 +386,7 @@ pub extern "C" fn pelage_sim_step(
             true => None,
             false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),
         };
-        let Step { context, blocks, snapshot } = sim.sim.begin(&frame.posed, &colliders, external, dt)?;
+        let Step { context, blocks, snapshot } = sim.sim.begin(frame.posed(), &colliders, external, dt)?;
         let (n, per) = (snapshot.len(), context.block_floats());
         split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.advance(range.start, part))?;
         for _ in 0..context.link_iterations() {
@@ -409,7 +417,7 @@ pub extern "C" fn pelage_sim_read(
     point_capacity: usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let sim = &sim_mut(sim)?.sim;
+        let sim = &sim_ref(sim)?.sim;
         let (n, m) = (sim.len(), sim.points());
         let needed = n * m;
         if point_capacity < needed {
@@ -451,7 +459,7 @@ pub extern "C" fn pelage_sim_reset(sim: PelageSim) -> PelageStatus {
 #[no_mangle]
 pub extern "C" fn pelage_sim_state_size(sim: PelageSim, state_bytes: *mut usize) -> PelageStatus {
     ffi_boundary! {
-        let size = sim_mut(sim)?.sim.state_bytes();
+        let size = sim_ref(sim)?.sim.state_bytes();
         *req_mut(state_bytes, "state_bytes")? = size;
         Ok(())
     }
@@ -474,7 +482,7 @@ pub extern "C" fn pelage_sim_save(
     written: *mut usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let sim = &sim_mut(sim)?.sim;
+        let sim = &sim_ref(sim)?.sim;
         let written = req_mut(written, "written")?;
         let needed = sim.state_bytes();
         if capacity < needed {

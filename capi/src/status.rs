@@ -85,7 +85,10 @@ thread_local! {
 /// Thread safety: per-thread; may be called from any thread.
 #[no_mangle]
 pub extern "C" fn pelage_last_error() -> *const c_char {
-    LAST_ERROR.with(|m| m.borrow().as_ptr())
+    // while the thread's locals are torn down there is no message to give
+    LAST_ERROR
+        .try_with(|m| m.borrow().as_ptr())
+        .unwrap_or(c"".as_ptr())
 }
 
 /// A failed call: its status and a message for `pelage_last_error`.

@@ -8,9 +8,10 @@ use std::ops::Range;
 /// Most threads `thread_count` may ask for beyond the machine's cores.
 const MAX_THREADS: usize = 64;
 
-/// Threads to use for a `thread_count` parameter: 0 means all cores; more
-/// threads than cores never helps, and the cap keeps a huge "as many as
-/// possible" value from spawning one thread per strand.
+/// Threads to use for a `thread_count` parameter: 0 means all cores; a
+/// host may ask for more threads than cores (up to 64, or the core count
+/// when larger), and the cap keeps a huge value from spawning one thread
+/// per strand.
 fn thread_total(thread_count: u32) -> usize {
     // asked once: on Linux the answer reads cgroup files (tens of
     // microseconds), which a renderer's per-patch calls would pay each time

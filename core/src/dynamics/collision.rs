@@ -121,14 +121,14 @@ fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
 /// touch, and the body and field (which are asked per point).
 struct Near<'c, 'r> {
     all: &'c Colliders<'r>,
-    spheres: [u16; MAX_NEAR],
-    capsules: [u16; MAX_NEAR],
-    planes: [u16; MAX_NEAR],
+    spheres: [u32; MAX_NEAR],
+    capsules: [u32; MAX_NEAR],
+    planes: [u32; MAX_NEAR],
     counts: [usize; 3],
 }
 
-/// Most shapes of each kind one strand is tested against (the nearest
-/// come first in the caller's order; more is a scene no fur survives).
+/// Most shapes of each kind kept per strand; when more of a kind are
+/// near, the strand is tested against every shape of that kind.
 const MAX_NEAR: usize = 64;
 
 impl<'c, 'r> Near<'c, 'r> {
@@ -140,27 +140,41 @@ impl<'c, 'r> Near<'c, 'r> {
             planes: [0; MAX_NEAR],
             counts: [0; 3],
         };
+        // the shapes of each kind near the root; past MAX_NEAR the count
+        // still grows, and every shape of that kind is tested
+        fn keep(list: &mut [u32; MAX_NEAR], count: &mut usize, i: usize) {
+            if *count < MAX_NEAR {
+                list[*count] = i as u32;
+            }
+            *count += 1;
+        }
         for (i, s) in all.spheres.iter().enumerate() {
-            if Vec3::from(s.centre).distance(root) < s.radius + reach && near.counts[0] < MAX_NEAR {
-                near.spheres[near.counts[0]] = i as u16;
-                near.counts[0] += 1;
+            if Vec3::from(s.centre).distance(root) < s.radius + reach {
+                keep(&mut near.spheres, &mut near.counts[0], i);
             }
         }
         for (i, c) in all.capsules.iter().enumerate() {
-            let d = segment_distance(root, c.a.into(), c.b.into());
-            if d < c.radius + reach && near.counts[1] < MAX_NEAR {
-                near.capsules[near.counts[1]] = i as u16;
-                near.counts[1] += 1;
+            if segment_distance(root, c.a.into(), c.b.into()) < c.radius + reach {
+                keep(&mut near.capsules, &mut near.counts[1], i);
             }
         }
         for (i, p) in all.planes.iter().enumerate() {
             let n = Vec3::from(p.normal);
-            if n.dot(root) - p.offset < reach * n.length() && near.counts[2] < MAX_NEAR {
-                near.planes[near.counts[2]] = i as u16;
-                near.counts[2] += 1;
+            if n.dot(root) - p.offset < reach * n.length() {
+                keep(&mut near.planes, &mut near.counts[2], i);
             }
         }
         near
+    }
+
+    /// The indices of kind `kind` to test: those kept, or all `total`
+    /// when more were near than kept.
+    fn shapes<'s>(&self, kind: usize, kept: &'s [u32; MAX_NEAR], total: usize) -> Shapes<'s> {
+        if self.counts[kind] > MAX_NEAR {
+            Shapes::All(0..total)
+        } else {
+            Shapes::Kept(kept[..self.counts[kind]].iter())
+        }
     }
 
     /// True when nothing can touch the strand.
@@ -171,21 +185,26 @@ impl<'c, 'r> Near<'c, 'r> {
     /// True when no point of `points` is inside a shape.
     fn clear(&self, points: &[Vec3]) -> bool {
         let all = self.all;
+        let (spheres, capsules, planes) = (
+            self.shapes(0, &self.spheres, all.spheres.len()),
+            self.shapes(1, &self.capsules, all.capsules.len()),
+            self.shapes(2, &self.planes, all.planes.len()),
+        );
         for &p in points {
-            for &i in &self.spheres[..self.counts[0]] {
-                let s = &all.spheres[i as usize];
+            for i in spheres.clone() {
+                let s = &all.spheres[i];
                 if p.distance(Vec3::from(s.centre)) < s.radius {
                     return false;
                 }
             }
-            for &i in &self.capsules[..self.counts[1]] {
-                let c = &all.capsules[i as usize];
+            for i in capsules.clone() {
+                let c = &all.capsules[i];
                 if segment_distance(p, c.a.into(), c.b.into()) < c.radius {
                     return false;
                 }
             }
-            for &i in &self.planes[..self.counts[2]] {
-                let s = &all.planes[i as usize];
+            for i in planes.clone() {
+                let s = &all.planes[i];
                 if Vec3::from(s.normal).dot(p) < s.offset {
                     return false;
                 }
@@ -209,6 +228,24 @@ impl<'c, 'r> Near<'c, 'r> {
             }
         }
         true
+    }
+}
+
+/// Shape indices a strand is tested against.
+#[derive(Clone)]
+enum Shapes<'s> {
+    Kept(core::slice::Iter<'s, u32>),
+    All(core::ops::Range<usize>),
+}
+
+impl Iterator for Shapes<'_> {
+    type Item = usize;
+
+    fn next(&mut self) -> Option<usize> {
+        match self {
+            Shapes::Kept(it) => it.next().map(|&i| i as usize),
+            Shapes::All(r) => r.next(),
+        }
     }
 }
 

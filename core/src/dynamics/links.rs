@@ -70,7 +70,7 @@ impl<'a> Links<'a> {
             0
         };
         let most = tips.saturating_mul(k).saturating_mul(2);
-        layout.add::<u32>(tips + 1);
+        layout.add::<u32>(tips.saturating_add(1));
         layout.add::<u32>(most);
         layout.add::<f32>(most);
         if k > 0 {
@@ -78,7 +78,7 @@ impl<'a> Links<'a> {
             layout.add::<u32>(HashGrid::buckets_for(tips));
             layout.add::<u32>(tips);
             layout.add::<u32>(tips.saturating_mul(k));
-            layout.add::<u32>(tips + 1);
+            layout.add::<u32>(tips.saturating_add(1));
         }
     }
 
@@ -91,6 +91,7 @@ impl<'a> Links<'a> {
         let n = tips.len();
         let tip = |i: usize| Vec3::from(tips[i]);
         let offsets = arena.alloc::<u32>(n + 1)?;
+        offsets.fill(0);
         if !params.active() || n < 2 {
             return Ok(Links {
                 offsets,

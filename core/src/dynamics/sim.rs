@@ -125,6 +125,14 @@ const TARGET: usize = 25;
 /// The posed points in the root frame.
 const POSED: usize = 28;
 
+/// Shortest step: below it the neutral tip's speed (distance over dt)
+/// leaves the float range for ordinary motion.
+pub const MIN_DT: f32 = 1e-5;
+
+/// Largest magnitude of a restored state value: a root frame's origin is
+/// within 1e9, the swing within twice a guide's reach.
+const MAX_STATE: f32 = 1e10;
+
 /// Save-file magic, "PLGS" (pelage guide state).
 const MAGIC: [u8; 4] = *b"PLGS";
 /// Save-file format version.
@@ -157,7 +165,8 @@ pub struct Sim<'a> {
     links: Links<'a>,
     blocks: &'a mut [f32],
     snapshot: &'a mut [[f32; 3]],
-    faces: usize,
+    /// The rest mesh's triangle and vertex counts, which every frame's has.
+    topology: (usize, usize),
 }
 
 impl<'a> Sim<'a> {
@@ -268,7 +277,7 @@ impl<'a> Sim<'a> {
             links,
             blocks,
             snapshot: rest_tips,
-            faces: rest.triangle_count(),
+            topology: (rest.triangle_count(), rest.positions.len()),
         })
     }
 
@@ -345,12 +354,13 @@ impl<'a> Sim<'a> {
         external: Option<Strided<'s, [f32; 3]>>,
         dt: f32,
     ) -> Result<Step<'s>, Error> {
-        if !(dt > 0.0 && dt <= 1.0) {
-            return Err(Error::InvalidArgument("dt must be in (0, 1] seconds"));
+        if !(MIN_DT..=1.0).contains(&dt) {
+            return Err(Error::InvalidArgument("dt must be in [1e-5, 1] seconds"));
         }
-        if frame.mesh().triangle_count() != self.faces {
+        let mesh = frame.mesh();
+        if (mesh.triangle_count(), mesh.positions.len()) != self.topology {
             return Err(Error::InvalidArgument(
-                "the frame's mesh has another triangle count than the rest mesh",
+                "the frame's mesh has other triangle or vertex counts than the rest mesh",
             ));
         }
         colliders.check()?;
@@ -484,7 +494,12 @@ impl<'a> Sim<'a> {
                 supported: STATE_VERSION,
             });
         }
-        if bytes.len() != self.state_bytes() {
+        // the length the header's own guide count gives, for telling a
+        // sound state of other guides from a damaged one
+        let own = (word(1) as usize)
+            .checked_mul(STATE_FLOATS * 4)
+            .and_then(|b| b.checked_add(HEADER + 4));
+        if own != Some(bytes.len()) {
             return Err(Error::Corrupt {
                 what: "state length does not match its guide count",
             });
@@ -504,18 +519,33 @@ impl<'a> Sim<'a> {
                 "the state is of another guide set (guide, joint or point count)",
             ));
         }
-        let floats = bytes[HEADER..body]
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]));
-        if !floats.clone().all(f32::is_finite) {
+        let float = |i: usize| {
+            let at = HEADER + 4 * i;
+            f32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
+        };
+        let sound = (0..self.len() * STATE_FLOATS).all(|i| {
+            let x = float(i);
+            if i % STATE_FLOATS == STARTED {
+                x == 0.0 || x == 1.0
+            } else {
+                x.abs() <= MAX_STATE
+            }
+        });
+        if !sound {
             return Err(Error::Corrupt {
-                what: "state holds a non-finite value",
+                what: "state holds a value out of its range",
             });
         }
+        // the step's scratch and output are the restored step's to make
         let per = Self::block_floats(&self.params);
-        for (i, x) in floats.enumerate() {
-            let (g, k) = (i / STATE_FLOATS, i % STATE_FLOATS);
-            self.blocks[g * per + k] = x;
+        for (g, block) in self.blocks.chunks_exact_mut(per).enumerate() {
+            for (k, x) in block.iter_mut().enumerate() {
+                *x = if k < STATE_FLOATS {
+                    float(g * STATE_FLOATS + k)
+                } else {
+                    0.0
+                };
+            }
         }
         Ok(())
     }
@@ -643,6 +673,11 @@ impl StepContext<'_> {
                     * (core::f32::consts::TAU * spring.frequency + spring.decay + 1.0 / self.dt);
                 if v.length() > speed {
                     v = v.normalize_or_zero() * speed;
+                }
+                // a value that overflowed on the way restarts the swing,
+                // never carries a NaN into the next step
+                if !(y.is_finite() && v.is_finite() && velocity.is_finite()) {
+                    (y, v, velocity) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
                 }
             }
             let put = |b: &mut [f32], o: usize, w: Vec3| b[o..o + 3].copy_from_slice(&w.to_array());
@@ -1077,6 +1112,32 @@ mod tests {
             sim.save(&mut short),
             Err(Error::OutputTooSmall { .. })
         ));
+        // a sound state with a value no step makes (checksum recomputed)
+        let mut huge = good.clone();
+        huge[HEADER..HEADER + 4].copy_from_slice(&1e30f32.to_le_bytes());
+        let body = huge.len() - 4;
+        let crc = crc32fast::hash(&huge[..body]).to_le_bytes();
+        huge[body..].copy_from_slice(&crc);
+        assert!(matches!(sim.restore(&huge), Err(Error::Corrupt { .. })));
+        // a sound state of other guides
+        let other_scene = Scene::new(21);
+        let mut other_buf = vec![];
+        let other_sim = other_scene.sim(&params(), &mut other_buf);
+        let mut theirs = vec![0u8; other_sim.state_bytes()];
+        other_sim.save(&mut theirs).unwrap();
+        assert!(matches!(
+            sim.restore(&theirs),
+            Err(Error::InvalidArgument(_))
+        ));
+        // too short a step to divide by, and steps out of range
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, moved_mesh.p.len(), 1, 2);
+        let mut fbuf = vec![0u8; layout.bytes()];
+        let frame = PosedFrame::new(moved_mesh.mesh(), 1, 2, &mut Arena::new(&mut fbuf)).unwrap();
+        for dt in [1e-30, 0.0, -1.0, f32::NAN, 2.0] {
+            let refused = sim.step(&frame, &Colliders::default(), dt);
+            assert!(matches!(refused, Err(Error::InvalidArgument(_))), "dt {dt}");
+        }
         // nothing changed: the next step is the one the good state gives
         step(&mut sim, &moved_mesh, &Colliders::default(), 0.05);
         let mut buf2 = vec![];

@@ -38,7 +38,7 @@ impl Default for TipSpring {
     }
 }
 
-/// Largest frequency and decay accepted.
+/// Largest frequency accepted.
 pub const MAX_FREQUENCY: f32 = 1000.0;
 /// Largest decay rate accepted.
 pub const MAX_DECAY: f32 = 10000.0;
@@ -67,8 +67,15 @@ impl TipSpring {
             // overdamped: cosh and sinh against e^(-l t), as exponentials
             // that never grow (l >= m), so a stiff decay cannot overflow
             let m = libm::sqrtf(-q);
+            let e = libm::expf(-l * dt);
             let (a, b) = (libm::expf((m - l) * dt), libm::expf(-(m + l) * dt));
-            (0.5 * (a + b), 0.5 * (a - b) / m)
+            // sinh(m t) / m near critical damping (m -> 0) without the
+            // cancellation of a - b: e (expm1(m t) - expm1(-m t)) / (2 m)
+            let s = e * (libm::expm1f(m * dt) - libm::expm1f(-m * dt)) / (2.0 * m);
+            (
+                0.5 * (a + b),
+                if s.is_finite() { s } else { 0.5 * (a - b) / m },
+            )
         } else {
             let e = libm::expf(-l * dt);
             (e, e * dt)

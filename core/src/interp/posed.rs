@@ -4,7 +4,8 @@
 //!
 //! (`surface::frame::Frame` is a root's coordinate frame, a different
 //! thing.) The frame lives in the caller's arena; its guides are filled from
-//! host buffers ([`PosedFrame::pose`]) and, later, from cache bytes.
+//! host buffers ([`PosedFrame::pose`], or [`PosedFrame::posing`] in
+//! parallel), and a guide cache decoder is meant to fill them the same way.
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::guides::Guides;
