@@ -9,8 +9,13 @@
 // shadow pass): a second curve geometry that shares the same vertex buffer
 // with an index buffer of just those hairs' segments. Renders fur.png.
 //
+// Then the guides are simulated (tip springs, links, the body as collider)
+// while the creature shakes its upper body, the fur is expanded from the
+// simulated guides each frame, and a strip of frames is written beside
+// fur.png (fur_strip.png) with per-frame timings.
+//
 //   demo [creature.obj] [creature_density.png] [fur.png] [--roots N] [--guides N]
-//        [--size PIXELS] [--spp SAMPLES] [--frames N]
+//        [--size PIXELS] [--spp SAMPLES] [--frames N] [--strip FRAMES]
 #include "creature_io.h"
 
 #include <tbb/blocked_range.h>
@@ -42,6 +47,7 @@ struct Options {
   int size = 1024;
   int spp = 4;     // samples per pixel, a square number
   int frames = 3;  // expansions timed (the median is reported)
+  int strip = 4;   // tiles in the simulated strip (3 steps each; 0: none)
 };
 
 Options parse(int argc, char** argv) {
@@ -57,6 +63,8 @@ Options parse(int argc, char** argv) {
       o.size = std::atoi(argv[++i]);
     } else if (!std::strcmp(argv[i], "--spp") && has_value) {
       o.spp = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--strip") && has_value) {
+      o.strip = std::max(0, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--frames") && has_value) {
       o.frames = std::max(1, std::atoi(argv[++i]));
     } else if (argv[i][0] != '-' && positional < 3) {
@@ -65,7 +73,7 @@ Options parse(int argc, char** argv) {
     } else {
       throw std::runtime_error(std::string("unknown argument ") + argv[i] +
                                "\nusage: demo [obj] [density.png] [out.png] [--roots N] [--guides N] [--size PIXELS] "
-                               "[--spp N] [--frames N]");
+                               "[--spp N] [--frames N] [--strip N]");
     }
   }
   return o;
@@ -164,7 +172,7 @@ int main(int argc, char** argv) try {
 
   // 1. Load the mesh and the density map.
   creature::Stopwatch clock;
-  const creature::Mesh mesh = creature::load_obj(opt.obj);
+  creature::Mesh mesh = creature::load_obj(opt.obj);
   const creature::GrayImage density = creature::load_png_gray(opt.density);
   if (mesh.uvs.empty() || mesh.normals.empty()) throw std::runtime_error(opt.obj + ": needs vt and vn");
   std::snprintf(note, sizeof note, "%zu triangles, %dx%d density", mesh.triangle_count(), density.width,
@@ -247,10 +255,11 @@ int main(int argc, char** argv) try {
   creature::Device device;
   RTCScene scene = rtcNewScene(device.device), shadow = rtcNewScene(device.device);
   const unsigned mesh_id = creature::attach_mesh(device.device, scene, mesh);
-  creature::attach_mesh(device.device, shadow, mesh);
+  const unsigned shadow_mesh_id = creature::attach_mesh(device.device, shadow, mesh);
   const unsigned curves_id =
       creature::attach_curves(device.device, scene, points.data(), per * n, indices.data(), indices.size());
-  creature::attach_curves(device.device, shadow, points.data(), per * n, shadow_indices.data(), shadow_indices.size());
+  const unsigned shadow_curves_id = creature::attach_curves(device.device, shadow, points.data(), per * n,
+                                                            shadow_indices.data(), shadow_indices.size());
   device.check("geometry");
 
   // 8. A frame's work once guides are posed (here: the rest pose): the
@@ -290,31 +299,103 @@ int main(int argc, char** argv) try {
   r.right = normalize(cross(r.forward, V3{0.0f, 1.0f, 0.0f}));
   r.up = cross(r.right, r.forward);
   r.tan_half_fov = std::tan(0.5f * 36.0f * 3.14159265f / 180.0f);
-  const int size = opt.size, side = std::max(1, int(std::lround(std::sqrt(double(opt.spp)))));
-  std::vector<uint8_t> rgb(size_t(size) * size_t(size) * 3);
-  tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& range) {
-    for (int y = range.begin(); y < range.end(); ++y) {
-      for (int x = 0; x < size; ++x) {
-        V3 sum;
-        const uint32_t pixel = uint32_t(y) * uint32_t(size) + uint32_t(x);
-        for (int s = 0; s < side * side; ++s) {
-          const float jx = (float(s % side) + hash01(pixel, 2 * s)) / float(side);
-          const float jy = (float(s / side) + hash01(pixel, 2 * s + 1)) / float(side);
-          sum = sum + r.shade(float(x) + jx, float(y) + jy, size);
+  // an image of `size` pixels a side, `side`^2 stratified samples per pixel
+  auto render = [&r](int size, int side) {
+    std::vector<uint8_t> rgb(size_t(size) * size_t(size) * 3);
+    tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& range) {
+      for (int y = range.begin(); y < range.end(); ++y) {
+        for (int x = 0; x < size; ++x) {
+          V3 sum;
+          const uint32_t pixel = uint32_t(y) * uint32_t(size) + uint32_t(x);
+          for (int s = 0; s < side * side; ++s) {
+            const float jx = (float(s % side) + hash01(pixel, 2 * s)) / float(side);
+            const float jy = (float(s / side) + hash01(pixel, 2 * s + 1)) / float(side);
+            sum = sum + r.shade(float(x) + jx, float(y) + jy, size);
+          }
+          const V3 c = (1.0f / float(side * side)) * sum;
+          uint8_t* out = &rgb[3 * size_t(pixel)];
+          out[0] = encode(c.x), out[1] = encode(c.y), out[2] = encode(c.z);
         }
-        const V3 c = (1.0f / float(side * side)) * sum;
-        uint8_t* out = &rgb[3 * size_t(pixel)];
-        out[0] = encode(c.x), out[1] = encode(c.y), out[2] = encode(c.z);
       }
-    }
-  });
+    });
+    return rgb;
+  };
+  const int size = opt.size, side = std::max(1, int(std::lround(std::sqrt(double(opt.spp)))));
+  const std::vector<uint8_t> rgb = render(size, side);
   device.check("render");
   std::snprintf(note, sizeof note, "%dx%d, %d spp + shadow rays", size, size, side * side);
   rows.push_back({"render", clock.seconds(), note});
+
+  // 11. Dynamics: the guides simulated while the upper body shakes; the fur
+  // expanded from them each frame into the same Embree buffers.
+  std::vector<double> sim_s, fur_s;
+  const int tile = std::max(64, size / 4);
+  std::vector<uint8_t> strip(size_t(tile) * size_t(tile) * 3 * size_t(opt.strip));
+  if (opt.strip > 0) {
+    clock = {};
+    const PelageMeshDesc rest_desc = mesh.desc();
+    PelageSimParams simp = pelage_sim_params_defaults();
+    simp.link_radius = 1.5f * bind_info.mean_spacing;
+    size_t sim_bytes = 0;
+    creature::check(pelage_sim_query(&rest_desc, guide_roots.size(), &simp, &sim_bytes), "pelage_sim_query");
+    std::vector<unsigned char> sim_memory(sim_bytes);
+    PelageSim sim = nullptr;
+    creature::check(pelage_sim_new(&rest_desc, &guides, &simp, sim_memory.data(), sim_bytes, &sim), "pelage_sim_new");
+    const std::vector<float> rest_positions = mesh.positions;
+    std::vector<float> simulated(guide_points.size());
+    PelageColliders colliders{};
+    colliders.body = 1;
+    const int steps_per_tile = 3;
+    for (int f = 0; f < opt.strip * steps_per_tile; ++f) {
+      // a shake of the upper body, growing with height (a bend, not a rigid motion)
+      const float t = float(f) / 24.0f, shake = 0.15f * std::sin(6.2831853f * 1.5f * t);
+      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+        const float up = std::max(rest_positions[3 * v + 1], 0.0f);
+        mesh.positions[3 * v] = rest_positions[3 * v] + shake * up * up;
+      }
+      creature::Stopwatch step_clock;
+      const creature::Frame frame(mesh, guides, ep);
+      creature::check(pelage_sim_step(sim, frame.get(), &colliders, nullptr, 0, 1.0f / 24.0f, 0), "pelage_sim_step");
+      creature::check(pelage_sim_read(sim, simulated.data(), 12, simulated.size() / 3), "pelage_sim_read");
+      const PelageGuidesDesc posed_guides = creature::guides_desc(guide_roots, simulated, cvs);
+      creature::check(pelage_frame_set_guides(frame.get(), &posed_guides, 0), "pelage_frame_set_guides");
+      sim_s.push_back(step_clock.seconds());
+      step_clock = {};
+      expander.expand(frame, fur, 0, n, points.data(), per * n);
+      fur_s.push_back(step_clock.seconds());
+      if (f % steps_per_tile != steps_per_tile - 1) continue;
+      for (auto [sc, geom] : {std::pair{scene, mesh_id}, {scene, curves_id}, {shadow, shadow_mesh_id},
+                              {shadow, shadow_curves_id}}) {
+        RTCGeometry g = rtcGetGeometry(sc, geom);
+        rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(g);
+      }
+      rtcCommitScene(scene);
+      rtcCommitScene(shadow);
+      const std::vector<uint8_t> frame_rgb = render(tile, 1);
+      const int k = f / steps_per_tile;
+      for (int y = 0; y < tile; ++y) {
+        std::memcpy(&strip[(size_t(y) * size_t(tile) * size_t(opt.strip) + size_t(k) * size_t(tile)) * 3],
+                    &frame_rgb[size_t(y) * size_t(tile) * 3], size_t(tile) * 3);
+      }
+    }
+    device.check("strip");
+    pelage_sim_free(sim);
+    if (const size_t bad = creature::count_bad_points(points.data(), per * n)) {
+      throw std::runtime_error(std::to_string(bad) + " simulated control points are non-finite");
+    }
+    const std::string strip_path = opt.out.substr(0, opt.out.rfind('.')) + "_strip.png";
+    creature::write_png_rgb(strip_path, tile * opt.strip, tile, strip);
+    std::sort(sim_s.begin(), sim_s.end());
+    std::sort(fur_s.begin(), fur_s.end());
+    std::snprintf(note, sizeof note, "%d frames: sim step %.1f ms, expand %.1f ms (medians); %s", opt.strip * steps_per_tile,
+                  1e3 * sim_s[sim_s.size() / 2], 1e3 * fur_s[fur_s.size() / 2], strip_path.c_str());
+    rows.push_back({"dynamics", clock.seconds(), note});
+  }
   rtcReleaseScene(scene);
   rtcReleaseScene(shadow);
 
-  // 11. Write the image.
+  // 12. Write the image.
   clock = {};
   creature::write_png_rgb(opt.out, size, size, rgb);
   rows.push_back({"write", clock.seconds(), opt.out});
