@@ -104,10 +104,10 @@ pub extern "C" fn pelage_frame_new(
         let out = req_mut(out_frame, "out_frame")?;
         let host = req(mesh, "mesh")?.view()?;
         let points = points_per_strand as usize;
-        // everything is checked before anything is allocated, so a bad
-        // count is a status, not an allocation that aborts the host
+        // the counts are checked before anything is allocated, so a bad
+        // count is a status, not an allocation that aborts the host (the
+        // mesh's values are checked once, on the copy, by PosedFrame::new)
         PosedFrame::check_sizes(guide_count, points)?;
-        host.check()?;
         let mut layout = ArenaLayout::new();
         PosedFrame::layout(&mut layout, host.positions.len(), guide_count, points);
         let mut storage = Vec::new();

@@ -428,8 +428,9 @@ pub extern "C" fn pelage_sim_read(
         }
         if let Some(mut out) = Float3Out::new(points, point_stride, needed, "points")? {
             for g in 0..n {
+                let frame = sim.root_frame(g);
                 for k in 0..m {
-                    out.set(g * m + k, sim.posed(g, k).to_array());
+                    out.set(g * m + k, frame.to_world(sim.posed_local(g, k)).to_array());
                 }
             }
         }

@@ -13,7 +13,7 @@ use pelage_core::interp::groom::{GroomMaps, StrandGroom};
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::Body;
 use pelage_core::{Arena, ArenaLayout, Root, ScalarMap};
-use pelage_tests::animated::{capsules, pose, FRAMES};
+use pelage_tests::animated::{capsules, colliders, pose, FRAMES};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
     combed_guides, curves_desc, frame, guides_desc, mesh_desc, mesh_view, stamp_roots, strands_desc,
@@ -115,17 +115,7 @@ fn main() {
                 (0..FRAMES as usize)
                     .map(|f| {
                         let caps = &props[f];
-                        let colliders = PelageColliders {
-                            spheres: std::ptr::null(),
-                            sphere_count: 0,
-                            capsules: caps.as_ptr(),
-                            capsule_count: caps.len(),
-                            planes: std::ptr::null(),
-                            plane_count: 0,
-                            body,
-                            distance: None,
-                            distance_user_data: null_mut(),
-                        };
+                        let colliders = colliders(caps, body != 0);
                         let t = Instant::now();
                         let s = pelage_sim_step(
                             sim,
@@ -262,17 +252,7 @@ fn full_frame(
     let mut times = vec![];
     for (f, handle) in frames.iter().enumerate() {
         let caps = &props[f];
-        let colliders = PelageColliders {
-            spheres: std::ptr::null(),
-            sphere_count: 0,
-            capsules: caps.as_ptr(),
-            capsule_count: caps.len(),
-            planes: std::ptr::null(),
-            plane_count: 0,
-            body: 0,
-            distance: None,
-            distance_user_data: null_mut(),
-        };
+        let colliders = colliders(caps, false);
         let t = Instant::now();
         assert_eq!(
             pelage_sim_step(

@@ -7,7 +7,7 @@
 use crate::creature::CreatureMesh;
 use crate::measure::mesh_view;
 use glam::{Quat, Vec3};
-use pelage::PelageCapsule;
+use pelage::{PelageCapsule, PelageColliders};
 use pelage_core::Root;
 
 /// Frames per second of the shot.
@@ -95,4 +95,19 @@ pub fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
     let ab = b - a;
     let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
     p.distance(a + ab * t)
+}
+
+/// Colliders of `capsules`, and the body when `body` is set.
+pub fn colliders(capsules: &[PelageCapsule], body: bool) -> PelageColliders {
+    PelageColliders {
+        spheres: std::ptr::null(),
+        sphere_count: 0,
+        capsules: capsules.as_ptr(),
+        capsule_count: capsules.len(),
+        planes: std::ptr::null(),
+        plane_count: 0,
+        body: body as u32,
+        distance: None,
+        distance_user_data: std::ptr::null_mut(),
+    }
 }

@@ -8,7 +8,7 @@ use glam::Vec3;
 use pelage::*;
 use pelage_core::surface::body::Body;
 use pelage_core::{Arena, Root};
-use pelage_tests::animated::{capsules, pose, segment_distance, FRAMES};
+use pelage_tests::animated::{capsules, colliders, pose, segment_distance, FRAMES};
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
     combed_guides, frame, guides_desc, mesh_desc, mesh_view, stamp_roots, Frame,
@@ -107,17 +107,7 @@ fn run(
         let mesh = pose(&shot.rest, f);
         let handle: Frame = frame(&mesh_desc(&mesh), &guides, JOINTS as u32, threads).unwrap();
         let caps = capsules(&shot.rest, &shot.roots, f);
-        let colliders = PelageColliders {
-            spheres: std::ptr::null(),
-            sphere_count: 0,
-            capsules: caps.as_ptr(),
-            capsule_count: caps.len(),
-            planes: std::ptr::null(),
-            plane_count: 0,
-            body: 1,
-            distance: None,
-            distance_user_data: null_mut(),
-        };
+        let colliders = colliders(&caps, true);
         let s = pelage_sim_step(
             sim.sim,
             handle.0,
