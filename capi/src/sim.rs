@@ -11,7 +11,7 @@ use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
 use pelage_core::dynamics::sim::{Sim, SimParams, Step};
 use pelage_core::interp::posed::PosedFrame;
-use pelage_core::surface::body::Body;
+use pelage_core::surface::body::{Body, BodyPlan};
 use pelage_core::Arena;
 use std::ffi::c_void;
 
@@ -367,11 +367,11 @@ pub extern "C" fn pelage_sim_step(
         let field = host.and_then(|c| c.distance.map(|callback| HostField { callback, user_data: c.distance_user_data }));
         let mesh = frame.posed().mesh();
         let body = if host.is_some_and(|c| c.body != 0) {
-            let bytes = Body::required_bytes(mesh)?;
-            if sim.body_arena.len() < bytes {
-                sim.body_arena.resize(bytes, 0);
+            let plan = BodyPlan::of(mesh)?;
+            if sim.body_arena.len() < plan.bytes() {
+                sim.body_arena.resize(plan.bytes(), 0);
             }
-            Some(Body::new(mesh, &mut Arena::new(&mut sim.body_arena))?)
+            Some(Body::build(&plan, mesh, &mut Arena::new(&mut sim.body_arena))?)
         } else {
             None
         };

@@ -1,17 +1,20 @@
 //! The body as a solid, for point-in-body queries (collisions).
 //!
-//! A uniform grid over the mesh triangles. Cells that no triangle touches are
-//! classified once, inside or outside: each 6-connected group of empty cells
-//! takes the parity of one exact ray from its first cell. A point in an empty
-//! cell is answered by a lookup; a point in a cell the surface passes through
-//! casts a ray along +x to the next empty cell and counts crossings.
+//! A uniform grid over the mesh triangles. Every cell centre's parity (inside
+//! or outside) is found once, by one sweep along x through each row of
+//! centres that counts the crossings between consecutive centres. A point in
+//! a cell no triangle touches takes its cell's class by a lookup; a point in
+//! a cell the surface passes through takes the centre's parity, flipped by
+//! each crossing of a three-leg path (along x, y, then z) from the centre to
+//! the point, all inside the cell, so only that cell's triangles are tested.
 //!
 //! Crossings are counted watertight: edge functions are evaluated with the
 //! edge's endpoints in a canonical order, so the two triangles sharing an
-//! edge see exactly opposite values, and a ray through an edge or a vertex is
-//! settled by a fixed symbolic perturbation of the ray. A ray through a shared
-//! edge thus crosses exactly one of the two triangles, whatever the rounding.
-//! The mesh should be closed; an open mesh answers by the parity the holes leave.
+//! edge see exactly opposite values, and a line through an edge or a vertex
+//! is settled by a fixed symbolic perturbation of the line. A line through a
+//! shared edge thus crosses exactly one of the two triangles, whatever the
+//! rounding. The mesh should be closed; an open mesh answers by the parity
+//! the holes leave.
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::surface::grid::floor_i32;
@@ -19,14 +22,16 @@ use crate::{Error, Mesh};
 use glam::Vec3;
 
 /// Cells per triangle the grid aims at (finer grids answer more points by lookup).
-const CELLS_PER_TRIANGLE: f32 = 4.0;
+const CELLS_PER_TRIANGLE: f32 = 32.0;
 /// Most cells along one axis.
 const MAX_DIM: f32 = 1024.0;
 
-const UNKNOWN: u8 = 0;
-const OUTSIDE: u8 = 1;
-const INSIDE: u8 = 2;
-const SURFACE: u8 = 3;
+/// Cell classes: a cell the surface misses is wholly outside or inside; a
+/// cell it passes through keeps its centre's parity.
+const OUTSIDE: u8 = 0;
+const INSIDE: u8 = 1;
+const SURFACE_OUTSIDE: u8 = 2;
+const SURFACE_INSIDE: u8 = 3;
 
 /// Grid placement, computed the same way when sizing and when building.
 #[derive(Clone, Copy, Debug)]
@@ -37,6 +42,9 @@ struct Shape {
     /// Triangle references over all cells.
     refs: usize,
     triangles: usize,
+    /// The bounds of the mesh.
+    lo: Vec3,
+    hi: Vec3,
 }
 
 impl Shape {
@@ -71,9 +79,12 @@ impl Shape {
             dims: [dim(extent.x), dim(extent.y), dim(extent.z)],
             refs: 0,
             triangles,
+            lo,
+            hi,
         };
         for f in (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f)) {
-            let (a, b) = shape.cell_range(mesh.corners(f));
+            let [a, b, c] = mesh.corners(f);
+            let (a, b) = shape.cell_range(a.min(b).min(c), a.max(b).max(c));
             shape.refs += (0..3).map(|k| b[k] - a[k] + 1).product::<usize>();
         }
         Ok(shape)
@@ -90,13 +101,18 @@ impl Shape {
         [floor_i32(q.x), floor_i32(q.y), floor_i32(q.z)]
     }
 
-    /// Cells a triangle's bounds touch, padded by a thousandth of a cell so
-    /// that a crossing computed with rounding still lands in a listed cell.
-    fn cell_range(&self, corners: [Vec3; 3]) -> ([usize; 3], [usize; 3]) {
-        let [a, b, c] = corners;
+    /// The cell of coordinate `v` along `axis` (may be out of the grid).
+    #[inline]
+    fn cell_on(&self, v: f32, axis: usize) -> i32 {
+        floor_i32((v - self.origin[axis]) * self.inv_cell)
+    }
+
+    /// Cells the bounds `lo`..`hi` of a triangle touch, padded by a
+    /// thousandth of a cell so that a crossing computed with rounding still
+    /// lands in a listed cell.
+    fn cell_range(&self, lo: Vec3, hi: Vec3) -> ([usize; 3], [usize; 3]) {
         let pad = Vec3::splat(1e-3 / self.inv_cell);
-        let lo = self.cell_of(a.min(b).min(c) - pad);
-        let hi = self.cell_of(a.max(b).max(c) + pad);
+        let (lo, hi) = (self.cell_of(lo - pad), self.cell_of(hi + pad));
         let clamp = |v: i32, k: usize| v.clamp(0, self.dims[k] as i32 - 1) as usize;
         (
             [clamp(lo[0], 0), clamp(lo[1], 1), clamp(lo[2], 2)],
@@ -116,37 +132,57 @@ pub struct Body<'a> {
     /// Triangle list of cell `c`: `refs[start[c]..start[c + 1]]`.
     start: &'a [u32],
     refs: &'a [u32],
-    /// Corners of the non-degenerate triangles, copied for locality.
-    corners: &'a [[[f32; 3]; 3]],
+    /// The non-degenerate triangles, copied for locality.
+    triangles: &'a [Stored],
     class: &'a [u8],
+}
+
+/// The grid a mesh's body will have, worked out before its memory is
+/// found: [`BodyPlan::bytes`] to size the arena, then [`Body::build`].
+#[derive(Clone, Copy, Debug)]
+pub struct BodyPlan {
+    shape: Shape,
+}
+
+impl BodyPlan {
+    /// Validates `mesh` and places the grid.
+    pub fn of(mesh: &Mesh) -> Result<Self, Error> {
+        let shape = Shape::of(mesh)?;
+        if shape.refs >= u32::MAX as usize {
+            return Err(Error::InvalidArgument("body grid is too large"));
+        }
+        Ok(BodyPlan { shape })
+    }
+
+    /// Arena bytes [`Body::build`] needs.
+    pub fn bytes(&self) -> usize {
+        let (shape, cells) = (&self.shape, self.shape.cells());
+        let mut layout = ArenaLayout::new();
+        layout
+            .add::<u32>(cells + 1)
+            .add::<u32>(shape.refs)
+            .add::<Stored>(shape.triangles)
+            .add::<u8>(cells);
+        layout.bytes()
+    }
 }
 
 impl<'a> Body<'a> {
     /// Arena bytes [`Body::new`] needs for `mesh` (validates it).
     pub fn required_bytes(mesh: &Mesh) -> Result<usize, Error> {
-        let shape = Shape::of(mesh)?;
-        Ok(Self::layout(&shape).bytes())
-    }
-
-    fn layout(shape: &Shape) -> ArenaLayout {
-        let cells = shape.cells();
-        let mut layout = ArenaLayout::new();
-        layout
-            .add::<u32>(cells + 1)
-            .add::<u32>(shape.refs)
-            .add::<[[f32; 3]; 3]>(shape.triangles)
-            .add::<u8>(cells)
-            .add::<u32>(cells);
-        layout
+        Ok(BodyPlan::of(mesh)?.bytes())
     }
 
     /// Validates `mesh` and builds its grid and cell classes.
     pub fn new(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
-        let shape = Shape::of(mesh)?;
-        if shape.refs >= u32::MAX as usize {
-            return Err(Error::InvalidArgument("body grid is too large"));
-        }
-        let needed = Self::layout(&shape).bytes();
+        Self::build(&BodyPlan::of(mesh)?, mesh, arena)
+    }
+
+    /// Builds the grid and cell classes of `mesh`, placed by `plan` (made
+    /// from this mesh).
+    pub fn build(plan: &BodyPlan, mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
+        let shape = plan.shape;
+        let needed = plan.bytes();
         if arena.remaining() < needed {
             return Err(Error::CapacityExceeded {
                 needed: arena.capacity() - arena.remaining() + needed,
@@ -156,18 +192,27 @@ impl<'a> Body<'a> {
         let cells = shape.cells();
         let start = arena.alloc::<u32>(cells + 1)?;
         let refs = arena.alloc::<u32>(shape.refs)?;
-        let corners = arena.alloc::<[[f32; 3]; 3]>(shape.triangles)?;
+        let triangles = arena.alloc::<Stored>(shape.triangles)?;
         let class = arena.alloc::<u8>(cells)?;
-        let queue = arena.alloc::<u32>(cells)?;
 
-        let solid = (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f));
-        for (t, f) in solid.clone().enumerate() {
-            corners[t] = mesh.corners(f).map(Into::into);
+        let another = Error::InvalidArgument("body plan made from another mesh");
+        let mut solid = (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f));
+        for t in triangles.iter_mut() {
+            let [a, b, c] = mesh.corners(solid.next().ok_or(another)?);
+            let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+            if !(lo.cmpge(shape.lo).all() && hi.cmple(shape.hi).all()) {
+                return Err(another);
+            }
+            *t = [a, b, c, lo, hi].map(Into::into);
+        }
+        if solid.next().is_some() {
+            return Err(another);
         }
         // counting sort of triangle references by cell
         start.fill(0);
         let each_cell = |t: usize, visit: &mut dyn FnMut(usize)| {
-            let (a, b) = shape.cell_range(corners[t].map(Vec3::from));
+            let [.., lo, hi] = triangles[t];
+            let (a, b) = shape.cell_range(lo.into(), hi.into());
             for z in a[2]..=b[2] {
                 for y in a[1]..=b[1] {
                     for x in a[0]..=b[0] {
@@ -176,90 +221,103 @@ impl<'a> Body<'a> {
                 }
             }
         };
+        // counts, summed in place to each cell's end, then filled
+        // backwards so each ends at its cell's start
         for t in 0..shape.triangles {
-            each_cell(t, &mut |c| start[c + 1] += 1);
+            each_cell(t, &mut |c| start[c] += 1);
         }
-        for c in 0..cells {
-            start[c + 1] += start[c];
+        let mut sum = 0u64;
+        for s in start[..cells].iter_mut() {
+            sum += u64::from(*s);
+            *s = sum as u32;
         }
+        if sum != shape.refs as u64 {
+            return Err(another);
+        }
+        start[cells] = sum as u32;
         for t in 0..shape.triangles {
             each_cell(t, &mut |c| {
+                start[c] -= 1;
                 refs[start[c] as usize] = t as u32;
-                start[c] += 1;
             });
-        }
-        for c in (1..=cells).rev() {
-            start[c] = start[c - 1];
-        }
-        start[0] = 0;
-        for c in 0..cells {
-            class[c] = if start[c + 1] > start[c] {
-                SURFACE
-            } else {
-                UNKNOWN
-            };
         }
         let mut body = Body {
             shape,
             start,
             refs,
-            corners,
+            triangles,
             class: &[],
         };
-        body.classify(class, queue);
+        body.classify(class);
         body.class = class;
         Ok(body)
     }
 
-    /// Gives each 6-connected group of empty cells the class of its first
-    /// cell, found by an exact ray from that cell's centre.
-    fn classify(&self, class: &mut [u8], queue: &mut [u32]) {
-        let [nx, ny, nz] = self.shape.dims;
-        let cell = 1.0 / self.shape.inv_cell;
-        for seed in 0..class.len() {
-            if class[seed] != UNKNOWN {
-                continue;
-            }
-            let (x, y, z) = (seed % nx, seed / nx % ny, seed / (nx * ny));
-            let centre = self.shape.origin
-                + Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) * cell;
-            let value = if self.ray_parity(centre, [x, y, z], class) {
-                INSIDE
-            } else {
-                OUTSIDE
+    /// The triangles listed in cell `c`.
+    #[inline]
+    fn listed(&self, c: usize) -> impl Iterator<Item = &Stored> {
+        self.refs[self.start[c] as usize..self.start[c + 1] as usize]
+            .iter()
+            .map(|&t| &self.triangles[t as usize])
+    }
+
+    /// The centre of cell `(x, y, z)`.
+    fn centre(&self, x: usize, y: usize, z: usize) -> Vec3 {
+        self.shape.origin
+            + Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) / self.shape.inv_cell
+    }
+
+    /// Sweeps each row of cell centres along x from the grid's empty first
+    /// layer (outside), flipping the parity at each crossing. Each
+    /// triangle's crossings with the rows' lines are marked first, in the
+    /// cell each falls in, as before or after that cell's centre.
+    fn classify(&self, class: &mut [u8]) {
+        const BEFORE: u8 = 4;
+        const AFTER: u8 = 8;
+        let shape = &self.shape;
+        class.fill(0);
+        for t in self.triangles {
+            let [.., lo, hi] = *t;
+            // the rows whose line may pass within the bounds (one more each
+            // way: `crossing` decides exactly)
+            let first = shape.cell_of(Vec3::from(lo) - 0.5 / shape.inv_cell);
+            let last = shape.cell_of(Vec3::from(hi) - 0.5 / shape.inv_cell);
+            let rows = |k: usize| {
+                let n = shape.dims[k] as i32;
+                first[k].clamp(0, n - 1) as usize..=(last[k] + 1).clamp(0, n - 1) as usize
             };
-            class[seed] = value;
-            queue[0] = seed as u32;
-            let (mut head, mut tail) = (0, 1);
-            while head < tail {
-                let c = queue[head] as usize;
-                head += 1;
-                let (x, y, z) = (c % nx, c / nx % ny, c / (nx * ny));
-                let mut visit = |n: usize| {
-                    if class[n] == UNKNOWN {
-                        class[n] = value;
-                        queue[tail] = n as u32;
-                        tail += 1;
+            for z in rows(2) {
+                for y in rows(1) {
+                    let Some(h) = crossing::<0>(t, self.centre(0, y, z)) else {
+                        continue;
+                    };
+                    let x = shape.cell_on(h, 0);
+                    if (0..shape.dims[0] as i32).contains(&x) {
+                        let x = x as usize;
+                        class[shape.index(x, y, z)] ^= if h <= self.centre(x, y, z).x {
+                            BEFORE
+                        } else {
+                            AFTER
+                        };
                     }
+                }
+            }
+        }
+        let nx = shape.dims[0];
+        for (r, row) in class.chunks_exact_mut(nx).enumerate() {
+            let mut odd = false;
+            // a cell the surface passes through lists triangles
+            let listed = self.start[r * nx..=(r + 1) * nx].windows(2);
+            for (flips, ends) in row.iter_mut().zip(listed) {
+                let f = *flips;
+                odd ^= f & BEFORE != 0;
+                *flips = match (ends[0] != ends[1], odd) {
+                    (false, false) => OUTSIDE,
+                    (false, true) => INSIDE,
+                    (true, false) => SURFACE_OUTSIDE,
+                    (true, true) => SURFACE_INSIDE,
                 };
-                if x > 0 {
-                    visit(c - 1);
-                }
-                if x + 1 < nx {
-                    visit(c + 1);
-                }
-                if y > 0 {
-                    visit(c - nx);
-                }
-                if y + 1 < ny {
-                    visit(c + nx);
-                }
-                if z > 0 {
-                    visit(c - nx * ny);
-                }
-                if z + 1 < nz {
-                    visit(c + nx * ny);
-                }
+                odd ^= f & AFTER != 0;
             }
         }
     }
@@ -272,10 +330,31 @@ impl<'a> Body<'a> {
             return false;
         }
         let cell = [c[0] as usize, c[1] as usize, c[2] as usize];
-        match self.class[self.shape.index(cell[0], cell[1], cell[2])] {
-            INSIDE => true,
+        let c = self.shape.index(cell[0], cell[1], cell[2]);
+        match self.class[c] {
             OUTSIDE => false,
-            _ => self.ray_parity(p, cell, self.class),
+            INSIDE => true,
+            class => {
+                // the path centre -> (p.x, centre.y, centre.z) -> (p.x, p.y,
+                // centre.z) -> p, a leg per axis, with each crossing h of a
+                // leg from `from` to `to` counted when from < h <= to or
+                // to < h <= from (as the sweep counts them)
+                let mut at = self.centre(cell[0], cell[1], cell[2]);
+                let mut odd = class == SURFACE_INSIDE;
+                let mut leg = |axis: usize, hit: &dyn Fn(&Stored, Vec3) -> Option<f32>| {
+                    let (lo, hi) = (at[axis].min(p[axis]), at[axis].max(p[axis]));
+                    for t in self.listed(c) {
+                        if let Some(h) = hit(t, at) {
+                            odd ^= lo < h && h <= hi;
+                        }
+                    }
+                    at[axis] = p[axis];
+                };
+                leg(0, &crossing::<0>);
+                leg(1, &crossing::<1>);
+                leg(2, &crossing::<2>);
+                odd
+            }
         }
     }
 
@@ -324,7 +403,7 @@ impl<'a> Body<'a> {
             let refs = &self.refs[self.start[c] as usize..self.start[c + 1] as usize];
             if refs
                 .iter()
-                .any(|&t| meets(&self.corners[t as usize], a, b - a))
+                .any(|&t| meets(&self.triangles[t as usize], a, b - a))
             {
                 return true;
             }
@@ -343,38 +422,13 @@ impl<'a> Body<'a> {
         }
         false
     }
-
-    /// Walks the row of `cell` along +x from `p` to the first cell already
-    /// classified inside or outside (or off the grid, outside), and returns
-    /// whether `p` is inside: that cell's class flipped by each crossing.
-    fn ray_parity(&self, p: Vec3, cell: [usize; 3], class: &[u8]) -> bool {
-        let [x0, y, z] = cell;
-        let mut odd = false;
-        for x in x0..self.shape.dims[0] {
-            let c = self.shape.index(x, y, z);
-            match class[c] {
-                INSIDE => return !odd,
-                OUTSIDE => return odd,
-                _ => {}
-            }
-            for &t in &self.refs[self.start[c] as usize..self.start[c + 1] as usize] {
-                if let Some(hit_x) = crossing(&self.corners[t as usize], p) {
-                    // a triangle listed in several cells is counted in the
-                    // one cell its crossing falls in
-                    let hx = floor_i32((hit_x - self.shape.origin.x) * self.shape.inv_cell);
-                    odd ^= hit_x > p.x && hx == x as i32;
-                }
-            }
-        }
-        odd
-    }
 }
 
 /// Whether the segment `a + t * d`, `t` in `[0, 1]`, meets triangle `t`
 /// (Moller-Trumbore; a segment in the triangle's plane does not).
 #[inline]
-fn meets(t: &[[f32; 3]; 3], a: Vec3, d: Vec3) -> bool {
-    let [p, q, r] = t.map(Vec3::from);
+fn meets(t: &Stored, a: Vec3, d: Vec3) -> bool {
+    let [p, q, r, ..] = t.map(Vec3::from);
     let (e1, e2) = (q - p, r - p);
     let h = d.cross(e2);
     let det = e1.dot(h);
@@ -389,11 +443,24 @@ fn meets(t: &[[f32; 3]; 3], a: Vec3, d: Vec3) -> bool {
     u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)
 }
 
-/// Where the ray from `p` along x crosses triangle `t` (its x), if the ray's
-/// line passes through it.
+/// A triangle as stored: its three corners, then the low and the high
+/// corner of its bounds.
+type Stored = [[f32; 3]; 5];
+
+/// Where the line through `p` along axis `AXIS` crosses triangle `t` (that
+/// coordinate), if it passes through it. The coordinates are rotated so
+/// `AXIS` comes first; every triangle sharing an edge rotates it alike.
 #[inline]
-fn crossing(t: &[[f32; 3]; 3], p: Vec3) -> Option<f32> {
-    let [a, b, c] = *t;
+fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<f32> {
+    let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
+    // a line strictly outside the triangle's bounds misses it, perturbed or
+    // not; most lines through a cell miss most of its triangles
+    let [.., lo, hi] = t;
+    if p[j] < lo[j] || p[j] > hi[j] || p[k] < lo[k] || p[k] > hi[k] {
+        return None;
+    }
+    let turn = |v: [f32; 3]| [v[AXIS], v[j], v[k]];
+    let (a, b, c, p) = (turn(t[0]), turn(t[1]), turn(t[2]), turn(p.to_array()));
     let (w0, s0) = edge(b, c, p);
     let (w1, s1) = edge(c, a, p);
     let (w2, s2) = edge(a, b, p);
@@ -404,17 +471,18 @@ fn crossing(t: &[[f32; 3]; 3], p: Vec3) -> Option<f32> {
     Some((w0 * a[0] + w1 * b[0] + w2 * c[0]) / sum)
 }
 
-/// The (y, z) edge function of `p` against edge `a -> b`, and which side `p`
-/// is on. The value is evaluated with the endpoints in a canonical order, so
-/// the neighbour across the edge sees its exact negation; on an exact zero
-/// the side is the one a fixed infinitesimal shift of `p`, (0, -eps^2, eps),
-/// would give, so a point on an edge belongs to exactly one of its triangles.
+/// The edge function of `p` against edge `a -> b` in the plane of the last
+/// two coordinates, and which side `p` is on. The value is evaluated with the
+/// endpoints in a canonical order, so the neighbour across the edge sees its
+/// exact negation; on an exact zero the side is the one a fixed infinitesimal
+/// shift of `p`, (0, -eps^2, eps), would give, so a point on an edge belongs
+/// to exactly one of its triangles.
 #[inline]
-fn edge(a: [f32; 3], b: [f32; 3], p: Vec3) -> (f32, bool) {
+fn edge(a: [f32; 3], b: [f32; 3], p: [f32; 3]) -> (f32, bool) {
     let swap = (a[1], a[2]) > (b[1], b[2]);
     let (a, b) = if swap { (b, a) } else { (a, b) };
     let (dy, dz) = (b[1] - a[1], b[2] - a[2]);
-    let e = dy * (p.z - a[2]) - dz * (p.y - a[1]);
+    let e = dy * (p[2] - a[2]) - dz * (p[1] - a[1]);
     let positive = if e != 0.0 {
         e > 0.0
     } else if dy != 0.0 {
@@ -541,6 +609,14 @@ mod tests {
         );
         assert!(matches!(
             Body::required_bytes(&flat),
+            Err(Error::InvalidArgument(_))
+        ));
+        // a plan from another mesh is refused, not trusted
+        let other = sphere(8, 16);
+        let plan = BodyPlan::of(&other.mesh()).unwrap();
+        let mut big = vec![0u8; plan.bytes().max(Body::required_bytes(&mesh).unwrap())];
+        assert!(matches!(
+            Body::build(&plan, &mesh, &mut Arena::new(&mut big)),
             Err(Error::InvalidArgument(_))
         ));
         let mut small = vec![0u8; Body::required_bytes(&mesh).unwrap() - 1];
