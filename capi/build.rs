@@ -1,5 +1,6 @@
 //! Regenerates include/pelage.h from the crate's sources on every build, so
-//! the committed header can be checked for drift.
+//! the committed header can be checked for drift, and gives the shared
+//! library its SONAME.
 
 use std::path::PathBuf;
 
@@ -16,4 +17,18 @@ fn main() {
         .generate()
         .expect("cbindgen could not generate the header");
     bindings.write_to_file(header);
+    if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("linux") {
+        println!("cargo:rustc-cdylib-link-arg=-Wl,-soname,{}", soname());
+    }
+}
+
+/// The shared library's SONAME: before 1.0 a minor release may break the
+/// ABI, so it names major and minor (libpelage.so.0.6); from 1.0 the major.
+fn soname() -> String {
+    let major = std::env::var("CARGO_PKG_VERSION_MAJOR").unwrap();
+    let minor = std::env::var("CARGO_PKG_VERSION_MINOR").unwrap();
+    match major.as_str() {
+        "0" => format!("libpelage.so.0.{minor}"),
+        _ => format!("libpelage.so.{major}"),
+    }
 }
