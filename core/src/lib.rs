@@ -32,6 +32,7 @@
 #![deny(missing_docs)]
 
 pub mod arena;
+pub mod cache;
 pub mod dynamics;
 pub mod error;
 pub mod guides;

@@ -188,6 +188,12 @@ impl<'m> PosedFrame<'m> {
         Vec3::new(w[j], w[self.points + j], w[2 * self.points + j])
     }
 
+    /// For decoders in this crate: the mesh, its tangents, every guide
+    /// slot (see [`GuideFiller::floats_per_guide`]) and the posed flag.
+    pub(crate) fn slots(&mut self) -> (&Mesh<'m>, &[[f32; 3]], &mut [f32], &mut bool) {
+        (&self.mesh, self.tangents, self.data, &mut self.posed)
+    }
+
     /// The mesh's vertex tangents.
     pub(crate) fn tangents(&self) -> &[[f32; 3]] {
         self.tangents
