@@ -111,3 +111,86 @@ pub fn colliders(capsules: &[PelageCapsule], body: bool) -> PelageColliders {
         distance_user_data: std::ptr::null_mut(),
     }
 }
+
+/// The shot simulated: the rest creature, guide roots and rest guides, and
+/// per frame the deformed mesh and the posed guides (world space).
+pub struct SimulatedShot {
+    /// The creature at rest.
+    pub rest: CreatureMesh,
+    /// Guide roots.
+    pub roots: Vec<Root>,
+    /// Rest guides, `points` per guide.
+    pub rest_points: Vec<[f32; 3]>,
+    /// Points per guide.
+    pub points: usize,
+    /// Each frame's deformed mesh.
+    pub meshes: Vec<CreatureMesh>,
+    /// Each frame's posed guides.
+    pub posed: Vec<Vec<[f32; 3]>>,
+}
+
+/// Simulates `guides` combed guides of `points` joints over the whole shot
+/// (tip links, the 16 capsules; 2 threads) through the C API.
+pub fn simulate_shot(guides: u32, points: usize) -> SimulatedShot {
+    use crate::measure::{combed_guides, frame, guides_desc, mesh_desc, stamp_roots};
+    use pelage::*;
+    let rest = crate::creature::default_creature();
+    let roots = stamp_roots(mesh_view(&rest), guides, 1);
+    let rest_points = combed_guides(&mesh_view(&rest), &roots, points, 0.06);
+    let desc = mesh_desc(&rest);
+    let gd = guides_desc(&roots, &rest_points);
+    let params = PelageSimParams {
+        joints: points as u32,
+        points_per_guide: points as u32,
+        link_radius: 0.05,
+        ..pelage_sim_params_defaults()
+    };
+    let mut bytes = 0;
+    assert_eq!(
+        pelage_sim_query(&desc, roots.len(), &params, &mut bytes),
+        PelageStatus::Ok
+    );
+    let mut memory = vec![0u8; bytes];
+    let mut sim = std::ptr::null_mut();
+    let s = pelage_sim_new(
+        &desc,
+        &gd,
+        &params,
+        memory.as_mut_ptr().cast(),
+        bytes,
+        &mut sim,
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let (mut meshes, mut posed) = (vec![], vec![]);
+    for f in 0..FRAMES {
+        let mesh = pose(&rest, f);
+        let handle = frame(&mesh_desc(&mesh), &gd, points as u32, 2).unwrap();
+        let caps = capsules(&rest, &roots, f);
+        let s = pelage_sim_step(
+            sim,
+            handle.0,
+            &colliders(&caps, false),
+            std::ptr::null(),
+            0,
+            1.0 / FPS,
+            2,
+        );
+        assert_eq!(s, PelageStatus::Ok);
+        let mut out = vec![[0.0f32; 3]; roots.len() * points];
+        assert_eq!(
+            pelage_sim_read(sim, out.as_mut_ptr().cast(), 12, out.len()),
+            PelageStatus::Ok
+        );
+        meshes.push(mesh);
+        posed.push(out);
+    }
+    pelage_sim_free(sim);
+    SimulatedShot {
+        rest,
+        roots,
+        rest_points,
+        points,
+        meshes,
+        posed,
+    }
+}

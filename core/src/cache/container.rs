@@ -22,15 +22,16 @@ pub(crate) const fn header_bytes(fields: usize) -> usize {
 }
 
 /// Writes a file into `out`: the header, then `payload` fills the payload
-/// through a [`Writer`], then the CRC. `out` must be exactly
-/// `header_bytes(fields.len()) + payload_len` long (the encoders size it).
+/// through a [`Writer`] (within `out`, which the encoders size for the
+/// largest payload), then the payload length and the CRC. Returns the
+/// file's length.
 pub(crate) fn write(
     out: &mut [u8],
     magic: &[u8; 8],
     version: u32,
     fields: &[u64],
     payload: impl FnOnce(&mut Writer),
-) {
+) -> usize {
     let start = header_bytes(fields.len());
     let mut w = Writer { out, at: 0 };
     w.bytes(magic);
@@ -39,12 +40,15 @@ pub(crate) fn write(
     for &f in fields {
         w.u64(f);
     }
-    w.u64((w.out.len() - start) as u64);
+    w.u64(0);
     w.u64(0);
     payload(&mut w);
-    debug_assert_eq!(w.at, w.out.len(), "payload length");
-    let crc = checksum(w.out, start - 8);
-    w.out[start - 8..start - 4].copy_from_slice(&crc.to_le_bytes());
+    let end = w.at;
+    let out = &mut w.out[..end];
+    out[start - 16..start - 8].copy_from_slice(&((end - start) as u64).to_le_bytes());
+    let crc = checksum(out, start - 8);
+    out[start - 8..start - 4].copy_from_slice(&crc.to_le_bytes());
+    end
 }
 
 fn checksum(bytes: &[u8], crc_at: usize) -> u32 {
@@ -138,6 +142,16 @@ pub(crate) struct Writer<'a> {
 }
 
 impl Writer<'_> {
+    /// Bytes written so far.
+    pub fn position(&self) -> usize {
+        self.at
+    }
+
+    /// Overwrites the u32 at `at` (written before).
+    pub fn patch_u32(&mut self, at: usize, v: u32) {
+        self.out[at..at + 4].copy_from_slice(&v.to_le_bytes());
+    }
+
     pub fn bytes(&mut self, b: &[u8]) {
         self.out[self.at..self.at + b.len()].copy_from_slice(b);
         self.at += b.len();
@@ -177,6 +191,11 @@ impl<'a> Reader<'a> {
 
     pub fn position(&self) -> usize {
         self.at
+    }
+
+    /// The bytes not read yet.
+    pub fn rest(&self) -> &'a [u8] {
+        &self.bytes[self.at..]
     }
 
     pub fn take(&mut self, n: usize) -> Result<&'a [u8], Error> {

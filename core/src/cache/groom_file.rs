@@ -138,13 +138,14 @@ pub fn encode(groom: &Groom, out: &mut [u8]) -> Result<usize, Error> {
         groom.points as u64,
         s as u64,
     ];
-    container::write(&mut out[..n], &MAGIC, VERSION, &fields, |w: &mut Writer| {
+    let written = container::write(&mut out[..n], &MAGIC, VERSION, &fields, |w: &mut Writer| {
         w.words(groom.guide_roots);
         w.words(groom.guide_points);
         w.words(&groom.strands.roots[..s]);
         w.words(&groom.strands.bindings[..s]);
         w.words(&groom.strands.grooms[..s]);
     });
+    debug_assert_eq!(written, n);
     Ok(n)
 }
 

@@ -26,6 +26,7 @@ use crate::root::check_root;
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
 use crate::{Error, Mesh};
+use core::cmp::Ordering;
 use glam::Vec3;
 
 /// The file's magic.
@@ -40,8 +41,15 @@ const FIELDS: usize = 6;
 const STEPS: f64 = 16384.0;
 /// Largest quantized offset coded packed.
 const MAX_STEPS: i64 = 1 << 30;
-/// Widest packed field a file may declare.
-const MAX_WIDTH: u8 = 40;
+/// Largest Rice parameter a file may declare.
+const MAX_K: u8 = 40;
+/// The parameter byte of an axis whose every error is zero (no bits).
+const ZERO: u8 = 0xff;
+/// A value whose quotient reaches this many ones is escaped: the ones,
+/// then the value in [`RAW_BITS`] bits.
+const ESCAPE: u64 = 24;
+/// Bits of an escaped value (zigzagged offsets stay below 2^33).
+const RAW_BITS: u32 = 40;
 
 const PACKED: u8 = 0;
 const RAW: u8 = 1;
@@ -86,6 +94,19 @@ fn rest_length(rest: &[[f32; 3]]) -> f32 {
         .sum()
 }
 
+/// The quantized offset expected at point `j` from those before it: a
+/// guide's offsets from its rest shape grow smoothly from the root, so the
+/// second difference along the guide is what is left to code.
+/// `q1` and `q2` are the offsets at points `j - 1` and `j - 2`.
+#[inline]
+fn predict(j: usize, q1: i64, q2: i64) -> i64 {
+    match j {
+        0 => 0,
+        1 => q1,
+        _ => q1.wrapping_mul(2).wrapping_sub(q2),
+    }
+}
+
 fn zigzag(v: i64) -> u64 {
     ((v << 1) ^ (v >> 63)) as u64
 }
@@ -94,17 +115,24 @@ fn unzigzag(v: u64) -> i64 {
     (v >> 1) as i64 ^ -((v & 1) as i64)
 }
 
-/// Bytes a packed guide of `n` points with these widths takes.
-fn packed_bytes(n: usize, widths: [u8; 3]) -> usize {
-    4 + (n * widths.iter().map(|&w| w as usize).sum::<usize>()).div_ceil(8)
+/// Bits of `z` Rice-coded with parameter `k`.
+fn rice_bits(z: u64, k: u32) -> u64 {
+    let q = z >> k;
+    if q < ESCAPE {
+        q + 1 + u64::from(k)
+    } else {
+        ESCAPE + u64::from(RAW_BITS)
+    }
 }
 
-/// One guide, coded: a tag, then its widths and bits, or raw floats.
+/// One guide, coded: a tag, then its Rice parameters and bits, or raw
+/// floats.
 struct Coded {
     tag: u8,
-    widths: [u8; 3],
+    ks: [u8; 3],
     errors: [[u64; 64]; 3],
     raw: [[f32; 3]; 64],
+    bytes: usize,
 }
 
 /// Codes guide `g` of `frame` (its root-frame points) against `rest`.
@@ -112,9 +140,10 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]]) -> Coded {
     let n = rest.len();
     let mut c = Coded {
         tag: RAW,
-        widths: [0; 3],
+        ks: [0; 3],
         errors: [[0; 64]; 3],
         raw: [[0.0; 3]; 64],
+        bytes: 1 + 12 * n,
     };
     for (j, r) in c.raw[..n].iter_mut().enumerate() {
         *r = frame.local_point(g, j).to_array();
@@ -124,37 +153,66 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]]) -> Coded {
         return c;
     }
     let inv = STEPS / length;
-    for axis in 0..3 {
-        let mut q = [0i64; 64];
-        for ((q, raw), rest) in q.iter_mut().zip(&c.raw[..n]).zip(rest) {
+    let mut q = [[0i64; 64]; 3];
+    for (j, (raw, rest)) in c.raw[..n].iter().zip(rest).enumerate() {
+        for axis in 0..3 {
             let d = (f64::from(raw[axis]) - f64::from(rest[axis])) * inv;
             // NaN fails too
-            if d.abs().partial_cmp(&(MAX_STEPS as f64)) != Some(core::cmp::Ordering::Less) {
+            if d.abs().partial_cmp(&(MAX_STEPS as f64)) != Some(Ordering::Less) {
                 return c;
             }
-            *q = libm::round(d) as i64;
+            q[axis][j] = libm::round(d) as i64;
         }
-        let mut widest = 0;
+    }
+    let mut bits = 0;
+    for axis in 0..3 {
+        let errors = &mut c.errors[axis];
+        let q = &q[axis];
         for j in 0..n {
-            let predicted = match j {
-                0 => 0,
-                1 => q[0],
-                _ => 2 * q[j - 1] - q[j - 2],
-            };
-            let e = zigzag(q[j] - predicted);
-            c.errors[axis][j] = e;
-            widest |= e;
+            let before = |k: usize| if j >= k { q[j - k] } else { 0 };
+            errors[j] = zigzag(q[j] - predict(j, before(1), before(2)));
         }
-        c.widths[axis] = (64 - widest.leading_zeros()) as u8;
+        if errors[..n].iter().all(|&z| z == 0) {
+            c.ks[axis] = ZERO;
+            continue;
+        }
+        let cost = |k: u32| errors[..n].iter().map(|&z| rice_bits(z, k)).sum::<u64>();
+        // the best k sits by log2 of the mean (geometric errors)
+        let mean = errors[..n].iter().sum::<u64>() / n as u64;
+        let near = (64 - mean.leading_zeros()).min(u32::from(MAX_K));
+        let k = (near.saturating_sub(2)..=near)
+            .min_by_key(|&k| (cost(k), k))
+            .unwrap_or(0);
+        c.ks[axis] = k as u8;
+        bits += cost(k);
     }
     c.tag = PACKED;
+    c.bytes = 4 + bits.div_ceil(8) as usize;
     c
 }
 
-fn coded_bytes(c: &Coded, n: usize) -> usize {
-    match c.tag {
-        PACKED => packed_bytes(n, c.widths),
-        _ => 1 + 12 * n,
+/// Writes bits least significant first.
+struct BitWriter<'w, 'a> {
+    w: &'w mut Writer<'a>,
+    acc: u128,
+    bits: u32,
+}
+
+impl BitWriter<'_, '_> {
+    fn put(&mut self, value: u64, bits: u32) {
+        self.acc |= u128::from(value) << self.bits;
+        self.bits += bits;
+        while self.bits >= 8 {
+            self.w.u8(self.acc as u8);
+            self.acc >>= 8;
+            self.bits -= 8;
+        }
+    }
+
+    fn finish(self) {
+        if self.bits > 0 {
+            self.w.u8(self.acc as u8);
+        }
     }
 }
 
@@ -164,48 +222,45 @@ fn write_coded(w: &mut Writer, c: &Coded, n: usize) {
         w.words(&c.raw[..n]);
         return;
     }
-    for &width in &c.widths {
-        w.u8(width);
+    for &k in &c.ks {
+        w.u8(k);
     }
-    let (mut acc, mut bits) = (0u128, 0u32);
-    for axis in 0..3 {
-        let width = u32::from(c.widths[axis]);
-        for &e in &c.errors[axis][..n] {
-            acc |= u128::from(e) << bits;
-            bits += width;
-            while bits >= 8 {
-                w.u8(acc as u8);
-                acc >>= 8;
-                bits -= 8;
+    let mut bits = BitWriter { w, acc: 0, bits: 0 };
+    for axis in (0..3).filter(|&a| c.ks[a] != ZERO) {
+        let k = u32::from(c.ks[axis]);
+        for &z in &c.errors[axis][..n] {
+            let q = z >> k;
+            if q < ESCAPE {
+                // q ones, a zero, then the k low bits
+                bits.put((1 << q) - 1, q as u32 + 1);
+                bits.put(z & ((1 << k) - 1), k);
+            } else {
+                bits.put((1 << ESCAPE) - 1, ESCAPE as u32);
+                bits.put(z, RAW_BITS);
             }
         }
     }
-    if bits > 0 {
-        w.u8(acc as u8);
-    }
+    bits.finish();
 }
 
-/// Bytes [`encode`] writes for these samples.
-pub fn encoded_bytes(groom: &Groom, samples: &[&PosedFrame], mode: Mode) -> Result<usize, Error> {
-    check_samples(groom, samples)?;
-    let (g, n) = (groom.guide_roots.len(), groom.points);
-    let stream = match mode {
-        Mode::Exact => product(&[samples.len() as u64, g as u64, n as u64, 12])?,
-        Mode::Quantized => {
-            let mut total = 0usize;
-            for frame in samples {
-                for i in 0..g {
-                    let rest = &groom.guide_points[i * n..(i + 1) * n];
-                    total += coded_bytes(&code(frame, i, rest), n);
-                }
-            }
-            total
-        }
+/// The most bytes [`encode`] writes for `samples` shutter samples of
+/// `guides` guides of `points` points (every guide stored raw; a typical
+/// quantized frame takes a tenth of it).
+pub fn max_encoded_bytes(
+    guides: usize,
+    points: usize,
+    samples: usize,
+    mode: Mode,
+) -> Result<usize, Error> {
+    let per_guide = match mode {
+        Mode::Exact => 12 * points as u64,
+        Mode::Quantized => 1 + 12 * points as u64,
     };
-    let offsets = 4 * (samples.len() * g.div_ceil(BLOCK) + 1);
+    let stream = product(&[samples as u64, guides as u64, per_guide])?;
     if stream > u32::MAX as usize {
         return Err(Error::InvalidArgument("a frame's cache is limited to 4 GB"));
     }
+    let offsets = 4 * (samples * guides.div_ceil(BLOCK) + 1);
     Ok(container::header_bytes(FIELDS) + offsets + stream)
 }
 
@@ -228,10 +283,11 @@ fn check_samples(groom: &Groom, samples: &[&PosedFrame]) -> Result<(), Error> {
     Ok(())
 }
 
-/// Writes one frame's cache: `samples` are the frame's posed frames at its
-/// shutter samples (each posed with the groom's guides, at the groom's
-/// point count), `groom_id` the groom file's id. Returns the bytes written
-/// ([`encoded_bytes`]); on error `out` is untouched.
+/// Writes one frame's cache into `out` (sized by [`max_encoded_bytes`]):
+/// `samples` are the frame's posed frames at its shutter samples (each
+/// posed with the groom's guides, at the groom's point count), `groom_id`
+/// the groom file's id. Returns the bytes written; on error `out` is
+/// untouched.
 pub fn encode(
     groom: &Groom,
     groom_id: u32,
@@ -240,14 +296,15 @@ pub fn encode(
     out: &mut [u8],
 ) -> Result<usize, Error> {
     groom.check()?;
-    let total = encoded_bytes(groom, samples, mode)?;
-    if out.len() < total {
+    check_samples(groom, samples)?;
+    let (g, n) = (groom.guide_roots.len(), groom.points);
+    let most = max_encoded_bytes(g, n, samples.len(), mode)?;
+    if out.len() < most {
         return Err(Error::OutputTooSmall {
-            needed: total,
+            needed: most,
             available: out.len(),
         });
     }
-    let (g, n) = (groom.guide_roots.len(), groom.points);
     let fields = [
         g as u64,
         n as u64,
@@ -256,31 +313,24 @@ pub fn encode(
         u64::from(groom_id),
         BLOCK as u64,
     ];
-    container::write(&mut out[..total], &MAGIC, VERSION, &fields, |w| {
-        // offsets first (sizes only), then the stream
-        let mut at = 0u32;
+    let written = container::write(out, &MAGIC, VERSION, &fields, |w| {
+        // the offset table, filled in as the stream is written
+        let table = w.position();
+        for _ in 0..samples.len() * g.div_ceil(BLOCK) + 1 {
+            w.u32(0);
+        }
+        let stream = w.position();
+        let mut entry = table;
         for frame in samples {
             for i in 0..g {
                 if i % BLOCK == 0 {
-                    w.u32(at);
+                    w.patch_u32(entry, (w.position() - stream) as u32);
+                    entry += 4;
                 }
-                at += match mode {
-                    Mode::Exact => 12 * n as u32,
-                    Mode::Quantized => {
-                        let rest = &groom.guide_points[i * n..(i + 1) * n];
-                        coded_bytes(&code(frame, i, rest), n) as u32
-                    }
-                };
-            }
-        }
-        w.u32(at);
-        for frame in samples {
-            for i in 0..g {
                 match mode {
                     Mode::Exact => {
                         for j in 0..n {
-                            let p = frame.world_point(i, j);
-                            w.words(&[p.to_array()]);
+                            w.words(&[frame.world_point(i, j).to_array()]);
                         }
                     }
                     Mode::Quantized => {
@@ -290,8 +340,9 @@ pub fn encode(
                 }
             }
         }
+        w.patch_u32(entry, (w.position() - stream) as u32);
     });
-    Ok(total)
+    Ok(written)
 }
 
 impl<'a> GuideCache<'a> {
@@ -444,19 +495,25 @@ impl<'a> GuideCache<'a> {
             } else {
                 &mut out[(i - first) * 6 * n..(i - first + 1) * 6 * n]
             };
+            // a dry run checks the bytes only
             let root = &groom.guide_roots[i];
-            let frame = Frame::at(mesh, tangents, root.face as usize, root.u, root.v);
+            let frame =
+                (!dry).then(|| Frame::at(mesh, tangents, root.face as usize, root.u, root.v));
             let rest = &groom.guide_points[i * n..(i + 1) * n];
             let (local, world) = slot.split_at_mut(3 * n);
-            match self.info.mode {
-                Mode::Exact => {
+            match (self.info.mode, &frame) {
+                (Mode::Exact, Some(frame)) => {
                     for j in 0..n {
                         let p = read_point(&mut r)?;
-                        let l = frame.to_local(p);
-                        put(local, world, n, j, l, p);
+                        put(local, world, n, j, frame.to_local(p), p);
                     }
                 }
-                Mode::Quantized => decode_guide(&mut r, &frame, rest, local, world)?,
+                (Mode::Exact, None) => {
+                    for _ in 0..n {
+                        read_point(&mut r)?;
+                    }
+                }
+                (Mode::Quantized, _) => decode_guide(&mut r, frame.as_ref(), rest, local, world)?,
             }
         }
         if r.position() != end - start {
@@ -484,9 +541,11 @@ fn read_point(r: &mut Reader) -> Result<Vec3, Error> {
     Ok(Vec3::from(p[0]))
 }
 
+/// Decodes one guide's record into its local lanes and, with a `frame`,
+/// its world lanes (without, the record is only checked).
 fn decode_guide(
     r: &mut Reader,
-    frame: &Frame,
+    frame: Option<&Frame>,
     rest: &[[f32; 3]],
     local: &mut [f32],
     world: &mut [f32],
@@ -496,61 +555,156 @@ fn decode_guide(
         RAW => {
             for j in 0..n {
                 let l = read_point(r)?;
-                put(local, world, n, j, l, frame.to_world(l));
+                if let Some(frame) = frame {
+                    put(local, world, n, j, l, frame.to_world(l));
+                }
             }
             Ok(())
         }
         PACKED => {
-            let mut widths = [0u8; 3];
-            for w in widths.iter_mut() {
-                *w = r.u8()?;
-                if *w > MAX_WIDTH {
+            let mut ks = [0u8; 3];
+            for k in ks.iter_mut() {
+                *k = r.u8()?;
+                if *k > MAX_K && *k != ZERO {
                     return Err(Error::Corrupt {
-                        what: "a packed width past 40 bits",
+                        what: "a Rice parameter past 40",
                     });
                 }
             }
-            let bits = r.take(packed_bytes(n, widths) - 4)?;
+            let mut bits = BitReader {
+                bytes: r.rest(),
+                next: 0,
+                acc: 0,
+                have: 0,
+            };
             let step = f64::from(rest_length(rest)) / STEPS;
-            let (mut acc, mut have, mut next) = (0u128, 0u32, 0usize);
-            for axis in 0..3 {
-                let width = u32::from(widths[axis]);
-                let mask = (1u128 << width) - 1;
-                let (mut q1, mut q2) = (0i64, 0i64);
-                for j in 0..n {
-                    while have < width {
-                        acc |= u128::from(bits[next]) << have;
-                        next += 1;
-                        have += 8;
+            for (axis, &k) in ks.iter().enumerate() {
+                let lane = &mut local[axis * n..(axis + 1) * n];
+                if k == ZERO {
+                    for (l, r) in lane.iter_mut().zip(rest) {
+                        *l = r[axis];
                     }
-                    let e = unzigzag((acc & mask) as u64);
-                    acc >>= width;
-                    have -= width;
-                    let predicted = match j {
-                        0 => 0,
-                        1 => q1,
-                        _ => q1.wrapping_mul(2).wrapping_sub(q2),
+                    continue;
+                }
+                let k = u32::from(k);
+                // the two offsets before, for the prediction
+                let (mut q1, mut q2) = (0i64, 0i64);
+                for (j, l) in lane.iter_mut().enumerate() {
+                    let ones = bits.ones()?;
+                    let z = if ones < ESCAPE as u32 {
+                        (u64::from(ones) << k) | bits.take(k)?
+                    } else {
+                        bits.take(RAW_BITS)?
                     };
-                    let q = e.wrapping_add(predicted);
+                    let q = unzigzag(z).wrapping_add(predict(j, q1, q2));
                     if !(-MAX_STEPS..=MAX_STEPS).contains(&q) {
                         return Err(Error::Corrupt {
                             what: "a quantized offset past 2^30 steps",
                         });
                     }
                     (q2, q1) = (q1, q);
-                    local[axis * n + j] = (f64::from(rest[j][axis]) + q as f64 * step) as f32;
+                    *l = (f64::from(rest[j][axis]) + q as f64 * step) as f32;
                 }
             }
-            for j in 0..n {
-                let l = Vec3::new(local[j], local[n + j], local[2 * n + j]);
-                let p = frame.to_world(l);
-                (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+            r.take(bits.bytes_used())?;
+            if let Some(frame) = frame {
+                for j in 0..n {
+                    let l = Vec3::new(local[j], local[n + j], local[2 * n + j]);
+                    let p = frame.to_world(l);
+                    (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+                }
             }
             Ok(())
         }
         _ => Err(Error::Corrupt {
             what: "a guide's tag is neither packed nor raw",
         }),
+    }
+}
+
+/// Reads bits least significant first from a slice, failing past its end.
+struct BitReader<'a> {
+    bytes: &'a [u8],
+    /// Bytes consumed into `acc`.
+    next: usize,
+    /// Bits from the slice, the first `have` of them counted in; any above
+    /// are the bytes after `next`, loaded early.
+    acc: u64,
+    have: u32,
+}
+
+impl BitReader<'_> {
+    /// Loads whole bytes while they fit (at least 56 bits held, unless the
+    /// slice ends).
+    #[inline]
+    fn refill(&mut self) {
+        if let Some(word) = self.bytes.get(self.next..self.next + 8) {
+            let v = u64::from_le_bytes([
+                word[0], word[1], word[2], word[3], word[4], word[5], word[6], word[7],
+            ]);
+            self.acc |= v << self.have;
+            let fit = (63 - self.have) / 8;
+            self.next += fit as usize;
+            self.have += fit * 8;
+        } else {
+            while self.have <= 56 {
+                let Some(&b) = self.bytes.get(self.next) else {
+                    return;
+                };
+                self.acc |= u64::from(b) << self.have;
+                self.next += 1;
+                self.have += 8;
+            }
+        }
+    }
+
+    /// Bytes read so far, the last one perhaps in part (a guide's bits
+    /// end on a byte).
+    fn bytes_used(&self) -> usize {
+        self.next - (self.have / 8) as usize
+    }
+
+    /// The `bits` (<= 40) next bits.
+    #[inline]
+    fn take(&mut self, bits: u32) -> Result<u64, Error> {
+        if bits == 0 {
+            return Ok(0);
+        }
+        if self.have < bits {
+            self.refill();
+            if self.have < bits {
+                return Err(Error::Corrupt {
+                    what: "truncated guide bits",
+                });
+            }
+        }
+        let v = self.acc & ((1u64 << bits) - 1);
+        self.acc >>= bits;
+        self.have -= bits;
+        Ok(v)
+    }
+
+    /// Counts ones up to a zero (consumed) or to [`ESCAPE`] ones.
+    #[inline]
+    fn ones(&mut self) -> Result<u32, Error> {
+        if self.have <= ESCAPE as u32 {
+            self.refill();
+        }
+        let run = (!self.acc).trailing_zeros().min(self.have);
+        if run >= ESCAPE as u32 {
+            self.acc >>= ESCAPE as u32;
+            self.have -= ESCAPE as u32;
+            return Ok(ESCAPE as u32);
+        }
+        if run == self.have {
+            return Err(Error::Corrupt {
+                what: "truncated guide bits",
+            });
+        }
+        // the zero ends the run
+        self.acc >>= run + 1;
+        self.have -= run + 1;
+        Ok(run)
     }
 }
 
@@ -562,11 +716,10 @@ mod tests {
     const GROOM_ID: u32 = 77;
 
     fn write(groom: &Groom, samples: &[&PosedFrame], mode: Mode) -> Vec<u8> {
-        let mut out = vec![0u8; encoded_bytes(groom, samples, mode).unwrap()];
-        assert_eq!(
-            encode(groom, GROOM_ID, samples, mode, &mut out),
-            Ok(out.len())
-        );
+        let (g, n) = (groom.guide_roots.len(), groom.points);
+        let mut out = vec![0u8; max_encoded_bytes(g, n, samples.len(), mode).unwrap()];
+        let written = encode(groom, GROOM_ID, samples, mode, &mut out).unwrap();
+        out.truncate(written);
         out
     }
 

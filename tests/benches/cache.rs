@@ -1,0 +1,154 @@
+//! The per-frame guide cache at the paper's gorilla scale: 13,030 guides x
+//! 16 points simulated over the animated creature's 96-frame shot, each
+//! frame coded (quantized, one and two shutter samples; exact) and decoded
+//! into a posed frame. Reports bytes per frame against the same frame as
+//! dense float32 curves (979,526 hairs x 18 points x float4, 282 MB; the
+//! paper: 47x) and against plain 16-bit guides, encode and decode times
+//! (medians over the shot), decode speed in decoded point floats, and a
+//! floor measured in the same run: posing the same frame from float32
+//! guides in memory (`PosedFrame::pose`, what decoding replaces).
+
+use pelage_core::cache::groom_file::{self, Groom};
+use pelage_core::cache::guide_cache::{self, GuideCache, Mode};
+use pelage_core::guides::{CvLayout, Guides};
+use pelage_core::interp::posed::PosedFrame;
+use pelage_core::interp::strands::Strands;
+use pelage_core::{Arena, ArenaLayout, Strided};
+use pelage_tests::animated::simulate_shot;
+use std::time::Instant;
+
+const GUIDES: u32 = 13_030;
+const POINTS: usize = 16;
+const DENSE_BYTES: f64 = 979_526.0 * 18.0 * 16.0;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let shot = simulate_shot(GUIDES, POINTS);
+    let roots = &shot.roots;
+    let g = roots.len();
+    let layout = |mesh: &pelage_tests::creature::CreatureMesh| {
+        let mut l = ArenaLayout::new();
+        PosedFrame::layout(&mut l, mesh.positions.len(), g, POINTS);
+        l.bytes()
+    };
+    fn guides<'a>(roots: &'a [pelage_core::Root], points: &'a [[f32; 3]]) -> Guides<'a> {
+        Guides {
+            roots,
+            points: Strided::from_slice(points),
+            layout: CvLayout::Fixed(POINTS),
+        }
+    }
+    let mut rest_buf = vec![0u8; layout(&shot.rest)];
+    let rest_guides = guides(roots, &shot.rest_points);
+    let rest = PosedFrame::with_guides(
+        pelage_tests::measure::mesh_view(&shot.rest),
+        &rest_guides,
+        POINTS,
+        &mut Arena::new(&mut rest_buf),
+    )
+    .unwrap();
+    let rest_local: Vec<[f32; 3]> = (0..g * POINTS)
+        .map(|k| rest.local_point(k / POINTS, k % POINTS).to_array())
+        .collect();
+    let groom = Groom {
+        guide_roots: roots,
+        guide_points: &rest_local,
+        points: POINTS,
+        strands: Strands {
+            roots: &[],
+            bindings: &[],
+            grooms: &[],
+        },
+    };
+    let mut groom_bytes = vec![0u8; groom.encoded_bytes().unwrap()];
+    groom_file::encode(&groom, &mut groom_bytes).unwrap();
+    let id = groom_file::counts(&groom_bytes).unwrap().id;
+
+    let frames = shot.meshes.len();
+    let mut bufs: Vec<Vec<u8>> = shot.meshes.iter().map(|m| vec![0u8; layout(m)]).collect();
+    let posed: Vec<PosedFrame> = bufs
+        .iter_mut()
+        .enumerate()
+        .map(|(f, buf)| {
+            let gd = guides(roots, &shot.posed[f]);
+            PosedFrame::with_guides(
+                pelage_tests::measure::mesh_view(&shot.meshes[f]),
+                &gd,
+                POINTS,
+                &mut Arena::new(buf),
+            )
+            .unwrap()
+        })
+        .collect();
+    let mut target_buf = vec![0u8; shot.meshes.iter().map(layout).max().unwrap()];
+    println!(
+        "creature: {g} guides x {POINTS} points, {frames} frames; dense float32 frame: {:.1} MB; plain 16-bit guides: {:.2} MB",
+        DENSE_BYTES / 1e6,
+        (g * POINTS * 6) as f64 / 1e6
+    );
+    println!(
+        "{:>24} | {:>10} {:>10} | {:>8} {:>8} | {:>9} {:>9} {:>9} | {:>7}",
+        "per frame (medians)",
+        "KB",
+        "max KB",
+        "x dense",
+        "x 16-bit",
+        "encode ms",
+        "decode ms",
+        "floor ms",
+        "GB/s"
+    );
+    for (name, samples, mode) in [
+        ("quantized, 1 sample", 1usize, Mode::Quantized),
+        ("quantized, 2 samples", 2, Mode::Quantized),
+        ("exact float32, 1 sample", 1, Mode::Exact),
+    ] {
+        let (mut sizes, mut enc, mut dec, mut floor) = (vec![], vec![], vec![], vec![]);
+        for f in 0..frames - samples + 1 {
+            let s: Vec<&PosedFrame> = (0..samples).map(|k| &posed[f + k]).collect();
+            let mut out =
+                vec![0u8; guide_cache::max_encoded_bytes(g, POINTS, samples, mode).unwrap()];
+            let t = Instant::now();
+            let n = guide_cache::encode(&groom, id, &s, mode, &mut out).unwrap();
+            enc.push(t.elapsed().as_secs_f64());
+            out.truncate(n);
+            sizes.push(n as f64 / samples as f64);
+            let view = pelage_tests::measure::mesh_view(&shot.meshes[f]);
+            let mut target =
+                PosedFrame::new(view, g, POINTS, &mut Arena::new(&mut target_buf)).unwrap();
+            let t = Instant::now();
+            let cache = GuideCache::parse(&out).unwrap();
+            cache.decode(&groom, id, 0, &mut target).unwrap();
+            dec.push(t.elapsed().as_secs_f64());
+            let gd = guides(roots, &shot.posed[f]);
+            let t = Instant::now();
+            target.pose(&gd).unwrap();
+            floor.push(t.elapsed().as_secs_f64());
+        }
+        let size = median(sizes.clone());
+        let max = sizes.iter().cloned().fold(0.0, f64::max);
+        let d = median(dec);
+        println!(
+            "{name:>24} | {:>10.1} {:>10.1} | {:>7.0}x {:>7.2}x | {:>9.2} {:>9.2} {:>9.2} | {:>7.2}",
+            size / 1e3,
+            max / 1e3,
+            DENSE_BYTES / size,
+            (g * POINTS * 6) as f64 / size,
+            median(enc) * 1e3,
+            d * 1e3,
+            median(floor) * 1e3,
+            (g * POINTS * 12) as f64 / d / 1e9
+        );
+    }
+    println!(
+        "(KB per shutter sample; decode: one sample into a posed frame, one thread; GB/s of decoded float32 points)"
+    );
+    println!(
+        "groom file of the guides alone: {:.2} MB",
+        groom_bytes.len() as f64 / 1e6
+    );
+}
