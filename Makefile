@@ -6,14 +6,16 @@ JOBS ?= 2
 APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev libopenvdb-dev libboost-dev valgrind binutils
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
-.PHONY: demo test deps rust-test rust-lint rust-miri cmake-test header-check bench
+FUZZ_SECONDS ?= 60
+
+.PHONY: demo test deps rust-test rust-lint rust-miri rust-fuzz cmake-test header-check bench
 
 demo: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
 	cmake --build $(BUILD) -j$(JOBS) --target demo
 	cd $(BUILD) && ./cpp_examples/demo
 
-test: deps rust-lint rust-test rust-miri cmake-test header-check
+test: deps rust-lint rust-test rust-miri rust-fuzz cmake-test header-check
 
 deps:
 	@missing=""; for p in $(APT_PACKAGES); do \
@@ -38,6 +40,10 @@ rust-test:
 rust-miri:
 	@rustup +nightly component list --installed | grep -q '^miri' || rustup component add --toolchain nightly miri rust-src
 	cargo +nightly miri test --locked -p pelage-core --lib --no-default-features -- arena strided rng map:: mesh::
+
+# The file decoders under libFuzzer (cargo-fuzz, nightly), a while each.
+rust-fuzz:
+	fuzz/run.sh $(FUZZ_SECONDS)
 
 cmake-test:
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release

@@ -6,7 +6,7 @@
 //! - [`guide_cache`]: one frame's posed guides (each shutter sample), coded
 //!   against their neutral pose in their root frames, decoded straight into
 //!   a [`PosedFrame`](crate::interp::posed::PosedFrame).
-//! - [`container`]: the framing both share (magic, version, counts, a
+//! - `container` (internal): the framing both share (magic, version, counts, a
 //!   CRC-32), and bounds-checked reading.
 //!
 //! Both are little-endian and documented byte by byte in `docs/FORMAT.md`.
