@@ -8,6 +8,7 @@ use libfuzzer_sys::fuzz_target;
 use pelage_core::cache::groom_file::{self, Groom, GroomBuffers};
 use pelage_core::interp::bind::StrandBinding;
 use pelage_core::interp::groom::StrandGroom;
+use pelage_core::interp::patch::Patch;
 use pelage_core::interp::strands::Strands;
 use pelage_core::Root;
 use std::sync::OnceLock;
@@ -32,7 +33,7 @@ fuzz_target!(|data: &[u8]| {
         edits.to_vec()
     } else {
         let mut b = valid().clone();
-        scene::damage(&mut b, edits, 32 + 8 * 3 - 8, flags & 2 == 2);
+        scene::damage(&mut b, edits, 32 + 8 * 4 - 8, flags & 2 == 2);
         b
     };
     let Ok(c) = groom_file::counts(&bytes) else {
@@ -44,12 +45,14 @@ fuzz_target!(|data: &[u8]| {
     let mut roots = vec![Root::default(); c.strands];
     let mut bindings = vec![StrandBinding::default(); c.strands];
     let mut grooms = vec![StrandGroom::default(); c.strands];
+    let mut patches = vec![Patch::default(); c.patches];
     let out = GroomBuffers {
         guide_roots: &mut guide_roots,
         guide_points: &mut guide_points,
         roots: &mut roots,
         bindings: &mut bindings,
         grooms: &mut grooms,
+        patches: &mut patches,
     };
     if groom_file::decode(&bytes, out).is_ok() {
         let groom = Groom {
@@ -61,6 +64,7 @@ fuzz_target!(|data: &[u8]| {
                 bindings: &bindings,
                 grooms: &grooms,
             },
+            patches: &patches,
         };
         groom.check().expect("a decoded groom passes its checks");
     }

@@ -7,6 +7,7 @@ use pelage_core::cache::groom_file::Groom;
 use pelage_core::guides::{CvLayout, Guides};
 use pelage_core::interp::bind::{StrandBinding, MAX_NEIGHBOURS};
 use pelage_core::interp::groom::StrandGroom;
+use pelage_core::interp::patch::Patch;
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::interp::strands::Strands;
 use pelage_core::{Arena, ArenaLayout, Mesh, Root, Strided};
@@ -157,6 +158,16 @@ impl Scene {
                 bindings: &self.bindings,
                 grooms: &self.grooms,
             },
+            patches: &[
+                Patch {
+                    first: 0,
+                    count: 20,
+                },
+                Patch {
+                    first: 20,
+                    count: 30,
+                },
+            ],
         }
     }
 }

@@ -63,6 +63,7 @@ fn main() {
             bindings: &[],
             grooms: &[],
         },
+        patches: &[],
     };
     let mut groom_bytes = vec![0u8; groom.encoded_bytes().unwrap()];
     groom_file::encode(&groom, &mut groom_bytes).unwrap();

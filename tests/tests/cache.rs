@@ -56,6 +56,7 @@ fn every_frame_decodes_from_its_own_file_within_the_bound() {
             bindings: &[],
             grooms: &[],
         },
+        patches: &[],
     };
     let mut groom_bytes = vec![0u8; groom.encoded_bytes().unwrap()];
     groom_file::encode(&groom, &mut groom_bytes).unwrap();
@@ -119,4 +120,109 @@ fn every_frame_decodes_from_its_own_file_within_the_bound() {
     );
     // 3.15 when measured; plain 16-bit guides take 6
     assert!(per_point < 3.5, "{per_point} bytes per point");
+}
+
+/// Patches of the creature's fur on its simulated shot: every expanded
+/// point, radius included, inside its patch's box, on every frame sampled
+/// (the teleport among them), with the boxes computed from the guides and
+/// groom records alone.
+#[test]
+fn no_expanded_point_leaves_its_patch_box() {
+    use pelage_core::interp::bind::{self, BindParams, StrandBinding};
+    use pelage_core::interp::expand::expand;
+    use pelage_core::interp::groom::{GroomMaps, StrandGroom};
+    use pelage_core::interp::patch::{self, Patch};
+    use pelage_core::interp::strand::{EndPoints, ExpandParams};
+    use pelage_core::ScalarMap;
+    use pelage_tests::animated::TELEPORT_FRAME;
+    use pelage_tests::measure::stamp_roots;
+
+    const HAIRS: u32 = 60_000;
+    const PATCH: usize = 500;
+    let shot = simulate_shot(GUIDES, POINTS);
+    let mesh = mesh_view(&shot.rest);
+    let stamped = stamp_roots(mesh, HAIRS, 2);
+    // patches: Morton runs, ranked inside; strands reordered by them
+    let (mut keys, mut order) = (vec![0u64; stamped.len()], vec![0u32; stamped.len()]);
+    let mut patches = vec![Patch::default(); patch::patch_count(stamped.len(), PATCH)];
+    patch::plan(&mesh, &stamped, PATCH, &mut keys, &mut order, &mut patches).unwrap();
+    let hairs: Vec<_> = order.iter().map(|&i| stamped[i as usize]).collect();
+    let rest_guides = Guides {
+        roots: &shot.roots,
+        points: Strided::from_slice(&shot.rest_points),
+        layout: CvLayout::Fixed(POINTS),
+    };
+    let mut arena = vec![0u8; bind::required_bytes(&mesh, shot.roots.len()).unwrap()];
+    let mut bindings = vec![StrandBinding::default(); hairs.len()];
+    bind::bind(
+        &mesh,
+        &rest_guides,
+        &hairs,
+        &BindParams::default(),
+        &mut Arena::new(&mut arena),
+        &mut bindings,
+    )
+    .unwrap();
+    let mut grooms = vec![StrandGroom::default(); hairs.len()];
+    let maps = GroomMaps {
+        kink_amplitude: ScalarMap::Constant(0.05),
+        clump: ScalarMap::Constant(0.3),
+        bend: ScalarMap::Constant(0.1),
+        ..GroomMaps::default()
+    };
+    maps.evaluate(&mesh, &hairs, 0, &mut grooms).unwrap();
+    let strands = Strands {
+        roots: &hairs,
+        bindings: &bindings,
+        grooms: &grooms,
+    };
+    let params = ExpandParams {
+        points_per_strand: POINTS,
+        end_points: EndPoints::Pinned,
+        orphan_length: 0.04,
+    };
+    let per = params.output_points();
+    let mut out = vec![[0.0f32; 4]; hairs.len() * per];
+    let (mut checked, mut volume_ratio) = (0usize, vec![]);
+    for f in (0..shot.meshes.len())
+        .step_by(8)
+        .chain([TELEPORT_FRAME as usize])
+    {
+        with_frame(&shot.meshes[f], &shot.roots, &shot.posed[f], |frame| {
+            let mut reach = vec![0.0f32; frame.guide_count()];
+            patch::guide_reach(frame, &mut reach);
+            expand(
+                frame,
+                &strands,
+                &params,
+                bytemuck::cast_slice_mut(&mut out),
+                16,
+            )
+            .unwrap();
+            for p in &patches {
+                let b = patch::patch_box(frame, &reach, &strands, &params, *p);
+                let (mut lo, mut hi) = (
+                    glam::Vec3::splat(f32::INFINITY),
+                    glam::Vec3::splat(f32::NEG_INFINITY),
+                );
+                let range = p.first as usize * per..(p.first + p.count) as usize * per;
+                for q in &out[range] {
+                    let (c, r) = (glam::Vec3::new(q[0], q[1], q[2]), glam::Vec3::splat(q[3]));
+                    assert!(
+                        b.contains(c - r) && b.contains(c + r),
+                        "frame {f}: a point of patch {p:?} outside its box"
+                    );
+                    (lo, hi) = (lo.min(c - r), hi.max(c + r));
+                    checked += 1;
+                }
+                volume_ratio.push(((b.hi - b.lo) / (hi - lo)).max_element());
+            }
+        });
+    }
+    volume_ratio.sort_by(f32::total_cmp);
+    println!(
+        "{checked} points inside their patch boxes; box extent over the points' extent, median {:.2}, worst {:.2}",
+        volume_ratio[volume_ratio.len() / 2],
+        volume_ratio[volume_ratio.len() - 1]
+    );
 }

@@ -3,15 +3,17 @@
 //! It holds what a renderer needs besides one frame's guides and deformed
 //! mesh: the guides' roots and rest shapes (in their root frames: the
 //! neutral pose a guide cache is coded against), and every render strand's
-//! root, binding and groom record. Header fields: guide count, points per
-//! guide, strand count. Payload, in order: guide roots (20 bytes each),
-//! guide rest points (12 bytes each, `points` per guide), strand roots,
-//! bindings (72 bytes), grooms (44 bytes); every field a little-endian
-//! u32 or f32 (`docs/FORMAT.md`).
+//! root, binding and groom record, and the patch table. Header fields:
+//! guide count, points per guide, strand count, patch count. Payload, in
+//! order: guide roots (20 bytes each), guide rest points (12 bytes each,
+//! `points` per guide), strand roots, bindings (72 bytes), grooms (44
+//! bytes), patches (8 bytes); every field a little-endian u32 or f32
+//! (`docs/FORMAT.md`).
 
 use super::container::{self, product, Reader, Writer};
 use crate::interp::bind::StrandBinding;
 use crate::interp::groom::StrandGroom;
+use crate::interp::patch::Patch;
 use crate::interp::strand::MAX_STRAND_POINTS;
 use crate::interp::strands::{StrandBounds, Strands};
 use crate::root::check_root;
@@ -23,7 +25,7 @@ use core::mem::size_of;
 pub const MAGIC: [u8; 8] = *b"PLGROOM\0";
 /// The format version this build writes and reads.
 pub const VERSION: u32 = 1;
-const FIELDS: usize = 3;
+const FIELDS: usize = 4;
 
 /// A groom, borrowed: what [`encode`] writes and [`decode`] fills.
 #[derive(Clone, Copy, Debug)]
@@ -37,6 +39,9 @@ pub struct Groom<'a> {
     pub points: usize,
     /// The render strands.
     pub strands: Strands<'a>,
+    /// The strands' patches (contiguous ranges covering every strand, in
+    /// order; see [`interp::patch`](crate::interp::patch)), or none.
+    pub patches: &'a [Patch],
 }
 
 /// The buffers [`decode`] fills (each at least as long as the file needs).
@@ -51,6 +56,8 @@ pub struct GroomBuffers<'a> {
     pub bindings: &'a mut [StrandBinding],
     /// Strand groom records.
     pub grooms: &'a mut [StrandGroom],
+    /// Patches.
+    pub patches: &'a mut [Patch],
 }
 
 /// The counts a groom file holds, read from its checked header.
@@ -62,6 +69,8 @@ pub struct GroomCounts {
     pub points: usize,
     /// Render strands.
     pub strands: usize,
+    /// Patches.
+    pub patches: usize,
     /// The file's CRC-32: a guide cache names the groom it was coded for
     /// by it.
     pub id: u32,
@@ -71,11 +80,34 @@ const ROOT: usize = size_of::<Root>();
 const POINT: usize = 12;
 const BINDING: usize = size_of::<StrandBinding>();
 const GROOM: usize = size_of::<StrandGroom>();
+const PATCH: usize = size_of::<Patch>();
 
-fn payload_bytes(guides: usize, points: usize, strands: usize) -> Option<usize> {
+fn payload_bytes(guides: usize, points: usize, strands: usize, patches: usize) -> Option<usize> {
     let g = guides.checked_mul(ROOT + points.checked_mul(POINT)?)?;
     let s = strands.checked_mul(ROOT + BINDING + GROOM)?;
-    g.checked_add(s)
+    g.checked_add(s)?.checked_add(patches.checked_mul(PATCH)?)
+}
+
+/// Checks that `patches` (if any) cut `strands` strands into contiguous,
+/// non-empty ranges, in order.
+fn check_patches(patches: &[Patch], strands: usize) -> Result<(), Error> {
+    if patches.is_empty() {
+        return Ok(());
+    }
+    let mut next = 0u64;
+    for (i, p) in patches.iter().enumerate() {
+        if u64::from(p.first) != next || p.count == 0 {
+            return Err(Error::OutOfDomain {
+                what: "patches (contiguous, non-empty, in order)",
+                index: i,
+            });
+        }
+        next += u64::from(p.count);
+    }
+    if next != strands as u64 {
+        return Err(Error::InvalidArgument("patches must cover every strand"));
+    }
+    Ok(())
 }
 
 impl Groom<'_> {
@@ -95,14 +127,20 @@ impl Groom<'_> {
             ));
         }
         check_guides(self.guide_roots, self.guide_points)?;
+        check_patches(self.patches, self.strands.len())?;
         StrandBounds::new(&self.strands)?.fits(u32::MAX as usize, self.guide_roots.len())
     }
 
     /// Bytes [`encode`] writes for this groom.
     pub fn encoded_bytes(&self) -> Result<usize, Error> {
-        payload_bytes(self.guide_roots.len(), self.points, self.strands.len())
-            .and_then(|p| p.checked_add(container::header_bytes(FIELDS)))
-            .ok_or(Error::InvalidArgument("groom too large"))
+        payload_bytes(
+            self.guide_roots.len(),
+            self.points,
+            self.strands.len(),
+            self.patches.len(),
+        )
+        .and_then(|p| p.checked_add(container::header_bytes(FIELDS)))
+        .ok_or(Error::InvalidArgument("groom too large"))
     }
 }
 
@@ -137,6 +175,7 @@ pub fn encode(groom: &Groom, out: &mut [u8]) -> Result<usize, Error> {
         groom.guide_roots.len() as u64,
         groom.points as u64,
         s as u64,
+        groom.patches.len() as u64,
     ];
     let written = container::write(&mut out[..n], &MAGIC, VERSION, &fields, |w: &mut Writer| {
         w.words(groom.guide_roots);
@@ -144,6 +183,7 @@ pub fn encode(groom: &Groom, out: &mut [u8]) -> Result<usize, Error> {
         w.words(&groom.strands.roots[..s]);
         w.words(&groom.strands.bindings[..s]);
         w.words(&groom.strands.grooms[..s]);
+        w.words(groom.patches);
     });
     debug_assert_eq!(written, n);
     Ok(n)
@@ -157,14 +197,15 @@ pub fn counts(bytes: &[u8]) -> Result<GroomCounts, Error> {
 
 fn parse(bytes: &[u8]) -> Result<(GroomCounts, &[u8]), Error> {
     let file = container::read(bytes, &MAGIC, VERSION, FIELDS)?;
-    let [guides, points, strands, ..] = file.fields;
+    let [guides, points, strands, patches, ..] = file.fields;
     if guides == 0 || !(2..=MAX_STRAND_POINTS as u64).contains(&points) {
         return Err(Error::Corrupt {
             what: "guide or point count",
         });
     }
-    let (guides, points, strands) = (product(&[guides])?, points as usize, product(&[strands])?);
-    if payload_bytes(guides, points, strands) != Some(file.payload.len()) {
+    let (guides, points) = (product(&[guides])?, points as usize);
+    let (strands, patches) = (product(&[strands])?, product(&[patches])?);
+    if payload_bytes(guides, points, strands, patches) != Some(file.payload.len()) {
         return Err(Error::Corrupt {
             what: "payload length does not match the counts",
         });
@@ -173,6 +214,7 @@ fn parse(bytes: &[u8]) -> Result<(GroomCounts, &[u8]), Error> {
         guides,
         points,
         strands,
+        patches,
         id: file.crc,
     };
     Ok((counts, file.payload))
@@ -193,6 +235,7 @@ pub fn decode(bytes: &[u8], out: GroomBuffers) -> Result<GroomCounts, Error> {
         (out.roots.len(), c.strands),
         (out.bindings.len(), c.strands),
         (out.grooms.len(), c.strands),
+        (out.patches.len(), c.patches),
     ];
     for (available, needed) in needs {
         if available < needed {
@@ -203,6 +246,7 @@ pub fn decode(bytes: &[u8], out: GroomBuffers) -> Result<GroomCounts, Error> {
     let at_strands = at_points + c.guides * c.points * POINT;
     let at_bindings = at_strands + c.strands * ROOT;
     let at_grooms = at_bindings + c.strands * BINDING;
+    let at_patches = at_grooms + c.strands * GROOM;
     let section = |at: usize| Reader::new(&payload[at..]);
     // validation pass, through small buffers
     let (mut guides, mut points) = (section(0), section(at_points));
@@ -243,6 +287,23 @@ pub fn decode(bytes: &[u8], out: GroomBuffers) -> Result<GroomCounts, Error> {
             .map_err(|e| corrupt(e, "strand records"))?;
         s += k;
     }
+    let mut patches = section(at_patches);
+    let mut next = 0u64;
+    for _ in 0..c.patches {
+        let mut p = [Patch::default()];
+        patches.words(&mut p)?;
+        if u64::from(p[0].first) != next || p[0].count == 0 {
+            return Err(Error::Corrupt {
+                what: "patches are not contiguous ranges in order",
+            });
+        }
+        next += u64::from(p[0].count);
+    }
+    if c.patches > 0 && next != c.strands as u64 {
+        return Err(Error::Corrupt {
+            what: "patches do not cover the strands",
+        });
+    }
     // the copy
     let mut all = section(0);
     all.words(&mut out.guide_roots[..c.guides])?;
@@ -250,6 +311,7 @@ pub fn decode(bytes: &[u8], out: GroomBuffers) -> Result<GroomCounts, Error> {
     all.words(&mut out.roots[..c.strands])?;
     all.words(&mut out.bindings[..c.strands])?;
     all.words(&mut out.grooms[..c.strands])?;
+    all.words(&mut out.patches[..c.patches])?;
     Ok(c)
 }
 
@@ -273,6 +335,7 @@ mod tests {
         roots: Vec<Root>,
         bindings: Vec<StrandBinding>,
         grooms: Vec<StrandGroom>,
+        patches: Vec<Patch>,
     }
 
     impl Out {
@@ -283,6 +346,7 @@ mod tests {
                 roots: vec![Root::default(); s],
                 bindings: vec![StrandBinding::default(); s],
                 grooms: vec![StrandGroom::default(); s],
+                patches: vec![Patch::default(); 4],
             }
         }
 
@@ -295,6 +359,7 @@ mod tests {
                     roots: &mut self.roots,
                     bindings: &mut self.bindings,
                     grooms: &mut self.grooms,
+                    patches: &mut self.patches,
                 },
             )
         }
@@ -338,6 +403,7 @@ mod tests {
         assert_eq!(out.roots, scene.roots);
         assert_eq!(out.bindings, scene.bindings);
         assert_eq!(out.grooms, scene.grooms);
+        assert_eq!(out.patches, scene.patches);
         // the same groom, the same bytes and id
         assert_eq!(encoded(&scene), bytes);
     }
@@ -432,6 +498,22 @@ mod tests {
         assert!(matches!(
             encode(&groom, &mut out),
             Err(Error::InvalidArgument(_))
+        ));
+        groom.guide_points = &scene.guide_local;
+        let gap = [
+            Patch {
+                first: 0,
+                count: 10,
+            },
+            Patch {
+                first: 11,
+                count: 189,
+            },
+        ];
+        groom.patches = &gap;
+        assert!(matches!(
+            encode(&groom, &mut out),
+            Err(Error::OutOfDomain { .. })
         ));
         assert!(out.iter().all(|&b| b == 0));
     }

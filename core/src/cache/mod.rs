@@ -40,6 +40,7 @@ pub(crate) mod fixture {
         pub roots: Vec<Root>,
         pub bindings: Vec<StrandBinding>,
         pub grooms: Vec<StrandGroom>,
+        pub patches: Vec<crate::interp::patch::Patch>,
     }
 
     impl Scene {
@@ -80,6 +81,13 @@ pub(crate) mod fixture {
                 guide_roots,
                 guide_world,
                 guide_local: vec![],
+                patches: (0..strand_roots.len() as u32)
+                    .step_by(64)
+                    .map(|first| crate::interp::patch::Patch {
+                        first,
+                        count: 64.min(strand_roots.len() as u32 - first),
+                    })
+                    .collect(),
                 roots: strand_roots,
                 bindings,
                 grooms,
@@ -105,6 +113,7 @@ pub(crate) mod fixture {
                     bindings: &self.bindings,
                     grooms: &self.grooms,
                 },
+                patches: &self.patches,
             }
         }
 

@@ -6,6 +6,7 @@ pub mod bind;
 pub mod expand;
 pub mod groom;
 pub(crate) mod lift;
+pub mod patch;
 pub mod posed;
 pub mod settle;
 pub mod strand;
