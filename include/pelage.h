@@ -371,11 +371,103 @@ typedef struct PelageGroomMaps {
   uint64_t seed;
 } PelageGroomMaps;
 
+// A patch: strands `first` .. `first + count` (see `pelage_patch_plan`).
+typedef struct PelagePatch {
+  // First strand.
+  uint32_t first;
+  // Strands in it.
+  uint32_t count;
+} PelagePatch;
+
+// What a groom file is written from.
+typedef struct PelageGroomFileDesc {
+  // The rest mesh's frame posed with the guides (`pelage_frame_new`,
+  // `pelage_frame_set_guides`): their rest shapes in their root frames,
+  // at its point count, are the neutral pose the guide caches code
+  // against.
+  PelageFrame rest_frame;
+  // The guides' roots, as many as the frame's guides.
+  const struct PelageRoot *guide_roots;
+  // The render strands (in patch order when there are patches).
+  struct PelageStrands strands;
+  // The strands' patches, or NULL with `patch_count` 0.
+  const struct PelagePatch *patches;
+  // Patches.
+  size_t patch_count;
+} PelageGroomFileDesc;
+
+// The counts and id in a groom file's checked header.
+typedef struct PelageGroomFileInfo {
+  // Guides.
+  size_t guide_count;
+  // Points per guide.
+  uint32_t points_per_guide;
+  // Render strands.
+  size_t strand_count;
+  // Patches.
+  size_t patch_count;
+  // The file's id (its CRC-32): a guide cache names its groom file by it.
+  uint32_t id;
+} PelageGroomFileInfo;
+
+// Where `pelage_groom_file_read` writes a groom file's contents; each
+// array at least as long as `pelage_groom_file_info` says.
+typedef struct PelageGroomFileBuffers {
+  // guide_count roots.
+  struct PelageRoot *guide_roots;
+  // guide_count x points_per_guide rest points, 3 floats each.
+  float *guide_points;
+  // Guides the two arrays above hold.
+  size_t guide_capacity;
+  // strand_count roots.
+  struct PelageRoot *roots;
+  // strand_count bindings.
+  struct PelageStrandBinding *bindings;
+  // strand_count groom records.
+  struct PelageStrandGroom *grooms;
+  // Strands the three arrays above hold.
+  size_t strand_capacity;
+  // patch_count patches.
+  struct PelagePatch *patches;
+  // Patches it holds.
+  size_t patch_capacity;
+} PelageGroomFileBuffers;
+
 // A groom: render strands (roots, bindings, groom values) copied and
 // checked once by `pelage_groom_new`, so that `pelage_groom_expand` checks
 // per frame only the mesh, the posed guides and the outputs. Created by
 // `pelage_groom_new`, released by `pelage_groom_free`; immutable between.
 typedef struct PelageGroomTy *PelageGroom;
+
+// The guides of a groom file, as `pelage_groom_file_read` gives them:
+// what a guide cache is coded against.
+typedef struct PelageGuideSet {
+  // guide_count roots.
+  const struct PelageRoot *guide_roots;
+  // guide_count x points_per_guide rest points in their root frames, 3
+  // floats each.
+  const float *guide_points;
+  // Guides.
+  size_t guide_count;
+  // Points per guide.
+  uint32_t points_per_guide;
+  // The groom file's id (`PelageGroomFileInfo::id`).
+  uint32_t groom_id;
+} PelageGuideSet;
+
+// The counts in a guide cache's checked header.
+typedef struct PelageGuideCacheInfo {
+  // Guides.
+  size_t guide_count;
+  // Points per guide.
+  uint32_t points_per_guide;
+  // Shutter samples.
+  uint32_t sample_count;
+  // 1 for exact float32 points, 0 for quantized ones.
+  uint32_t exact;
+  // The id of the groom file it was coded for.
+  uint32_t groom_id;
+} PelageGuideCacheInfo;
 
 // What pelage_settle changed.
 typedef struct PelageSettleInfo {
@@ -691,6 +783,40 @@ struct PelageGroomMaps pelage_groom_maps_defaults(void);
 // Thread safety: reentrant; concurrent calls need distinct outputs.
 enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const struct PelageGroomMaps *maps, const struct PelageRoot *roots, size_t root_count, struct PelageStrandGroom *grooms, size_t grooms_capacity);
 
+// Writes a groom file into `out` (`capacity` bytes) and its length to
+// `*written`. With `out` NULL and `capacity` 0, only the length needed is
+// written (CAPACITY_EXCEEDED, as for a buffer too small). Every record is
+// checked first (finite, in range, guide indices below the guide count,
+// patches contiguous and covering the strands); on failure `out` is
+// untouched.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts, a frame with no
+// guides, patches that leave strands out), NON_FINITE, OUT_OF_RANGE,
+// CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread; the frame may be read by
+// other calls meanwhile.
+enum PelageStatus pelage_groom_file_write(const struct PelageGroomFileDesc *desc, void *out, size_t capacity, size_t *written);
+
+// Checks a groom file's framing (magic, version, length, CRC) and counts,
+// and writes them to `*info`.
+//
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, counts),
+// VERSION_MISMATCH (another magic or version), PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_groom_file_info(const void *data, size_t length, struct PelageGroomFileInfo *info);
+
+// Reads a groom file into `buffers`. The whole file is checked first
+// (framing, counts, every record); on failure nothing is written.
+//
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
+// CAPACITY_EXCEEDED (an array shorter than the file's counts),
+// MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_groom_file_read(const void *data, size_t length, const struct PelageGroomFileBuffers *buffers);
+
 // Creates a groom from render strands (roots, bindings from `pelage_bind`,
 // groom values from `pelage_groom_evaluate` or the host). The records are
 // checked (faces, barycentrics, guide indices, weights in 0..1, finite
@@ -733,6 +859,82 @@ enum PelageStatus pelage_groom_strand_count(PelageGroom groom, size_t *strand_co
 // Thread safety: concurrent calls on the same groom and frame are safe
 // with distinct outputs.
 enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageExpandParams *params, const struct PelageCurves *curves);
+
+// The most bytes `pelage_guide_cache_write` writes for `sample_count`
+// shutter samples of `guide_count` guides of `points_per_guide` points
+// (a quantized frame typically takes a tenth of it).
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a cache past 4 GB), PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_guide_cache_max_size(size_t guide_count, uint32_t points_per_guide, uint32_t sample_count, uint32_t exact, size_t *bytes);
+
+// Writes one frame's guide cache: `samples` are `sample_count` frames
+// (1..255), the frame's deformed mesh at each shutter sample posed with
+// its guides (`pelage_frame_set_guides`, at the guide set's point count).
+// Quantized (`exact` 0: every root-frame coordinate within 2^-15 of the
+// guide's length) or exact float32 (`exact` 1). `out` holds `capacity`
+// bytes (`pelage_guide_cache_max_size`); the bytes written go to
+// `*written`. On failure `out` is untouched.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts that differ from
+// the guide set's, a frame with no guides, sample count), NON_FINITE,
+// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread; the frames may be read by
+// other calls meanwhile.
+enum PelageStatus pelage_guide_cache_write(const struct PelageGuideSet *guides, const PelageFrame *samples, uint32_t sample_count, uint32_t exact, void *out, size_t capacity, size_t *written);
+
+// Checks a guide cache's framing (magic, version, length, CRC), counts and
+// offset table, and writes its header to `*info`.
+//
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_guide_cache_info(const void *data, size_t length, struct PelageGuideCacheInfo *info);
+
+// Decodes shutter sample `sample` of a guide cache into `frame` (made on
+// that sample's deformed mesh for the guide set's counts): its posed
+// guides, ready for `pelage_groom_expand`. The cache must have been coded
+// for `guides` (the same groom id). The whole cache is checked before the
+// frame is written; on failure the frame keeps the guides it had.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
+// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
+// VERSION_MISMATCH, MISALIGNED, PANIC.
+//
+// Thread safety: no other call may use `frame` during this one.
+enum PelageStatus pelage_guide_cache_read(const void *data, size_t length, const struct PelageGuideSet *guides, uint32_t sample, PelageFrame frame);
+
+// Orders `root_count` strands rooted at `roots` on the rest `mesh` into
+// patches of `patch_size` strands: `order` (root_count entries) receives
+// the strand to place k-th (reorder roots, bindings and grooms by it),
+// `patches` (capacity `patch_capacity`, at least
+// ceil(root_count / patch_size)) the patches, and `*patch_count` their
+// count. Patches are runs of the strands in Morton order of their roots,
+// sorted by LOD rank inside each (an LOD is a cutoff in every patch).
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (patch size 0), NON_FINITE,
+// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const struct PelageRoot *roots, size_t root_count, uint32_t patch_size, uint32_t *order, struct PelagePatch *patches, size_t patch_capacity, size_t *patch_count);
+
+// Writes the box of each of `patches` (`patch_count`) on `frame`: 6
+// floats per patch into `boxes` (low x, y, z, then high x, y, z) holding
+// every point `pelage_groom_expand` writes for its strands, radius
+// included, and any rotation of them about their roots. Computed from the
+// frame's guides and the strand records without expanding; merge the boxes
+// of a frame's shutter samples for motion blur. Only `orphan_length` and
+// `thread_count` of `params` are used.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE
+// (a strand's face or guide, a patch past the strands), MISALIGNED,
+// PANIC.
+//
+// Thread safety: may be called from any thread; the frame may be read by
+// other calls meanwhile.
+enum PelageStatus pelage_patch_boxes(PelageFrame frame, const struct PelageStrands *strands, const struct PelageExpandParams *params, const struct PelagePatch *patches, size_t patch_count, float *boxes);
 
 // Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 // positions into `positions` (float3, `position_stride` bytes apart) and, if

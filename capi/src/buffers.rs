@@ -218,3 +218,18 @@ impl Float3Out {
         }
     }
 }
+
+/// A host array of `count` handles (opaque pointers). `(NULL, 0)` is valid.
+pub(crate) fn handles<'a, T>(
+    ptr: *const *mut T,
+    count: usize,
+    name: &str,
+) -> Result<&'a [*mut T], Failure> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    check_array(ptr, count, name)?;
+    // SAFETY: non-NULL, aligned, and the host promises `count` initialised
+    // handles for the duration of the call.
+    Ok(unsafe { std::slice::from_raw_parts(ptr, count) })
+}

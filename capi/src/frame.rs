@@ -67,6 +67,11 @@ impl Frame {
     pub(crate) fn posed(&self) -> &PosedFrame<'_> {
         &self.posed
     }
+
+    /// The posed frame, to fill (a guide cache decodes into it).
+    pub(crate) fn posed_mut(&mut self) -> &mut PosedFrame<'static> {
+        &mut self.posed
+    }
 }
 
 /// The frame behind a handle, or NULL_PARAMETER. A non-NULL handle must
@@ -74,6 +79,12 @@ impl Frame {
 /// contract), so it points to a live `Frame`.
 pub(crate) fn frame_ref<'a>(frame: PelageFrame) -> Result<&'a Frame, Failure> {
     req(frame.cast::<Frame>().cast_const(), "frame")
+}
+
+/// The frame behind a handle, for a call that changes it (see
+/// [`frame_ref`]); the header forbids other calls on it meanwhile.
+pub(crate) fn frame_mut<'a>(frame: PelageFrame) -> Result<&'a mut Frame, Failure> {
+    req_mut(frame.cast::<Frame>(), "frame")
 }
 
 /// Copies a host buffer into a heap buffer.
@@ -166,7 +177,7 @@ pub extern "C" fn pelage_frame_set_guides(
     thread_count: u32,
 ) -> PelageStatus {
     ffi_boundary! {
-        let frame = req_mut(frame.cast::<Frame>(), "frame")?;
+        let frame = frame_mut(frame)?;
         let guides = req(guides, "guides")?.view()?;
         let posing = frame.posed.posing(&guides)?;
         let filler = posing.filler;

@@ -12,10 +12,13 @@ mod buffers;
 mod expand;
 mod frame;
 mod groom;
+mod groom_file;
 mod groom_handle;
+mod guide_cache;
 mod guides;
 mod map;
 mod mesh;
+mod patch;
 mod region;
 mod roots;
 mod settle;
@@ -37,13 +40,22 @@ pub use frame::{
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,
 };
+pub use groom_file::{
+    pelage_groom_file_info, pelage_groom_file_read, pelage_groom_file_write,
+    PelageGroomFileBuffers, PelageGroomFileDesc, PelageGroomFileInfo, PelagePatch,
+};
 pub use groom_handle::{
     pelage_groom_expand, pelage_groom_free, pelage_groom_new, pelage_groom_strand_count,
     PelageGroom, PelageGroomTy,
 };
+pub use guide_cache::{
+    pelage_guide_cache_info, pelage_guide_cache_max_size, pelage_guide_cache_read,
+    pelage_guide_cache_write, PelageGuideCacheInfo, PelageGuideSet,
+};
 pub use guides::PelageGuidesDesc;
 pub use map::{PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
+pub use patch::{pelage_patch_boxes, pelage_patch_plan};
 pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};

@@ -2296,6 +2296,127 @@ static void test_groom_handle(void) {
   free(grooms), free(bindings), free(roots);
 }
 
+/* Render-time files: patches, the groom file and the guide cache, through
+ * the C API on the interpolation fixture. */
+static void test_files(void) {
+  const size_t n = g_in.strand_count, g = g_in.guide_count;
+  const uint32_t size = 64;
+  const size_t most = (n + size - 1) / size;
+  uint32_t *order = malloc(n * sizeof *order);
+  PelagePatch *patches = malloc(most * sizeof *patches);
+  size_t patch_count = 0;
+  REQUIRE(order && patches);
+  EXPECT(PELAGE_STATUS_OK, pelage_patch_plan(&g_in.mesh, g_in.strands, n, size, order, patches, most, &patch_count));
+  CHECK(patch_count == most && patches[0].first == 0);
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED,
+         pelage_patch_plan(&g_in.mesh, g_in.strands, n, size, order, patches, most - 1, &patch_count));
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT,
+         pelage_patch_plan(&g_in.mesh, g_in.strands, n, 0, order, patches, most, &patch_count));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER,
+         pelage_patch_plan(&g_in.mesh, g_in.strands, n, size, NULL, patches, most, &patch_count));
+  /* the strands in patch order */
+  PelageRoot *roots = malloc(n * sizeof *roots);
+  PelageStrandBinding *bindings = malloc(n * sizeof *bindings);
+  PelageStrandGroom *grooms = malloc(n * sizeof *grooms);
+  REQUIRE(roots && bindings && grooms);
+  for (size_t k = 0; k < n; ++k)
+    roots[k] = g_in.strands[order[k]], bindings[k] = g_in.bindings[order[k]], grooms[k] = g_in.grooms[order[k]];
+  const PelageStrands strands = records(roots, bindings, grooms, n);
+
+  /* the groom file: sized, written, read back */
+  PelageGroomFileDesc desc = {g_in.frame, g_in.guide_roots, strands, patches, patch_count};
+  size_t bytes = 0, written = 0;
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_groom_file_write(&desc, NULL, 0, &bytes));
+  CHECK(bytes > 0);
+  unsigned char *file = malloc(bytes);
+  REQUIRE(file);
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_file_write(&desc, file, bytes, &written));
+  CHECK(written == bytes);
+  PelageGroomFileInfo info;
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_file_info(file, bytes, &info));
+  const uint32_t pts = g_in.expand_params.points_per_strand;
+  CHECK(info.guide_count == g && info.points_per_guide == pts && info.strand_count == n);
+  CHECK(info.patch_count == patch_count);
+  PelageRoot *guide_roots = malloc(g * sizeof *guide_roots);
+  float *guide_points = malloc(g * pts * 3 * sizeof *guide_points);
+  PelageRoot *roots2 = malloc(n * sizeof *roots2);
+  PelageStrandBinding *bindings2 = malloc(n * sizeof *bindings2);
+  PelageStrandGroom *grooms2 = malloc(n * sizeof *grooms2);
+  PelagePatch *patches2 = malloc(most * sizeof *patches2);
+  REQUIRE(guide_roots && guide_points && roots2 && bindings2 && grooms2 && patches2);
+  PelageGroomFileBuffers out = {guide_roots, guide_points, g, roots2, bindings2, grooms2, n, patches2, most};
+  /* damaged files: refused, nothing written */
+  FILL(roots2, n * sizeof *roots2);
+  file[bytes / 2] ^= 0x20;
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_groom_file_read(file, bytes, &out));
+  file[bytes / 2] ^= 0x20;
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_groom_file_read(file, bytes - 1, &out));
+  file[0] ^= 1;
+  EXPECT(PELAGE_STATUS_VERSION_MISMATCH, pelage_groom_file_read(file, bytes, &out));
+  file[0] ^= 1;
+  out.strand_capacity = n - 1;
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_groom_file_read(file, bytes, &out));
+  out.strand_capacity = n;
+  CHECK(untouched(roots2, n * sizeof *roots2));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_groom_file_read(NULL, bytes, &out));
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_file_read(file, bytes, &out));
+  CHECK(memcmp(roots2, roots, n * sizeof *roots) == 0 && memcmp(bindings2, bindings, n * sizeof *bindings) == 0);
+  CHECK(memcmp(grooms2, grooms, n * sizeof *grooms) == 0 && memcmp(patches2, patches, patch_count * sizeof *patches) == 0);
+  CHECK(memcmp(guide_roots, g_in.guide_roots, g * sizeof *guide_roots) == 0);
+
+  /* the guide cache, exact: a frame decoded from it expands to the same bits */
+  const PelageGuideSet set = {guide_roots, guide_points, g, pts, info.id};
+  size_t cache_bytes = 0;
+  /* quantized may need more room than exact (a raw guide has a tag) */
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_max_size(g, pts, 1, 0, &cache_bytes));
+  unsigned char *cache = malloc(cache_bytes);
+  REQUIRE(cache);
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 1, cache, cache_bytes, &written));
+  PelageGuideCacheInfo cinfo;
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_info(cache, written, &cinfo));
+  CHECK(cinfo.guide_count == g && cinfo.sample_count == 1 && cinfo.exact == 1 && cinfo.groom_id == info.id);
+  PelageFrame decoded = NULL;
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_new(&g_in.mesh, g, pts, &decoded));
+  REQUIRE(decoded != NULL);
+  PelageGuideSet other = set;
+  other.groom_id ^= 1;
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &other, 0, decoded));
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &set, 1, decoded));
+  cache[written - 1] ^= 0x40;
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_guide_cache_read(cache, written, &set, 0, decoded));
+  cache[written - 1] ^= 0x40;
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_read(cache, written, NULL, 0, decoded));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded));
+  SAME_AS_REFERENCE(decoded);
+  /* quantized: smaller, and within the bound */
+  size_t quantized = 0;
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 0, cache, cache_bytes, &quantized));
+  CHECK(quantized < written / 2);
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, quantized, &set, 0, decoded));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_write(&set, NULL, 1, 0, cache, cache_bytes, &quantized));
+
+  /* patch boxes hold every point of their strands */
+  float *boxes = malloc(patch_count * 6 * sizeof *boxes);
+  REQUIRE(boxes);
+  EXPECT(PELAGE_STATUS_OK, pelage_patch_boxes(decoded, &strands, &g_in.expand_params, patches, patch_count, boxes));
+  EXPECT(PELAGE_STATUS_OK, expand_(decoded, roots, bindings, grooms, n, &g_in.expand_params, g_in.points_out, 16,
+                                   POINTS_CAPACITY, NULL, NULL));
+  size_t outside = 0;
+  for (size_t p = 0; p < patch_count; ++p) {
+    const float *b = boxes + 6 * p;
+    for (size_t k = patches[p].first * g_in.per; k < (size_t)(patches[p].first + patches[p].count) * g_in.per; ++k) {
+      const float *q = (const float *)(g_in.points_out + 16 * k);
+      for (int a = 0; a < 3; ++a) outside += q[a] - q[3] < b[a] || q[a] + q[3] > b[3 + a];
+    }
+  }
+  CHECK(outside == 0);
+  PelagePatch past = {(uint32_t)n, 1};
+  EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_patch_boxes(decoded, &strands, &g_in.expand_params, &past, 1, boxes));
+  pelage_frame_free(decoded);
+  free(boxes), free(cache), free(file), free(guide_roots), free(guide_points), free(roots2), free(bindings2);
+  free(grooms2), free(patches2), free(roots), free(bindings), free(grooms), free(order), free(patches);
+}
+
 static void interp_free(void) {
   pelage_frame_free(g_in.frame);
   free(g_in.guide_roots), free(g_in.strands), free(g_in.guide_points), free(g_in.bind_arena), free(g_in.bindings);
@@ -2753,6 +2874,7 @@ int main(void) {
   test_groom_handle();
   test_settle();
   test_interp_progress();
+  test_files();
   interp_free();
   test_threads();
   free(g_arena), free(g_roots);

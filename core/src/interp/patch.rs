@@ -141,6 +141,28 @@ fn morton(x: u32, y: u32, z: u32) -> u64 {
     spread(x) | spread(y) << 1 | spread(z) << 2
 }
 
+/// Checks `strands` (as expansion does) against `frame`'s mesh and guides,
+/// and that each of `patches` lies within them, so [`patch_box`] may run on
+/// any of them.
+pub fn check(frame: &PosedFrame, strands: &Strands, patches: &[Patch]) -> Result<(), Error> {
+    crate::interp::strands::check_strands(
+        strands,
+        frame.mesh().triangle_count(),
+        frame.guide_count(),
+    )?;
+    for (i, p) in patches.iter().enumerate() {
+        if u64::from(p.first) + u64::from(p.count) > strands.len() as u64 {
+            return Err(Error::OutOfRange {
+                what: "patches",
+                index: i,
+                value: (u64::from(p.first) + u64::from(p.count)) as usize,
+                bound: strands.len(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Writes, for every guide of `frame`, its reach: the largest distance of
 /// its points from its root frame's origin.
 pub fn guide_reach(frame: &PosedFrame, reach: &mut [f32]) {
@@ -152,8 +174,8 @@ pub fn guide_reach(frame: &PosedFrame, reach: &mut [f32]) {
     }
 }
 
-/// The box of strands `first .. first + count` of `strands` (checked, as
-/// for expansion) on `frame`, with `reach` from [`guide_reach`] on the same
+/// The box of strands `first .. first + count` of `strands` (checked by
+/// [`check`]) on `frame`, with `reach` from [`guide_reach`] on the same
 /// frame: every point [`expand`](crate::interp::expand) writes for them,
 /// radius included, lies inside.
 pub fn patch_box(

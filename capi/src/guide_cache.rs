@@ -1,0 +1,187 @@
+//! The per-frame guide cache in C: written per frame from the frame's
+//! shutter samples, read by a renderer straight into a frame.
+
+use crate::buffers::{bytes, bytes_mut, handles, req, req_mut, slice};
+use crate::frame::{frame_mut, frame_ref};
+use crate::status::Failure;
+use crate::{PelageFrame, PelageRoot, PelageStatus};
+use pelage_core::cache::groom_file::Groom;
+use pelage_core::cache::guide_cache::{self, GuideCache, Mode};
+use pelage_core::interp::posed::PosedFrame;
+use pelage_core::interp::strands::Strands;
+
+/// The guides of a groom file, as `pelage_groom_file_read` gives them:
+/// what a guide cache is coded against.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageGuideSet {
+    /// guide_count roots.
+    pub guide_roots: *const PelageRoot,
+    /// guide_count x points_per_guide rest points in their root frames, 3
+    /// floats each.
+    pub guide_points: *const f32,
+    /// Guides.
+    pub guide_count: usize,
+    /// Points per guide.
+    pub points_per_guide: u32,
+    /// The groom file's id (`PelageGroomFileInfo::id`).
+    pub groom_id: u32,
+}
+
+/// The counts in a guide cache's checked header.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PelageGuideCacheInfo {
+    /// Guides.
+    pub guide_count: usize,
+    /// Points per guide.
+    pub points_per_guide: u32,
+    /// Shutter samples.
+    pub sample_count: u32,
+    /// 1 for exact float32 points, 0 for quantized ones.
+    pub exact: u32,
+    /// The id of the groom file it was coded for.
+    pub groom_id: u32,
+}
+
+impl PelageGuideSet {
+    fn view(&self) -> Result<Groom<'_>, Failure> {
+        let n = self.points_per_guide as usize;
+        let count = self.guide_count.checked_mul(3 * n).ok_or(Failure::new(
+            PelageStatus::InvalidArgument,
+            "guide_count overflows",
+        ))?;
+        Ok(Groom {
+            guide_roots: bytemuck::cast_slice(slice(
+                self.guide_roots,
+                self.guide_count,
+                "guide_roots",
+            )?),
+            guide_points: bytemuck::cast_slice(slice(self.guide_points, count, "guide_points")?),
+            points: n,
+            strands: Strands {
+                roots: &[],
+                bindings: &[],
+                grooms: &[],
+            },
+            patches: &[],
+        })
+    }
+}
+
+/// The most bytes `pelage_guide_cache_write` writes for `sample_count`
+/// shutter samples of `guide_count` guides of `points_per_guide` points
+/// (a quantized frame typically takes a tenth of it).
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a cache past 4 GB), PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_guide_cache_max_size(
+    guide_count: usize,
+    points_per_guide: u32,
+    sample_count: u32,
+    exact: u32,
+    bytes: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let out = req_mut(bytes, "bytes")?;
+        let mode = if exact != 0 { Mode::Exact } else { Mode::Quantized };
+        *out = guide_cache::max_encoded_bytes(guide_count, points_per_guide as usize, sample_count as usize, mode)?;
+        Ok(())
+    }
+}
+
+/// Writes one frame's guide cache: `samples` are `sample_count` frames
+/// (1..255), the frame's deformed mesh at each shutter sample posed with
+/// its guides (`pelage_frame_set_guides`, at the guide set's point count).
+/// Quantized (`exact` 0: every root-frame coordinate within 2^-15 of the
+/// guide's length) or exact float32 (`exact` 1). `out` holds `capacity`
+/// bytes (`pelage_guide_cache_max_size`); the bytes written go to
+/// `*written`. On failure `out` is untouched.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts that differ from
+/// the guide set's, a frame with no guides, sample count), NON_FINITE,
+/// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread; the frames may be read by
+/// other calls meanwhile.
+#[no_mangle]
+pub extern "C" fn pelage_guide_cache_write(
+    guides: *const PelageGuideSet,
+    samples: *const PelageFrame,
+    sample_count: u32,
+    exact: u32,
+    out: *mut std::ffi::c_void,
+    capacity: usize,
+    written: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let written = req_mut(written, "written")?;
+        let set = req(guides, "guides")?;
+        let groom = set.view()?;
+        let handles = handles(samples, sample_count as usize, "samples")?;
+        let frames = handles
+            .iter()
+            .map(|&h| frame_ref(h).map(|f| f.posed()))
+            .collect::<Result<Vec<&PosedFrame>, Failure>>()?;
+        let mode = if exact != 0 { Mode::Exact } else { Mode::Quantized };
+        *written = guide_cache::encode(&groom, set.groom_id, &frames, mode, bytes_mut(out, capacity, "out")?)?;
+        Ok(())
+    }
+}
+
+/// Checks a guide cache's framing (magic, version, length, CRC), counts and
+/// offset table, and writes its header to `*info`.
+///
+/// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH, PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_guide_cache_info(
+    data: *const std::ffi::c_void,
+    length: usize,
+    info: *mut PelageGuideCacheInfo,
+) -> PelageStatus {
+    ffi_boundary! {
+        let info = req_mut(info, "info")?;
+        let i = GuideCache::parse(bytes(data, length, "data")?)?.info();
+        *info = PelageGuideCacheInfo {
+            guide_count: i.guides,
+            points_per_guide: i.points as u32,
+            sample_count: i.samples as u32,
+            exact: (i.mode == Mode::Exact) as u32,
+            groom_id: i.groom,
+        };
+        Ok(())
+    }
+}
+
+/// Decodes shutter sample `sample` of a guide cache into `frame` (made on
+/// that sample's deformed mesh for the guide set's counts): its posed
+/// guides, ready for `pelage_groom_expand`. The cache must have been coded
+/// for `guides` (the same groom id). The whole cache is checked before the
+/// frame is written; on failure the frame keeps the guides it had.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
+/// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
+/// VERSION_MISMATCH, MISALIGNED, PANIC.
+///
+/// Thread safety: no other call may use `frame` during this one.
+#[no_mangle]
+pub extern "C" fn pelage_guide_cache_read(
+    data: *const std::ffi::c_void,
+    length: usize,
+    guides: *const PelageGuideSet,
+    sample: u32,
+    frame: PelageFrame,
+) -> PelageStatus {
+    ffi_boundary! {
+        let set = req(guides, "guides")?;
+        let groom = set.view()?;
+        let frame = frame_mut(frame)?;
+        let cache = GuideCache::parse(bytes(data, length, "data")?)?;
+        cache.decode(&groom, set.groom_id, sample as usize, frame.posed_mut())?;
+        Ok(())
+    }
+}
