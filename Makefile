@@ -3,7 +3,7 @@
 
 BUILD ?= build
 JOBS ?= 2
-APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev libopenvdb-dev libboost-dev valgrind binutils
+APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev libopenvdb-dev libboost-dev valgrind binutils python3-venv
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
 FUZZ_SECONDS ?= 60
