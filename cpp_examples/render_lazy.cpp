@@ -17,6 +17,7 @@
 #include <embree3/rtcore.h>
 #include <pelage.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -248,6 +249,7 @@ struct Lazy {
   std::vector<std::unique_ptr<Patch>> patches;
   std::atomic<size_t> bytes{0}, builds{0}, peak{0}, evictions{0};
   std::atomic<double> build_seconds{0.0};
+  std::atomic<bool> failed{false};
   int bucket = 0;
 
   RTCScene ensure(size_t p) {
@@ -257,6 +259,24 @@ struct Lazy {
     std::lock_guard<std::mutex> lock(patch.build);
     if (RTCScene s = patch.scene.load(std::memory_order_acquire)) return s;
     creature::Stopwatch clock;
+    // Embree's build waits for its own tasks; isolated, the waiting thread
+    // cannot take another row whose ray enters this patch (and its lock)
+    RTCScene s = nullptr;
+    tbb::this_task_arena::isolate([&] { s = build(patch, p); });
+    const size_t now = bytes += patch.bytes();
+    size_t high = peak.load();
+    while (now > high && !peak.compare_exchange_weak(high, now)) {
+    }
+    builds += 1;
+    double seconds = build_seconds.load();
+    while (!build_seconds.compare_exchange_weak(seconds, seconds + clock.seconds())) {
+    }
+    patch.scene.store(s, std::memory_order_release);
+    return s;
+  }
+
+  // Expands patch `p` at every shutter sample into its own scene.
+  RTCScene build(Patch& patch, size_t p) {
     const PelagePatch range = fur.patches[p];
     for (int k = 0; k < kSamples; ++k) {
       patch.points[k].assign(4 * fur.per * range.count, 0.0f);
@@ -268,15 +288,6 @@ struct Lazy {
     RTCScene s = rtcNewScene(device);
     attach_moving_curves(device, s, patch.points, fur.per * range.count, patch.indices);
     rtcCommitScene(s);
-    const size_t now = bytes += patch.bytes();
-    size_t high = peak.load();
-    while (now > high && !peak.compare_exchange_weak(high, now)) {
-    }
-    builds += 1;
-    double seconds = build_seconds.load();
-    while (!build_seconds.compare_exchange_weak(seconds, seconds + clock.seconds())) {
-    }
-    patch.scene.store(s, std::memory_order_release);
     return s;
   }
 
@@ -313,7 +324,15 @@ void patch_intersect(const RTCIntersectFunctionNArguments* args) {
   if (args->N != 1 || !args->valid[0]) return;
   Lazy& lazy = *static_cast<Lazy*>(args->geometryUserPtr);
   RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
-  RTCScene scene = lazy.ensure(args->primID);
+  // no exception may cross Embree's C callback: a failed patch is recorded
+  // and the ray goes on without it
+  RTCScene scene = nullptr;
+  try {
+    scene = lazy.ensure(args->primID);
+  } catch (const std::exception&) {
+    lazy.failed = true;
+    return;
+  }
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit sub = *rh;
@@ -424,7 +443,7 @@ int main(int argc, char** argv) try {
     rtcReleaseScene(eager);
 
     // lazy: patch boxes only, curves when rays come
-    Lazy lazy{fur, device.device, {}, {}, {}, {}, {}, {}, 0};
+    Lazy lazy{fur, device.device, {}, {}, {}, {}, {}, {}, {}, 0};
     for (size_t p = 0; p < fur.patches.size(); ++p) lazy.patches.push_back(std::make_unique<Patch>());
     RTCScene scene = rtcNewScene(device.device);
     const unsigned mesh_id = attach_moving_mesh(device.device, scene, meshes);
@@ -446,6 +465,7 @@ int main(int argc, char** argv) try {
     rtcReleaseScene(scene);
     device.check("render");
 
+    if (lazy.failed) throw std::runtime_error("a patch failed to expand");
     size_t differing = 0;
     for (size_t i = 0; i < got.size(); i += 3) differing += std::memcmp(&got[i], &want[i], 3) != 0;
     const double lazy_s = lazy.build_seconds.load();

@@ -925,12 +925,13 @@ enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const str
 // every point `pelage_groom_expand` writes for its strands, radius
 // included, and any rotation of them about their roots. Computed from the
 // frame's guides and the strand records without expanding; merge the boxes
-// of a frame's shutter samples for motion blur. Only `orphan_length` and
-// `thread_count` of `params` are used.
+// of a frame's shutter samples for motion blur. The boxes also hold the
+// Catmull-Rom curves through the points (which reach up to 1.25 times
+// farther from the root). `params` are the expansion's.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE
-// (a strand's face or guide, a patch past the strands), MISALIGNED,
-// PANIC.
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides,
+// or of another point count), NON_FINITE, OUT_OF_RANGE (a strand's face
+// or guide, a patch past the strands), MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread; the frame may be read by
 // other calls meanwhile.

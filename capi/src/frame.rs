@@ -6,6 +6,8 @@ use crate::status::Failure;
 use crate::threads::split_over_threads;
 use crate::{PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
+use pelage_core::cache::groom_file::Groom;
+use pelage_core::cache::guide_cache::GuideCache;
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::{Arena, Mesh, Strided};
 
@@ -68,9 +70,15 @@ impl Frame {
         &self.posed
     }
 
-    /// The posed frame, to fill (a guide cache decodes into it).
-    pub(crate) fn posed_mut(&mut self) -> &mut PosedFrame<'static> {
-        &mut self.posed
+    /// Decodes shutter sample `sample` of `cache` into this frame's guides.
+    pub(crate) fn decode_guides(
+        &mut self,
+        cache: &GuideCache,
+        groom: &Groom,
+        groom_id: u32,
+        sample: usize,
+    ) -> Result<(), pelage_core::Error> {
+        cache.decode(groom, groom_id, sample, &mut self.posed)
     }
 }
 

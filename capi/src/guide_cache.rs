@@ -181,7 +181,7 @@ pub extern "C" fn pelage_guide_cache_read(
         let groom = set.view()?;
         let frame = frame_mut(frame)?;
         let cache = GuideCache::parse(bytes(data, length, "data")?)?;
-        cache.decode(&groom, set.groom_id, sample as usize, frame.posed_mut())?;
+        frame.decode_guides(&cache, &groom, set.groom_id, sample as usize)?;
         Ok(())
     }
 }

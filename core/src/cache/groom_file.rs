@@ -144,7 +144,9 @@ impl Groom<'_> {
     }
 }
 
-fn check_guides(roots: &[Root], points: &[[f32; 3]]) -> Result<(), Error> {
+/// Checks guide roots (inside their triangles) and rest points (finite,
+/// within 1e9).
+pub(crate) fn check_guides(roots: &[Root], points: &[[f32; 3]]) -> Result<(), Error> {
     for (i, r) in roots.iter().enumerate() {
         check_root(u32::MAX as usize, r, "guide roots").map_err(|e| e.shifted(i))?;
     }

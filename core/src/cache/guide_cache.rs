@@ -20,7 +20,7 @@
 //! bits).
 
 use super::container::{self, product, Reader, Writer};
-use super::groom_file::Groom;
+use super::groom_file::{check_guides, Groom};
 use crate::interp::posed::PosedFrame;
 use crate::root::check_root;
 use crate::surface::frame::Frame;
@@ -186,8 +186,12 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]]) -> Coded {
         c.ks[axis] = k as u8;
         bits += cost(k);
     }
-    c.tag = PACKED;
-    c.bytes = 4 + bits.div_ceil(8) as usize;
+    // wild offsets can cost more bits than the floats themselves
+    let packed = 4 + bits.div_ceil(8) as usize;
+    if packed <= c.bytes {
+        c.tag = PACKED;
+        c.bytes = packed;
+    }
     c
 }
 
@@ -463,11 +467,16 @@ impl<'a> GuideCache<'a> {
         if sample >= info.samples {
             return Err(Error::InvalidArgument("no such shutter sample"));
         }
+        if Some(groom.guide_points.len()) != info.guides.checked_mul(info.points) {
+            return Err(Error::InvalidArgument(
+                "the groom's rest points must be points per guide times the guide count",
+            ));
+        }
         let faces = frame.mesh().triangle_count();
         for (i, r) in groom.guide_roots.iter().enumerate() {
             check_root(faces, r, "guide roots").map_err(|e| e.shifted(i))?;
         }
-        Ok(())
+        check_guides(&[], groom.guide_points)
     }
 
     /// Decodes block `b` of `sample` into `out` (its guides' slots), or
@@ -604,6 +613,11 @@ fn decode_guide(
                     }
                     (q2, q1) = (q1, q);
                     *l = (f64::from(rest[j][axis]) + q as f64 * step) as f32;
+                    if l.abs() > MAX_COORDINATE {
+                        return Err(Error::Corrupt {
+                            what: "a decoded point beyond 1e9",
+                        });
+                    }
                 }
             }
             r.take(bits.bytes_used())?;
@@ -805,6 +819,46 @@ mod tests {
             let g = f.guide_count();
             let table = 4 * (g.div_ceil(BLOCK) + 1);
             assert_eq!(bytes.len(), container::header_bytes(FIELDS) + table + 4 * g);
+        });
+    }
+
+    #[test]
+    fn wild_guides_fit_the_largest_size() {
+        // offsets zig-zagging by thousands of guide lengths cost more as
+        // Rice codes than as floats: such guides are stored raw
+        let scene = Scene::new(300);
+        let groom = scene.groom();
+        let mut world = scene.guide_world.clone();
+        for (k, p) in world.iter_mut().enumerate() {
+            p[0] += if k % 2 == 0 { 4000.0 } else { -4000.0 } * (k % POINTS) as f32;
+        }
+        scene.with_frame(&scene.rest, &world, |f| {
+            let bytes = write(&groom, &[f], Mode::Quantized);
+            let cache = GuideCache::parse(&bytes).unwrap();
+            let (_, other) = scene.posed(0.5);
+            scene.with_frame(&scene.rest, &other, |d| {
+                cache.decode(&groom, GROOM_ID, 0, d).unwrap();
+                assert_eq!(d.local_point(7, 5), f.local_point(7, 5));
+            });
+        });
+    }
+
+    #[test]
+    fn a_bad_guide_set_is_refused() {
+        let scene = Scene::new(300);
+        scene.with_frame(&scene.rest, &scene.guide_world, |f| {
+            let bytes = write(&scene.groom(), &[f], Mode::Quantized);
+            let cache = GuideCache::parse(&bytes).unwrap();
+            let mut points = scene.guide_local.clone();
+            points[40][2] = f32::NAN;
+            let mut groom = scene.groom();
+            groom.guide_points = &points;
+            assert!(cache.decode(&groom, GROOM_ID, 0, f).is_err());
+            groom.guide_points = &scene.guide_local[1..];
+            assert!(matches!(
+                cache.decode(&groom, GROOM_ID, 0, f),
+                Err(Error::InvalidArgument(_))
+            ));
         });
     }
 

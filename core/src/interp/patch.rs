@@ -9,11 +9,12 @@
 //! a cutoff inside every patch).
 //!
 //! The box of a patch on a posed frame holds, around each strand's root, a
-//! ball its expanded points (with their radii) cannot leave: the blended
-//! guide points are within the reach of the farthest guide bound (weights
-//! are at most 1 and sum to 1), scaled by the strand's length, bent by at
-//! most `bend` of its length, pulled toward the clump guide's points, and
-//! kinked by at most `kink_amplitude` of its length. A rotation about the
+//! ball its expanded points (with their radii), and the Catmull-Rom curves
+//! through them, cannot leave: the blended guide points are within the
+//! weighted sum of the bound guides' reaches, scaled by the strand's
+//! length, bent by at most `bend` of its length, pulled toward the clump
+//! guide's points, and kinked by at most `kink_amplitude` of its length
+//! (times the phase's length). A rotation about the
 //! root (lift, push-out) or a cut (trimming) keeps every point in the ball,
 //! so the box covers them too; the union over shutter samples covers the
 //! motion.
@@ -25,6 +26,10 @@ use crate::interp::strands::Strands;
 use crate::{Error, Mesh, Root};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+
+/// How far a uniform Catmull-Rom curve can reach beyond its control
+/// points' ball around the root (the sum of the basis' absolute weights).
+const CURVE_OVERSHOOT: f32 = 1.25;
 
 /// A patch: strands `first .. first + count`.
 #[repr(C)]
@@ -191,19 +196,21 @@ pub fn patch_box(
     for i in range {
         let (r, b, g) = (&strands.roots[i], &strands.bindings[i], &strands.grooms[i]);
         let o = mesh.point(r.face as usize, r.u, r.v);
-        let guides = &b.guides[..b.count as usize];
-        let far = if guides.is_empty() {
+        let count = b.count as usize;
+        // the weights need not sum to 1: the blend is within the weighted
+        // sum of the reaches
+        let far = if count == 0 {
             params.orphan_length.abs()
         } else {
-            guides
-                .iter()
-                .map(|&k| reach[k as usize])
-                .fold(0.0, f32::max)
+            (0..count)
+                .map(|k| b.weights[k] * reach[b.guides[k] as usize])
+                .sum::<f32>()
         };
         let scale = g.length.abs();
-        // scaled, bent; then kinked
+        // scaled, bent; then kinked (the phase need not be a unit vector)
         let shaped = far * scale * (1.0 + g.bend.abs());
-        let kink = g.kink_amplitude.abs() * far * scale;
+        let phase = libm::hypotf(g.kink_phase[0], g.kink_phase[1]);
+        let kink = g.kink_amplitude.abs() * far * scale * phase;
         // pulled toward the clump guide's points by up to `clump`
         let pulled = if b.clump == NO_GUIDE || g.clump == 0.0 {
             shaped
@@ -215,8 +222,11 @@ pub fn patch_box(
             shaped.max((1.0 - g.clump).abs() * shaped + g.clump.abs() * centre)
         };
         let radius = g.root_radius.abs().max(g.tip_radius.abs());
-        // rounding in the kernel (frames, sums) stays far below this slack
-        let ball = (pulled + kink + radius) * (1.0 + 1e-4) + 1e-6 * o.abs().max_element();
+        // a Catmull-Rom curve through the points (and its radius) reaches
+        // at most 1.25 times as far (the basis' absolute weights sum to at
+        // most 1.25); rounding in the kernel stays far below the slack
+        let ball = (pulled + kink + radius) * CURVE_OVERSHOOT * (1.0 + 1e-4)
+            + 1e-6 * o.abs().max_element();
         out = out.merge(PatchBox {
             lo: o - Vec3::splat(ball),
             hi: o + Vec3::splat(ball),

@@ -54,8 +54,14 @@ endfunction()
 set(prefix "${WORK_DIR}/prefix")
 set(build "${WORK_DIR}/library-build")
 file(REMOVE_RECURSE "${WORK_DIR}")
-string(REGEX MATCH "^[0-9]+\\.[0-9]+" SONAME_VERSION "${EXPECTED_VERSION}")
+# the SONAME's version: MAJOR.MINOR before 1.0, MAJOR from 1.0 (capi/build.rs)
+string(REGEX REPLACE "^([0-9]+)\\.([0-9]+).*" "\\1" SONAME_VERSION_MAJOR "${EXPECTED_VERSION}")
 string(REGEX REPLACE "^[0-9]+\\.([0-9]+).*" "\\1" SONAME_VERSION_MINOR "${EXPECTED_VERSION}")
+if(SONAME_VERSION_MAJOR EQUAL 0)
+  set(SONAME_VERSION "0.${SONAME_VERSION_MINOR}")
+else()
+  set(SONAME_VERSION "${SONAME_VERSION_MAJOR}")
+endif()
 
 # 1. the library alone: configure, build, install
 run("${CMAKE_COMMAND}" -S "${SOURCE_DIR}" -B "${build}" -G "${GENERATOR}" -DCMAKE_BUILD_TYPE=Release
