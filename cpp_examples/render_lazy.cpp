@@ -189,7 +189,7 @@ void load_fur(Fur& fur, const std::string& groom_path, const std::string& cache_
     const PelageMeshDesc desc = meshes[k].desc();
     creature::check(pelage_frame_new(&desc, info.guide_count, info.points_per_guide, &fur.frames[k]),
                     "pelage_frame_new");
-    creature::check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), fur.frames[k]),
+    creature::check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), fur.frames[k], 0),
                     "pelage_guide_cache_read");
     creature::check(pelage_patch_boxes(fur.frames[k], &strands, &fur.params, fur.patches.data(), info.patch_count,
                                        &fur.boxes[6 * k * info.patch_count]),

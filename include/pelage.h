@@ -899,12 +899,17 @@ enum PelageStatus pelage_guide_cache_info(const void *data, size_t length, struc
 // for `guides` (the same groom id). The whole cache is checked before the
 // frame is written; on failure the frame keeps the guides it had.
 //
+// Checks and decodes over `thread_count` threads (0: all cores); the bits
+// do not depend on it.
+//
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
 // sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
-// VERSION_MISMATCH, MISALIGNED, PANIC.
+// VERSION_MISMATCH, MISALIGNED, PANIC (also when a worker thread cannot
+// start: the frame's guides are then unspecified until the next
+// successful call).
 //
 // Thread safety: no other call may use `frame` during this one.
-enum PelageStatus pelage_guide_cache_read(const void *data, size_t length, const struct PelageGuideSet *guides, uint32_t sample, PelageFrame frame);
+enum PelageStatus pelage_guide_cache_read(const void *data, size_t length, const struct PelageGuideSet *guides, uint32_t sample, PelageFrame frame, uint32_t thread_count);
 
 // Orders `root_count` strands rooted at `roots` on the rest `mesh` into
 // patches of `patch_size` strands: `order` (root_count entries) receives

@@ -3,11 +3,14 @@
 
 use crate::buffers::{req, req_mut};
 use crate::status::Failure;
-use crate::threads::split_over_threads;
+use crate::threads::{check_over_threads, split_in_chunks, split_over_threads, CHUNK};
 use crate::{PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::cache::groom_file::Groom;
-use pelage_core::cache::guide_cache::GuideCache;
+use pelage_core::cache::guide_cache::{GuideCache, BLOCK};
+
+// a chunk of guides is a block of the cache
+const _: () = assert!(CHUNK == BLOCK);
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::{Arena, Mesh, Strided};
 
@@ -70,15 +73,40 @@ impl Frame {
         &self.posed
     }
 
-    /// Decodes shutter sample `sample` of `cache` into this frame's guides.
+    /// Decodes shutter sample `sample` of `cache` into this frame's guides,
+    /// checked whole first, over `thread_count` threads (runs of whole
+    /// blocks: the chunks of `split_in_chunks` are blocks).
     pub(crate) fn decode_guides(
         &mut self,
         cache: &GuideCache,
         groom: &Groom,
         groom_id: u32,
         sample: usize,
-    ) -> Result<(), pelage_core::Error> {
-        cache.decode(groom, groom_id, sample, &mut self.posed)
+        thread_count: u32,
+    ) -> Result<(), Failure> {
+        cache.check(groom, groom_id, sample, &self.posed)?;
+        check_over_threads(cache.blocks(), thread_count, |blocks| {
+            cache.check_blocks(groom, sample, blocks)
+        })?;
+        let decoding = cache.decoding(groom, sample, &mut self.posed);
+        let filler = decoding.filler;
+        let failed = std::sync::Mutex::new(None);
+        split_in_chunks(
+            cache.info().guides,
+            thread_count,
+            &mut *decoding.data,
+            filler.floats_per_guide(),
+            |range, part| {
+                if let Err(e) = filler.fill(range.start, part) {
+                    *failed.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+                }
+            },
+        )?;
+        if let Some(e) = failed.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            return Err(e.into());
+        }
+        decoding.finish();
+        Ok(())
     }
 }
 

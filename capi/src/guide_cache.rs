@@ -163,9 +163,14 @@ pub extern "C" fn pelage_guide_cache_info(
 /// for `guides` (the same groom id). The whole cache is checked before the
 /// frame is written; on failure the frame keeps the guides it had.
 ///
+/// Checks and decodes over `thread_count` threads (0: all cores); the bits
+/// do not depend on it.
+///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
 /// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
-/// VERSION_MISMATCH, MISALIGNED, PANIC.
+/// VERSION_MISMATCH, MISALIGNED, PANIC (also when a worker thread cannot
+/// start: the frame's guides are then unspecified until the next
+/// successful call).
 ///
 /// Thread safety: no other call may use `frame` during this one.
 #[no_mangle]
@@ -175,13 +180,14 @@ pub extern "C" fn pelage_guide_cache_read(
     guides: *const PelageGuideSet,
     sample: u32,
     frame: PelageFrame,
+    thread_count: u32,
 ) -> PelageStatus {
     ffi_boundary! {
         let set = req(guides, "guides")?;
         let groom = set.view()?;
         let frame = frame_mut(frame)?;
         let cache = GuideCache::parse(bytes(data, length, "data")?)?;
-        frame.decode_guides(&cache, &groom, set.groom_id, sample as usize)?;
+        frame.decode_guides(&cache, &groom, set.groom_id, sample as usize, thread_count)?;
         Ok(())
     }
 }

@@ -182,7 +182,7 @@ pub(crate) fn split_with_progress<T: Send, R: Send>(
 }
 
 /// Strands (or guides) per chunk of [`split_in_chunks`].
-const CHUNK: usize = 256;
+pub(crate) const CHUNK: usize = 256;
 
 /// Runs `work` on chunks of `0..n` ([`CHUNK`] items, `per` elements of
 /// `out` each), the threads taking the next chunk as they free up: for

@@ -2380,19 +2380,22 @@ static void test_files(void) {
   REQUIRE(decoded != NULL);
   PelageGuideSet other = set;
   other.groom_id ^= 1;
-  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &other, 0, decoded));
-  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &set, 1, decoded));
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &other, 0, decoded, 1));
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &set, 1, decoded, 1));
   cache[written - 1] ^= 0x40;
-  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_guide_cache_read(cache, written, &set, 0, decoded));
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_guide_cache_read(cache, written, &set, 0, decoded, 1));
   cache[written - 1] ^= 0x40;
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_read(cache, written, NULL, 0, decoded));
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_read(cache, written, NULL, 0, decoded, 1));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded, 1));
+  SAME_AS_REFERENCE(decoded);
+  /* any thread count, the same bits */
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded, 3));
   SAME_AS_REFERENCE(decoded);
   /* quantized: smaller, and within the bound */
   size_t quantized = 0;
   EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 0, cache, cache_bytes, &quantized));
   CHECK(quantized < written / 2);
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, quantized, &set, 0, decoded));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, quantized, &set, 0, decoded, 1));
   EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_write(&set, NULL, 1, 0, cache, cache_bytes, &quantized));
 
   /* patch boxes hold every point of their strands */

@@ -413,8 +413,11 @@ impl<'a> GuideCache<'a> {
     /// Decodes shutter sample `sample` into `frame` (made on that sample's
     /// deformed mesh, for the groom's guide and point counts): every guide,
     /// local and world. `groom` and `groom_id` are the groom file's
-    /// contents and id. The cache is decoded whole before the frame is
-    /// written: on error the frame keeps the guides it had.
+    /// contents and id. The cache is checked whole before the frame is
+    /// written: on error the frame keeps the guides it had. (A host that
+    /// decodes on several threads runs the same steps: [`GuideCache::check`],
+    /// [`GuideCache::check_blocks`] over every block, then
+    /// [`GuideCache::decoding`].)
     pub fn decode(
         &self,
         groom: &Groom,
@@ -422,26 +425,68 @@ impl<'a> GuideCache<'a> {
         sample: usize,
         frame: &mut PosedFrame,
     ) -> Result<(), Error> {
-        self.check_target(groom, groom_id, sample, frame)?;
-        let blocks = self.info.guides.div_ceil(BLOCK);
-        // a dry run over the stream catches corrupt guides before any write
-        {
-            let (mesh, tangents, _, _) = frame.slots();
-            let mut scratch = [0.0f32; 6 * 64];
-            for b in 0..blocks {
-                self.decode_block(groom, mesh, tangents, sample, b, &mut scratch, true)?;
-            }
-        }
-        let (mesh, tangents, data, posed) = frame.slots();
-        let per = 6 * self.info.points;
-        for (b, part) in data.chunks_mut(BLOCK * per).enumerate() {
-            self.decode_block(groom, mesh, tangents, sample, b, part, false)?;
-        }
+        self.check(groom, groom_id, sample, frame)?;
+        self.check_blocks(groom, sample, 0..self.blocks())?;
+        let Decoding {
+            filler,
+            data,
+            posed,
+        } = self.decoding(groom, sample, frame);
+        filler.fill(0, data)?;
         *posed = true;
         Ok(())
     }
 
-    fn check_target(
+    /// Blocks of [`BLOCK`] guides per sample.
+    pub fn blocks(&self) -> usize {
+        self.info.guides.div_ceil(BLOCK)
+    }
+
+    /// Checks blocks `blocks` of sample `sample` (a sample [`GuideCache::check`]
+    /// accepted) without writing anything: every tag, Rice parameter, bit,
+    /// offset and stored point.
+    pub fn check_blocks(
+        &self,
+        groom: &Groom,
+        sample: usize,
+        blocks: core::ops::Range<usize>,
+    ) -> Result<(), Error> {
+        let mut scratch = [0.0f32; 6 * 64];
+        for b in blocks {
+            self.decode_block(groom, None, sample, b, &mut scratch)?;
+        }
+        Ok(())
+    }
+
+    /// The frame's guide slots and a filler that decodes blocks of sample
+    /// `sample` into them, for a host that splits them over threads (by
+    /// runs of whole blocks); [`Decoding::finish`] marks the frame posed.
+    /// Check first ([`GuideCache::check`], [`GuideCache::check_blocks`]):
+    /// a block that fails leaves its slots part written.
+    pub fn decoding<'r>(
+        &'r self,
+        groom: &'r Groom<'r>,
+        sample: usize,
+        frame: &'r mut PosedFrame,
+    ) -> Decoding<'r> {
+        let (mesh, tangents, data, posed) = frame.slots();
+        Decoding {
+            filler: BlockFiller {
+                cache: self,
+                groom,
+                mesh,
+                tangents,
+                sample,
+            },
+            data,
+            posed,
+        }
+    }
+
+    /// Checks that sample `sample` can decode into `frame` for `groom`:
+    /// the groom id, the guide and point counts, the sample index, the
+    /// guide roots on the frame's mesh, and the rest points.
+    pub fn check(
         &self,
         groom: &Groom,
         groom_id: u32,
@@ -479,18 +524,16 @@ impl<'a> GuideCache<'a> {
         check_guides(&[], groom.guide_points)
     }
 
-    /// Decodes block `b` of `sample` into `out` (its guides' slots), or
-    /// only checks it (`dry`: `out` holds one guide's slot, rewritten).
-    #[allow(clippy::too_many_arguments)]
+    /// Decodes block `b` of `sample` into `out` (its guides' slots) on the
+    /// frame of `target` (its mesh and tangents), or without one only
+    /// checks it (`out` then holds one guide's slot, rewritten).
     fn decode_block(
         &self,
         groom: &Groom,
-        mesh: &Mesh,
-        tangents: &[[f32; 3]],
+        target: Option<(&Mesh, &[[f32; 3]])>,
         sample: usize,
         b: usize,
         out: &mut [f32],
-        dry: bool,
     ) -> Result<(), Error> {
         let (g, n) = (self.info.guides, self.info.points);
         let blocks = g.div_ceil(BLOCK);
@@ -499,15 +542,15 @@ impl<'a> GuideCache<'a> {
         let mut r = Reader::new(&self.stream[start..end]);
         let first = b * BLOCK;
         for i in first..(first + BLOCK).min(g) {
-            let slot = if dry {
-                &mut out[..6 * n]
-            } else {
-                &mut out[(i - first) * 6 * n..(i - first + 1) * 6 * n]
+            let slot = match target {
+                None => &mut out[..6 * n],
+                Some(_) => &mut out[(i - first) * 6 * n..(i - first + 1) * 6 * n],
             };
             // a dry run checks the bytes only
             let root = &groom.guide_roots[i];
-            let frame =
-                (!dry).then(|| Frame::at(mesh, tangents, root.face as usize, root.u, root.v));
+            let frame = target.map(|(mesh, tangents)| {
+                Frame::at(mesh, tangents, root.face as usize, root.u, root.v)
+            });
             let rest = &groom.guide_points[i * n..(i + 1) * n];
             let (local, world) = slot.split_at_mut(3 * n);
             match (self.info.mode, &frame) {
@@ -633,6 +676,62 @@ fn decode_guide(
         _ => Err(Error::Corrupt {
             what: "a guide's tag is neither packed nor raw",
         }),
+    }
+}
+
+/// A frame being filled from a cache (see [`GuideCache::decoding`]).
+pub struct Decoding<'r> {
+    /// Decodes runs of blocks.
+    pub filler: BlockFiller<'r>,
+    /// [`BlockFiller::floats_per_guide`] floats per guide, guide after guide.
+    pub data: &'r mut [f32],
+    posed: &'r mut bool,
+}
+
+impl Decoding<'_> {
+    /// Marks the frame posed, once every block is filled.
+    pub fn finish(self) {
+        *self.posed = true;
+    }
+}
+
+/// Decodes runs of blocks of one sample (see [`Decoding`]).
+#[derive(Clone, Copy)]
+pub struct BlockFiller<'r> {
+    cache: &'r GuideCache<'r>,
+    groom: &'r Groom<'r>,
+    mesh: &'r Mesh<'r>,
+    tangents: &'r [[f32; 3]],
+    sample: usize,
+}
+
+impl BlockFiller<'_> {
+    /// Floats each guide takes.
+    pub fn floats_per_guide(&self) -> usize {
+        6 * self.cache.info.points
+    }
+
+    /// Decodes the guides `first ..` that `part` holds, `first` a multiple
+    /// of [`BLOCK`] and `part` whole blocks (or up to the last guide).
+    pub fn fill(&self, first: usize, part: &mut [f32]) -> Result<(), Error> {
+        let per = self.floats_per_guide();
+        let guides = part.len() / per;
+        let whole = guides % BLOCK == 0 || first + guides == self.cache.info.guides;
+        if first % BLOCK != 0
+            || part.len() % per != 0
+            || !whole
+            || first + guides > self.cache.info.guides
+        {
+            return Err(Error::InvalidArgument(
+                "a decoded run is whole blocks of guides",
+            ));
+        }
+        for (k, out) in part.chunks_mut(BLOCK * per).enumerate() {
+            let target = Some((self.mesh, self.tangents));
+            self.cache
+                .decode_block(self.groom, target, self.sample, first / BLOCK + k, out)?;
+        }
+        Ok(())
     }
 }
 
