@@ -82,15 +82,6 @@ pub struct PelageGroomFileBuffers {
     pub patch_capacity: usize,
 }
 
-/// The rest points of a frame's guides in their root frames, guide after
-/// guide.
-pub(crate) fn rest_points(frame: &pelage_core::interp::posed::PosedFrame) -> Vec<[f32; 3]> {
-    let n = frame.points();
-    (0..frame.guide_count() * n)
-        .map(|k| frame.local_point(k / n, k % n).to_array())
-        .collect()
-}
-
 /// Writes a groom file into `out` (`capacity` bytes) and its length to
 /// `*written`. With `out` NULL and `capacity` 0, only the length needed is
 /// written (CAPACITY_EXCEEDED, as for a buffer too small). Every record is
@@ -118,7 +109,7 @@ pub extern "C" fn pelage_groom_file_write(
         if !frame.is_posed() {
             return Err(Failure::new(PelageStatus::InvalidArgument, "the rest frame has no guides"));
         }
-        let points = rest_points(frame);
+        let points: Vec<[f32; 3]> = frame.local_points().collect();
         let groom = Groom {
             guide_roots: bytemuck::cast_slice(slice(desc.guide_roots, frame.guide_count(), "guide_roots")?),
             guide_points: &points,

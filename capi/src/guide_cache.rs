@@ -8,7 +8,6 @@ use crate::{PelageFrame, PelageRoot, PelageStatus};
 use pelage_core::cache::groom_file::Groom;
 use pelage_core::cache::guide_cache::{self, GuideCache, Mode};
 use pelage_core::interp::posed::PosedFrame;
-use pelage_core::interp::strands::Strands;
 
 /// The guides of a groom file, as `pelage_groom_file_read` gives them:
 /// what a guide cache is coded against.
@@ -51,21 +50,11 @@ impl PelageGuideSet {
             PelageStatus::InvalidArgument,
             "guide_count overflows",
         ))?;
-        Ok(Groom {
-            guide_roots: bytemuck::cast_slice(slice(
-                self.guide_roots,
-                self.guide_count,
-                "guide_roots",
-            )?),
-            guide_points: bytemuck::cast_slice(slice(self.guide_points, count, "guide_points")?),
-            points: n,
-            strands: Strands {
-                roots: &[],
-                bindings: &[],
-                grooms: &[],
-            },
-            patches: &[],
-        })
+        Ok(Groom::of_guides(
+            bytemuck::cast_slice(slice(self.guide_roots, self.guide_count, "guide_roots")?),
+            bytemuck::cast_slice(slice(self.guide_points, count, "guide_points")?),
+            n,
+        ))
     }
 }
 

@@ -101,11 +101,7 @@ pub fn with_target<T>(t: f32, f: impl FnOnce(&mut PosedFrame) -> T) -> T {
 impl Scene {
     pub fn new() -> Scene {
         let guide_roots = guide_roots();
-        let rest_local = with_frame(0.0, &guide_roots, |f| {
-            (0..GUIDES * POINTS)
-                .map(|k| f.local_point(k / POINTS, k % POINTS).to_array())
-                .collect()
-        });
+        let rest_local = with_frame(0.0, &guide_roots, |f| f.local_points().collect());
         let roots: Vec<Root> = (0..50u32)
             .map(|i| Root {
                 face: i,

@@ -12,7 +12,6 @@ use pelage_core::cache::groom_file::{self, Groom};
 use pelage_core::cache::guide_cache::{self, GuideCache, Mode};
 use pelage_core::guides::{CvLayout, Guides};
 use pelage_core::interp::posed::PosedFrame;
-use pelage_core::interp::strands::Strands;
 use pelage_core::{Arena, ArenaLayout, Strided};
 use pelage_tests::animated::simulate_shot;
 use std::time::Instant;
@@ -42,29 +41,8 @@ fn main() {
             layout: CvLayout::Fixed(POINTS),
         }
     }
-    let mut rest_buf = vec![0u8; layout(&shot.rest)];
-    let rest_guides = guides(roots, &shot.rest_points);
-    let rest = PosedFrame::with_guides(
-        pelage_tests::measure::mesh_view(&shot.rest),
-        &rest_guides,
-        POINTS,
-        &mut Arena::new(&mut rest_buf),
-    )
-    .unwrap();
-    let rest_local: Vec<[f32; 3]> = (0..g * POINTS)
-        .map(|k| rest.local_point(k / POINTS, k % POINTS).to_array())
-        .collect();
-    let groom = Groom {
-        guide_roots: roots,
-        guide_points: &rest_local,
-        points: POINTS,
-        strands: Strands {
-            roots: &[],
-            bindings: &[],
-            grooms: &[],
-        },
-        patches: &[],
-    };
+    let rest_local = shot.rest_local();
+    let groom = Groom::of_guides(roots, &rest_local, POINTS);
     let mut groom_bytes = vec![0u8; groom.encoded_bytes().unwrap()];
     groom_file::encode(&groom, &mut groom_bytes).unwrap();
     let id = groom_file::counts(&groom_bytes).unwrap().id;

@@ -8,15 +8,15 @@
 //! simulated guides. The paper: 7 frames/s for the simulation alone.
 
 use pelage::*;
-use pelage_core::interp::bind::{self, BindParams, StrandBinding};
 use pelage_core::interp::groom::{GroomMaps, StrandGroom};
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::Body;
 use pelage_core::{Arena, ArenaLayout, Root, ScalarMap};
-use pelage_tests::animated::{capsules, colliders, pose, FRAMES};
+use pelage_tests::animated::{capsules, colliders, pose, ShotSim, FRAMES};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
-    combed_guides, curves_desc, frame, guides_desc, mesh_desc, mesh_view, stamp_roots, strands_desc,
+    bind_vec, combed_guides, curves_desc, frame, guides_desc, mesh_desc, mesh_view, stamp_roots,
+    strands_desc,
 };
 use std::hint::black_box;
 use std::ptr::null_mut;
@@ -36,32 +36,11 @@ fn main() {
     let mesh = mesh_view(&rest);
     let roots = stamp_roots(mesh, GUIDES, 1);
     let points = combed_guides(&mesh, &roots, JOINTS, 0.06);
-    let desc = mesh_desc(&rest);
     let guides = guides_desc(&roots, &points);
-    let params = PelageSimParams {
-        joints: JOINTS as u32,
-        points_per_guide: JOINTS as u32,
-        link_radius: 0.05,
-        ..pelage_sim_params_defaults()
-    };
-    let mut bytes = 0;
-    assert_eq!(
-        pelage_sim_query(&desc, roots.len(), &params, &mut bytes),
-        PelageStatus::Ok
-    );
-    let mut memory = vec![0u8; bytes];
     let t = Instant::now();
-    let mut sim = null_mut();
-    let s = pelage_sim_new(
-        &desc,
-        &guides,
-        &params,
-        memory.as_mut_ptr().cast(),
-        bytes,
-        &mut sim,
-    );
-    assert_eq!(s, PelageStatus::Ok);
+    let shot_sim = ShotSim::new(&rest, &roots, &points, JOINTS);
     let t_new = t.elapsed().as_secs_f64();
+    let (sim, bytes) = (shot_sim.sim, shot_sim.bytes());
     // the shot's meshes and frames, made before timing (a host has them)
     let meshes: Vec<_> = (0..FRAMES).map(|f| pose(&rest, f)).collect();
     let descs: Vec<_> = meshes.iter().map(mesh_desc).collect();
@@ -154,7 +133,6 @@ fn main() {
         );
     }
     full_frame(sim, &rest, &roots, &points, &frames, &props);
-    pelage_sim_free(sim);
     println!("paper: 7 frames/s for the guide simulation, 2 frames/s with interpolation");
 }
 
@@ -209,22 +187,7 @@ fn full_frame(
         h.retain(|r| r.rank < HAIRS);
         h
     };
-    let rest_guides = pelage_core::guides::Guides {
-        roots,
-        points: pelage_core::Strided::from_slice(points),
-        layout: pelage_core::guides::CvLayout::Fixed(JOINTS),
-    };
-    let mut arena = vec![0u8; bind::required_bytes(&mesh, roots.len()).unwrap()];
-    let mut bindings = vec![StrandBinding::default(); hairs.len()];
-    bind::bind(
-        &mesh,
-        &rest_guides,
-        &hairs,
-        &BindParams::default(),
-        &mut Arena::new(&mut arena),
-        &mut bindings,
-    )
-    .unwrap();
+    let bindings = bind_vec(&mesh, roots, points, JOINTS, &hairs);
     let mut grooms = vec![StrandGroom::default(); hairs.len()];
     let maps = GroomMaps {
         kink_amplitude: ScalarMap::Constant(0.03),

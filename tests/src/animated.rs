@@ -129,6 +129,84 @@ pub struct SimulatedShot {
     pub posed: Vec<Vec<[f32; 3]>>,
 }
 
+impl SimulatedShot {
+    /// The guides' rest shapes in their root frames on the rest creature,
+    /// guide after guide (what a groom file stores).
+    pub fn rest_local(&self) -> Vec<[f32; 3]> {
+        use pelage_core::guides::{CvLayout, Guides};
+        use pelage_core::interp::posed::PosedFrame;
+        let mut layout = pelage_core::ArenaLayout::new();
+        PosedFrame::layout(
+            &mut layout,
+            self.rest.positions.len(),
+            self.roots.len(),
+            self.points,
+        );
+        let mut buf = vec![0u8; layout.bytes()];
+        let guides = Guides {
+            roots: &self.roots,
+            points: pelage_core::Strided::from_slice(&self.rest_points),
+            layout: CvLayout::Fixed(self.points),
+        };
+        let arena = &mut pelage_core::Arena::new(&mut buf);
+        let rest =
+            PosedFrame::with_guides(mesh_view(&self.rest), &guides, self.points, arena).unwrap();
+        rest.local_points().collect()
+    }
+}
+
+/// A simulation (C API) of `joints`-joint guides on the rest creature, with
+/// tip links within 0.05, in memory it owns; freed on drop.
+pub struct ShotSim {
+    /// The handle.
+    pub sim: pelage::PelageSim,
+    memory: Vec<u8>,
+}
+
+impl ShotSim {
+    /// Creates the simulation of the guides `points` rooted at `roots`.
+    pub fn new(rest: &CreatureMesh, roots: &[Root], points: &[[f32; 3]], joints: usize) -> ShotSim {
+        use crate::measure::{guides_desc, mesh_desc};
+        use pelage::*;
+        let desc = mesh_desc(rest);
+        let params = PelageSimParams {
+            joints: joints as u32,
+            points_per_guide: joints as u32,
+            link_radius: 0.05,
+            ..pelage_sim_params_defaults()
+        };
+        let mut bytes = 0;
+        assert_eq!(
+            pelage_sim_query(&desc, roots.len(), &params, &mut bytes),
+            PelageStatus::Ok
+        );
+        let mut memory = vec![0u8; bytes];
+        let mut sim = std::ptr::null_mut();
+        let guides = guides_desc(roots, points);
+        let s = pelage_sim_new(
+            &desc,
+            &guides,
+            &params,
+            memory.as_mut_ptr().cast(),
+            bytes,
+            &mut sim,
+        );
+        assert_eq!(s, PelageStatus::Ok);
+        ShotSim { sim, memory }
+    }
+
+    /// Bytes the simulation lives in.
+    pub fn bytes(&self) -> usize {
+        self.memory.len()
+    }
+}
+
+impl Drop for ShotSim {
+    fn drop(&mut self) {
+        pelage::pelage_sim_free(self.sim);
+    }
+}
+
 /// Simulates `guides` combed guides of `points` joints over the whole shot
 /// (tip links, the 16 capsules; 2 threads) through the C API.
 pub fn simulate_shot(guides: u32, points: usize) -> SimulatedShot {
@@ -137,30 +215,9 @@ pub fn simulate_shot(guides: u32, points: usize) -> SimulatedShot {
     let rest = crate::creature::default_creature();
     let roots = stamp_roots(mesh_view(&rest), guides, 1);
     let rest_points = combed_guides(&mesh_view(&rest), &roots, points, 0.06);
-    let desc = mesh_desc(&rest);
     let gd = guides_desc(&roots, &rest_points);
-    let params = PelageSimParams {
-        joints: points as u32,
-        points_per_guide: points as u32,
-        link_radius: 0.05,
-        ..pelage_sim_params_defaults()
-    };
-    let mut bytes = 0;
-    assert_eq!(
-        pelage_sim_query(&desc, roots.len(), &params, &mut bytes),
-        PelageStatus::Ok
-    );
-    let mut memory = vec![0u8; bytes];
-    let mut sim = std::ptr::null_mut();
-    let s = pelage_sim_new(
-        &desc,
-        &gd,
-        &params,
-        memory.as_mut_ptr().cast(),
-        bytes,
-        &mut sim,
-    );
-    assert_eq!(s, PelageStatus::Ok);
+    let shot_sim = ShotSim::new(&rest, &roots, &rest_points, points);
+    let sim = shot_sim.sim;
     let (mut meshes, mut posed) = (vec![], vec![]);
     for f in 0..FRAMES {
         let mesh = pose(&rest, f);
@@ -184,7 +241,7 @@ pub fn simulate_shot(guides: u32, points: usize) -> SimulatedShot {
         meshes.push(mesh);
         posed.push(out);
     }
-    pelage_sim_free(sim);
+
     SimulatedShot {
         rest,
         roots,

@@ -154,6 +154,36 @@ pub fn combed_guides(mesh: &Mesh, roots: &[Root], cvs: usize, length: f32) -> Ve
     pts
 }
 
+/// Binds `hairs` to the guides of `cvs` points on `mesh` at rest (default
+/// parameters).
+pub fn bind_vec(
+    mesh: &Mesh,
+    guide_roots: &[Root],
+    guide_points: &[[f32; 3]],
+    cvs: usize,
+    hairs: &[Root],
+) -> Vec<pelage_core::interp::bind::StrandBinding> {
+    use pelage_core::interp::bind::{self, BindParams, StrandBinding};
+    let guides = pelage_core::guides::Guides {
+        roots: guide_roots,
+        points: Strided::from_slice(guide_points),
+        layout: pelage_core::guides::CvLayout::Fixed(cvs),
+    };
+    let mut arena = vec![0u8; bind::required_bytes(mesh, guide_roots.len()).unwrap()];
+    let mut bindings = vec![StrandBinding::default(); hairs.len()];
+    let params = BindParams::default();
+    bind::bind(
+        mesh,
+        &guides,
+        hairs,
+        &params,
+        &mut Arena::new(&mut arena),
+        &mut bindings,
+    )
+    .unwrap();
+    bindings
+}
+
 /// The creature as a C API mesh description (borrows `m`).
 pub fn mesh_desc(m: &CreatureMesh) -> pelage::PelageMeshDesc {
     pelage::PelageMeshDesc {

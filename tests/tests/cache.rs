@@ -42,22 +42,8 @@ fn with_frame<T>(
 fn every_frame_decodes_from_its_own_file_within_the_bound() {
     let shot = simulate_shot(GUIDES, POINTS);
     let roots = &shot.roots;
-    let rest_local: Vec<[f32; 3]> = with_frame(&shot.rest, roots, &shot.rest_points, |f| {
-        (0..roots.len() * POINTS)
-            .map(|k| f.local_point(k / POINTS, k % POINTS).to_array())
-            .collect()
-    });
-    let groom = Groom {
-        guide_roots: roots,
-        guide_points: &rest_local,
-        points: POINTS,
-        strands: Strands {
-            roots: &[],
-            bindings: &[],
-            grooms: &[],
-        },
-        patches: &[],
-    };
+    let rest_local = shot.rest_local();
+    let groom = Groom::of_guides(roots, &rest_local, POINTS);
     let mut groom_bytes = vec![0u8; groom.encoded_bytes().unwrap()];
     groom_file::encode(&groom, &mut groom_bytes).unwrap();
     let id = groom_file::counts(&groom_bytes).unwrap().id;
@@ -128,14 +114,13 @@ fn every_frame_decodes_from_its_own_file_within_the_bound() {
 /// groom records alone.
 #[test]
 fn no_expanded_point_leaves_its_patch_box() {
-    use pelage_core::interp::bind::{self, BindParams, StrandBinding};
     use pelage_core::interp::expand::expand;
     use pelage_core::interp::groom::{GroomMaps, StrandGroom};
     use pelage_core::interp::patch::{self, Patch};
     use pelage_core::interp::strand::{EndPoints, ExpandParams};
     use pelage_core::ScalarMap;
     use pelage_tests::animated::TELEPORT_FRAME;
-    use pelage_tests::measure::stamp_roots;
+    use pelage_tests::measure::{bind_vec, stamp_roots};
 
     const HAIRS: u32 = 60_000;
     const PATCH: usize = 500;
@@ -147,22 +132,7 @@ fn no_expanded_point_leaves_its_patch_box() {
     let mut patches = vec![Patch::default(); patch::patch_count(stamped.len(), PATCH)];
     patch::plan(&mesh, &stamped, PATCH, &mut keys, &mut order, &mut patches).unwrap();
     let hairs: Vec<_> = order.iter().map(|&i| stamped[i as usize]).collect();
-    let rest_guides = Guides {
-        roots: &shot.roots,
-        points: Strided::from_slice(&shot.rest_points),
-        layout: CvLayout::Fixed(POINTS),
-    };
-    let mut arena = vec![0u8; bind::required_bytes(&mesh, shot.roots.len()).unwrap()];
-    let mut bindings = vec![StrandBinding::default(); hairs.len()];
-    bind::bind(
-        &mesh,
-        &rest_guides,
-        &hairs,
-        &BindParams::default(),
-        &mut Arena::new(&mut arena),
-        &mut bindings,
-    )
-    .unwrap();
+    let bindings = bind_vec(&mesh, &shot.roots, &shot.rest_points, POINTS, &hairs);
     let mut grooms = vec![StrandGroom::default(); hairs.len()];
     let maps = GroomMaps {
         kink_amplitude: ScalarMap::Constant(0.05),

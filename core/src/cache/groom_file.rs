@@ -110,7 +110,23 @@ fn check_patches(patches: &[Patch], strands: usize) -> Result<(), Error> {
     Ok(())
 }
 
-impl Groom<'_> {
+impl<'a> Groom<'a> {
+    /// The guides alone, without strands or patches: what a guide cache is
+    /// coded against.
+    pub fn of_guides(guide_roots: &'a [Root], guide_points: &'a [[f32; 3]], points: usize) -> Self {
+        Groom {
+            guide_roots,
+            guide_points,
+            points,
+            strands: Strands {
+                roots: &[],
+                bindings: &[],
+                grooms: &[],
+            },
+            patches: &[],
+        }
+    }
+
     /// Checks the groom: guide and point counts, finite rest points within
     /// the coordinate range, roots inside their triangles, and every strand
     /// record (as expansion checks it) naming only these guides.

@@ -94,12 +94,8 @@ pub(crate) mod fixture {
             };
             let rest_mesh = scene.rest.clone();
             let world = scene.guide_world.clone();
-            scene.guide_local = scene.with_frame(&rest_mesh, &world, |f| {
-                let n = f.guide_count();
-                (0..n * POINTS)
-                    .map(|k| f.local_point(k / POINTS, k % POINTS).to_array())
-                    .collect()
-            });
+            scene.guide_local =
+                scene.with_frame(&rest_mesh, &world, |f| f.local_points().collect());
             scene
         }
 

@@ -176,6 +176,13 @@ impl<'m> PosedFrame<'m> {
         Frame::at(&self.mesh, self.tangents, face, u, v)
     }
 
+    /// Every guide's points in its root frame, guide after guide (on the
+    /// rest mesh: the rest shapes a groom file stores).
+    pub fn local_points(&self) -> impl Iterator<Item = [f32; 3]> + '_ {
+        let n = self.points;
+        (0..self.guides * n).map(move |k| self.local_point(k / n, k % n).to_array())
+    }
+
     /// Point `j` of guide `g` in the guide's root frame.
     pub fn local_point(&self, g: usize, j: usize) -> Vec3 {
         let l = self.local(g);
