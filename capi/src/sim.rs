@@ -11,7 +11,7 @@ use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
 use pelage_core::dynamics::sim::{Sim, SimParams, Step};
 use pelage_core::interp::posed::PosedFrame;
-use pelage_core::surface::body::{Body, BodyPlan};
+use pelage_core::surface::body::{Body, BodyPlan, Rim};
 use pelage_core::Arena;
 use std::ffi::c_void;
 
@@ -138,6 +138,8 @@ struct SimBox {
     sim: Sim<'static>,
     /// The body grid of the last step that collided with the body.
     body_arena: Vec<u8>,
+    /// The mesh's boundary loops, for the body.
+    rim_arena: Vec<u8>,
 }
 
 fn sim_mut<'a>(sim: PelageSim) -> Result<&'a mut SimBox, Failure> {
@@ -208,7 +210,7 @@ pub extern "C" fn pelage_sim_new(
         // the rest mesh is read only while the simulation is made: the
         // guides' rest shapes and roots are copied into its memory
         let sim = Sim::new(mesh, &guides, &p, &mut Arena::new(memory))?;
-        *out = Box::into_raw(Box::new(SimBox { sim, body_arena: Vec::new() })).cast::<PelageSimTy>();
+        *out = Box::into_raw(Box::new(SimBox { sim, body_arena: Vec::new(), rim_arena: Vec::new() })).cast::<PelageSimTy>();
         Ok(())
     }
 }
@@ -367,11 +369,16 @@ pub extern "C" fn pelage_sim_step(
         let field = host.and_then(|c| c.distance.map(|callback| HostField { callback, user_data: c.distance_user_data }));
         let mesh = frame.posed().mesh();
         let body = if host.is_some_and(|c| c.body != 0) {
-            let plan = BodyPlan::of(mesh)?;
+            let rim_bytes = Rim::required_bytes(mesh);
+            if sim.rim_arena.len() < rim_bytes {
+                sim.rim_arena.resize(rim_bytes, 0);
+            }
+            let rim = Rim::new(mesh, &mut Arena::new(&mut sim.rim_arena))?;
+            let plan = BodyPlan::of(mesh, &rim)?;
             if sim.body_arena.len() < plan.bytes() {
                 sim.body_arena.resize(plan.bytes(), 0);
             }
-            Some(Body::build(&plan, mesh, &mut Arena::new(&mut sim.body_arena))?)
+            Some(Body::build(&plan, mesh, &rim, &mut Arena::new(&mut sim.body_arena))?)
         } else {
             None
         };

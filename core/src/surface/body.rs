@@ -1,23 +1,41 @@
-//! The body as a solid, for point-in-body queries (collisions).
+//! The body as a solid, for point-in-body queries (collisions, settle).
 //!
-//! A uniform grid over the mesh triangles. Every cell centre's parity (inside
-//! or outside) is found once, by one sweep along x through each row of
-//! centres that counts the crossings between consecutive centres. A point in
-//! a cell no triangle touches takes its cell's class by a lookup; a point in
-//! a cell the surface passes through takes the centre's parity, flipped by
-//! each crossing of a three-leg path (along x, y, then z) from the centre to
-//! the point, all inside the cell, so only that cell's triangles are tested.
+//! **Inside** means a generalized winding number (Jacobson et al. 2013)
+//! above one half: the signed solid angle the whole mesh subtends at the
+//! point, over 4 pi. On a closed mesh wound counter-clockwise seen from
+//! outside (the normals hair grows along) it is 1 inside and 0 outside; a
+//! point inside two intersecting shells (an eyeball in its socket) counts
+//! 2, still inside; near a hole (an open eye socket, a neck) it falls off
+//! smoothly, and the threshold of one half closes the hole with the surface
+//! that spans it. An inside-out mesh has no inside.
+//!
+//! The winding number is evaluated in two parts. Each boundary loop of the
+//! mesh (its [`Rim`]) is closed by a cap, a fan of triangles from the mean
+//! of the loop's corners; the capped surface is closed, so its winding
+//! number `w` is an integer that changes by one at each crossing of the
+//! surface. The mesh's own winding number is `w` minus the caps' solid
+//! angle over 4 pi, which matters only near a cap.
+//!
+//! A uniform grid over the mesh triangles. Every cell centre's `w` is found
+//! once, by one sweep along x through each row of centres that adds up the
+//! signed crossings between consecutive centres. A point in a cell no
+//! triangle touches, far from every cap, takes its cell's class by a
+//! lookup; a point in a cell the surface passes through takes the centre's
+//! `w`, changed by each crossing of a three-leg path (along x, y, then z)
+//! from the centre to the point, all inside the cell, so only that cell's
+//! triangles are tested. Near a cap the path also meets the caps, and the
+//! caps' solid angle is evaluated exactly.
 //!
 //! Crossings are counted watertight: edge functions are evaluated with the
 //! edge's endpoints in a canonical order, so the two triangles sharing an
 //! edge see exactly opposite values, and a line through an edge or a vertex
 //! is settled by a fixed symbolic perturbation of the line. A line through a
 //! shared edge thus crosses exactly one of the two triangles, whatever the
-//! rounding. The mesh should be closed; an open mesh answers by the parity
-//! the holes leave.
+//! rounding.
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::surface::grid::floor_i32;
+pub use crate::surface::rim::Rim;
 use crate::{Error, Mesh};
 use glam::Vec3;
 
@@ -26,12 +44,20 @@ const CELLS_PER_TRIANGLE: f32 = 32.0;
 /// Most cells along one axis.
 const MAX_DIM: f32 = 1024.0;
 
-/// Cell classes: a cell the surface misses is wholly outside or inside; a
-/// cell it passes through keeps its centre's parity.
-const OUTSIDE: u8 = 0;
-const INSIDE: u8 = 1;
-const SURFACE_OUTSIDE: u8 = 2;
-const SURFACE_INSIDE: u8 = 3;
+/// The threshold on the generalized winding number above which a point is
+/// inside.
+pub const INSIDE_WINDING: f32 = 0.5;
+
+/// Cell class bits: the surface passes through the cell (it lists
+/// triangles); a cap's solid angle may decide points in it. The bits above
+/// them hold the centre's winding number `w` of the capped surface, signed
+/// (read as `class as i8 >> WINDING_SHIFT`).
+const SURFACE: u8 = 1;
+const NEAR_CAP: u8 = 2;
+const WINDING_SHIFT: u32 = 2;
+/// The range of `w` a class holds; a point inside more than 31 shells at
+/// once is read as inside 31.
+const MAX_WINDING: i32 = 31;
 
 /// Grid placement, computed the same way when sizing and when building.
 #[derive(Clone, Copy, Debug)]
@@ -134,6 +160,8 @@ pub struct Body<'a> {
     refs: &'a [u32],
     /// The non-degenerate triangles, copied for locality.
     triangles: &'a [Stored],
+    /// The caps' triangles, one per boundary edge (see the module docs).
+    caps: &'a [Stored],
     class: &'a [u8],
 }
 
@@ -142,45 +170,76 @@ pub struct Body<'a> {
 #[derive(Clone, Copy, Debug)]
 pub struct BodyPlan {
     shape: Shape,
+    /// Boundary edges and loops of the mesh.
+    cap_triangles: usize,
+    loops: usize,
 }
 
 impl BodyPlan {
-    /// Validates `mesh` and places the grid.
-    pub fn of(mesh: &Mesh) -> Result<Self, Error> {
+    /// Validates `mesh` and places the grid; `rim` is the mesh's boundary
+    /// (found once per topology, for every frame).
+    pub fn of(mesh: &Mesh, rim: &Rim) -> Result<Self, Error> {
+        rim.check_mesh(mesh)?;
         let shape = Shape::of(mesh)?;
         if shape.refs >= u32::MAX as usize {
             return Err(Error::InvalidArgument("body grid is too large"));
         }
-        Ok(BodyPlan { shape })
+        Ok(BodyPlan {
+            shape,
+            cap_triangles: rim.edge_count(),
+            loops: rim.loop_count(),
+        })
     }
 
     /// Arena bytes [`Body::build`] needs.
     pub fn bytes(&self) -> usize {
-        let (shape, cells) = (&self.shape, self.shape.cells());
+        Self::bytes_with(&self.shape, self.cap_triangles)
+    }
+
+    fn bytes_with(shape: &Shape, cap_triangles: usize) -> usize {
+        let cells = shape.cells();
         let mut layout = ArenaLayout::new();
         layout
             .add::<u32>(cells + 1)
             .add::<u32>(shape.refs)
             .add::<Stored>(shape.triangles)
+            .add::<Stored>(cap_triangles)
             .add::<u8>(cells);
         layout.bytes()
     }
 }
 
 impl<'a> Body<'a> {
-    /// Arena bytes [`Body::new`] needs for `mesh` (validates it).
+    /// Arena bytes [`Body::new`] needs for `mesh` (validates it): its rim's
+    /// and its body's, for the most boundary edges the mesh could have.
     pub fn required_bytes(mesh: &Mesh) -> Result<usize, Error> {
-        Ok(BodyPlan::of(mesh)?.bytes())
+        let shape = Shape::of(mesh)?;
+        let body = BodyPlan::bytes_with(&shape, 3 * mesh.triangle_count());
+        Ok(Rim::required_bytes(mesh).saturating_add(body))
     }
 
-    /// Validates `mesh` and builds its grid and cell classes.
+    /// Validates `mesh`, finds its rim and builds its grid and cell
+    /// classes, all in `arena`.
     pub fn new(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
-        Self::build(&BodyPlan::of(mesh)?, mesh, arena)
+        let needed = Self::required_bytes(mesh)?;
+        if arena.remaining() < needed {
+            return Err(Error::CapacityExceeded {
+                needed: arena.capacity() - arena.remaining() + needed,
+                available: arena.capacity(),
+            });
+        }
+        let rim = Rim::new(mesh, arena)?;
+        Self::build(&BodyPlan::of(mesh, &rim)?, mesh, &rim, arena)
     }
 
     /// Builds the grid and cell classes of `mesh`, placed by `plan` (made
-    /// from this mesh).
-    pub fn build(plan: &BodyPlan, mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
+    /// from this mesh and `rim`).
+    pub fn build(
+        plan: &BodyPlan,
+        mesh: &Mesh,
+        rim: &Rim,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
         let shape = plan.shape;
         let needed = plan.bytes();
         if arena.remaining() < needed {
@@ -189,13 +248,18 @@ impl<'a> Body<'a> {
                 available: arena.capacity(),
             });
         }
+        let another = Error::InvalidArgument("body plan made from another mesh");
+        rim.check_mesh(mesh)?;
+        if (rim.edge_count(), rim.loop_count()) != (plan.cap_triangles, plan.loops) {
+            return Err(another);
+        }
         let cells = shape.cells();
         let start = arena.alloc::<u32>(cells + 1)?;
         let refs = arena.alloc::<u32>(shape.refs)?;
         let triangles = arena.alloc::<Stored>(shape.triangles)?;
+        let caps = arena.alloc::<Stored>(plan.cap_triangles)?;
         let class = arena.alloc::<u8>(cells)?;
 
-        let another = Error::InvalidArgument("body plan made from another mesh");
         let mut solid = (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f));
         for t in triangles.iter_mut() {
             let [a, b, c] = mesh.corners(solid.next().ok_or(another)?);
@@ -241,14 +305,17 @@ impl<'a> Body<'a> {
                 refs[start[c] as usize] = t as u32;
             });
         }
+        cap(mesh, rim, caps);
         let mut body = Body {
             shape,
             start,
             refs,
             triangles,
+            caps,
             class: &[],
         };
         body.classify(class);
+        body.mark_near_caps(class, rim);
         body.class = class;
         Ok(body)
     }
@@ -268,15 +335,13 @@ impl<'a> Body<'a> {
     }
 
     /// Sweeps each row of cell centres along x from the grid's empty first
-    /// layer (outside), flipping the parity at each crossing. Each
-    /// triangle's crossings with the rows' lines are marked first, in the
-    /// cell each falls in, as before or after that cell's centre.
+    /// layer (outside), adding up the signed crossings of the capped
+    /// surface. Each triangle's crossings with the rows' lines are added
+    /// first to the centre each comes before.
     fn classify(&self, class: &mut [u8]) {
-        const BEFORE: u8 = 4;
-        const AFTER: u8 = 8;
         let shape = &self.shape;
         class.fill(0);
-        for t in self.triangles {
+        for t in self.triangles.iter().chain(self.caps) {
             let [.., lo, hi] = *t;
             // the rows whose line may pass within the bounds (one more each
             // way: `crossing` decides exactly)
@@ -288,41 +353,73 @@ impl<'a> Body<'a> {
             };
             for z in rows(2) {
                 for y in rows(1) {
-                    let Some(h) = crossing::<0>(t, self.centre(0, y, z)) else {
+                    let Some((h, step)) = crossing::<0>(t, self.centre(0, y, z)) else {
                         continue;
                     };
+                    // the first centre at or past the crossing
                     let x = shape.cell_on(h, 0);
-                    if (0..shape.dims[0] as i32).contains(&x) {
-                        let x = x as usize;
-                        class[shape.index(x, y, z)] ^= if h <= self.centre(x, y, z).x {
-                            BEFORE
-                        } else {
-                            AFTER
-                        };
+                    if !(0..shape.dims[0] as i32).contains(&x) {
+                        continue;
+                    }
+                    let x = x as usize + (h > self.centre(x as usize, y, z).x) as usize;
+                    if x < shape.dims[0] {
+                        let c = &mut class[shape.index(x, y, z)];
+                        *c = (*c as i8).wrapping_add(step as i8) as u8;
                     }
                 }
             }
         }
         let nx = shape.dims[0];
         for (r, row) in class.chunks_exact_mut(nx).enumerate() {
-            let mut odd = false;
+            let mut w = 0i32;
             // a cell the surface passes through lists triangles
             let listed = self.start[r * nx..=(r + 1) * nx].windows(2);
-            for (flips, ends) in row.iter_mut().zip(listed) {
-                let f = *flips;
-                odd ^= f & BEFORE != 0;
-                *flips = match (ends[0] != ends[1], odd) {
-                    (false, false) => OUTSIDE,
-                    (false, true) => INSIDE,
-                    (true, false) => SURFACE_OUTSIDE,
-                    (true, true) => SURFACE_INSIDE,
-                };
-                odd ^= f & AFTER != 0;
+            for (c, ends) in row.iter_mut().zip(listed) {
+                w += (*c as i8) as i32;
+                let winding = w.clamp(-MAX_WINDING - 1, MAX_WINDING) as i8;
+                *c = ((winding << WINDING_SHIFT) as u8) | (ends[0] != ends[1]) as u8 * SURFACE;
             }
         }
     }
 
-    /// True when `p` is inside the body.
+    /// Marks the cells where the caps' solid angle may reach a half turn
+    /// (2 pi): where it cannot, the capped surface's integer winding number
+    /// decides alone. A cap within a ball of radius `R` subtends at most
+    /// `2 pi (1 - sqrt(1 - R^2 / D^2))` from a distance `D > R` to the
+    /// ball's centre; with `K` caps, each kept below `2 pi / K`, their sum
+    /// stays below a half turn.
+    fn mark_near_caps(&self, class: &mut [u8], rim: &Rim) {
+        let loops = rim.loop_count();
+        let shape = &self.shape;
+        let share = 1.0 - 1.0 / loops as f32;
+        let reach = 1.0 / libm::sqrtf(1.0 - share * share);
+        let half_diagonal = 0.5 * libm::sqrtf(3.0) / shape.inv_cell;
+        let mut first = 0;
+        for k in 0..loops {
+            let fan = &self.caps[first..first + rim.loop_edges(k).len()];
+            first += fan.len();
+            let centre = Vec3::from(fan[0][2]);
+            let radius = fan
+                .iter()
+                .flat_map(|t| [t[0], t[1]])
+                .map(|p| Vec3::from(p).distance(centre))
+                .fold(0.0f32, f32::max);
+            let d = radius * reach * 1.001 + half_diagonal;
+            let (a, b) = shape.cell_range(centre - Vec3::splat(d), centre + Vec3::splat(d));
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        if self.centre(x, y, z).distance(centre) <= d {
+                            class[shape.index(x, y, z)] |= NEAR_CAP;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// True when `p` is inside the body: its generalized winding number is
+    /// above [`INSIDE_WINDING`].
     pub fn contains(&self, p: Vec3) -> bool {
         let c = self.shape.cell_of(p);
         let inside = (0..3).all(|k| c[k] >= 0 && (c[k] as usize) < self.shape.dims[k]);
@@ -331,31 +428,40 @@ impl<'a> Body<'a> {
         }
         let cell = [c[0] as usize, c[1] as usize, c[2] as usize];
         let c = self.shape.index(cell[0], cell[1], cell[2]);
-        match self.class[c] {
-            OUTSIDE => false,
-            INSIDE => true,
-            class => {
-                // the path centre -> (p.x, centre.y, centre.z) -> (p.x, p.y,
-                // centre.z) -> p, a leg per axis, with each crossing h of a
-                // leg from `from` to `to` counted when from < h <= to or
-                // to < h <= from (as the sweep counts them)
-                let mut at = self.centre(cell[0], cell[1], cell[2]);
-                let mut odd = class == SURFACE_INSIDE;
-                let mut leg = |axis: usize, hit: &dyn Fn(&Stored, Vec3) -> Option<f32>| {
-                    let (lo, hi) = (at[axis].min(p[axis]), at[axis].max(p[axis]));
-                    for t in self.listed(c) {
-                        if let Some(h) = hit(t, at) {
-                            odd ^= lo < h && h <= hi;
-                        }
-                    }
-                    at[axis] = p[axis];
-                };
-                leg(0, &crossing::<0>);
-                leg(1, &crossing::<1>);
-                leg(2, &crossing::<2>);
-                odd
-            }
+        let class = self.class[c];
+        let mut w = ((class as i8) >> WINDING_SHIFT) as i32;
+        if class & (SURFACE | NEAR_CAP) == 0 {
+            return w >= 1;
         }
+        let near_cap = class & NEAR_CAP != 0;
+        // the path centre -> (p.x, centre.y, centre.z) -> (p.x, p.y,
+        // centre.z) -> p, a leg per axis; a crossing h of a leg from `from`
+        // to `to` counts when from < h <= to, and counts negated when
+        // to < h <= from (as the sweep counts them)
+        let mut at = self.centre(cell[0], cell[1], cell[2]);
+        let mut leg = |axis: usize, hit: &dyn Fn(&Stored, Vec3) -> Option<(f32, i32)>| {
+            let (from, to) = (at[axis], p[axis]);
+            let (lo, hi, sign) = if from <= to {
+                (from, to, 1)
+            } else {
+                (to, from, -1)
+            };
+            let caps = if near_cap { self.caps } else { &[] };
+            for t in self.listed(c).chain(caps) {
+                if let Some((h, step)) = hit(t, at) {
+                    w += if lo < h && h <= hi { sign * step } else { 0 };
+                }
+            }
+            at[axis] = p[axis];
+        };
+        leg(0, &crossing::<0>);
+        leg(1, &crossing::<1>);
+        leg(2, &crossing::<2>);
+        if !near_cap {
+            return w >= 1;
+        }
+        let caps: f64 = self.caps.iter().map(|t| solid_angle(t, p)).sum();
+        w as f64 - caps / (4.0 * core::f64::consts::PI) > INSIDE_WINDING as f64
     }
 
     /// True when the segment from `a` to `b` meets a triangle of the body.
@@ -448,10 +554,13 @@ fn meets(t: &Stored, a: Vec3, d: Vec3) -> bool {
 type Stored = [[f32; 3]; 5];
 
 /// Where the line through `p` along axis `AXIS` crosses triangle `t` (that
-/// coordinate), if it passes through it. The coordinates are rotated so
-/// `AXIS` comes first; every triangle sharing an edge rotates it alike.
+/// coordinate), if it passes through it, and how the winding number changes
+/// there going along the axis: +1 entering the triangle's back (its normal
+/// against the axis), -1 leaving through its front. The coordinates are
+/// rotated so `AXIS` comes first; every triangle sharing an edge rotates it
+/// alike.
 #[inline]
-fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<f32> {
+fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
     let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
     // a line strictly outside the triangle's bounds misses it, perturbed or
     // not; most lines through a cell miss most of its triangles
@@ -468,7 +577,40 @@ fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<f32> {
         return None;
     }
     let sum = w0 + w1 + w2;
-    Some((w0 * a[0] + w1 * b[0] + w2 * c[0]) / sum)
+    let step = if s0 { -1 } else { 1 };
+    Some(((w0 * a[0] + w1 * b[0] + w2 * c[0]) / sum, step))
+}
+
+/// Fills `caps` with the fans that close `rim`'s loops on `mesh`: for a
+/// boundary edge `a -> b` of a loop whose corners have the mean `m`, the
+/// triangle `(b, a, m)`, which runs the edge the other way.
+fn cap(mesh: &Mesh, rim: &Rim, caps: &mut [Stored]) {
+    let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
+    let mut next = 0;
+    for k in 0..rim.loop_count() {
+        let edges = rim.loop_edges(k);
+        let sum: Vec3 = edges.iter().map(|e| at(e[0])).sum();
+        let mean = sum / edges.len() as f32;
+        for e in edges {
+            let (a, b) = (at(e[0]), at(e[1]));
+            let (lo, hi) = (a.min(b).min(mean), a.max(b).max(mean));
+            caps[next] = [b, a, mean, lo, hi].map(Into::into);
+            next += 1;
+        }
+    }
+}
+
+/// The signed solid angle triangle `t` subtends at `p` (Van Oosterom and
+/// Strackee), positive when `p` sees its back.
+fn solid_angle(t: &Stored, p: Vec3) -> f64 {
+    let [a, b, c] = [0, 1, 2].map(|i| {
+        let v = Vec3::from(t[i]) - p;
+        glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+    });
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let det = a.dot(b.cross(c));
+    let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    2.0 * libm::atan2(det, den)
 }
 
 /// The edge function of `p` against edge `a -> b` in the plane of the last
@@ -591,6 +733,84 @@ mod tests {
         }
     }
 
+    /// The generalized winding number of `mesh` at `p`, triangle by triangle.
+    fn winding(mesh: &Mesh, p: Vec3) -> f64 {
+        let total: f64 = (0..mesh.triangle_count())
+            .map(|f| {
+                let [a, b, c] = mesh.corners(f);
+                solid_angle(&[a, b, c, a, a].map(Into::into), p)
+            })
+            .sum();
+        total / (4.0 * core::f64::consts::PI)
+    }
+
+    /// `contains` against the winding number, brute force, at random points
+    /// of the box `lo..hi` (points within `margin` of the threshold are
+    /// ties, left out); returns how many points were inside.
+    fn agrees_with_winding(mesh: &Mesh, lo: Vec3, hi: Vec3, points: u64, margin: f64) -> usize {
+        let mut buf = vec![];
+        let body = build(mesh, &mut buf);
+        let mut inside = 0;
+        for i in 0..points {
+            let r = |c| rng::unit(5, i, Purpose::Uniform, c);
+            let p = lo + (hi - lo) * Vec3::new(r(0), r(1), r(2));
+            let w = winding(mesh, p);
+            if (w - 0.5).abs() < margin {
+                continue;
+            }
+            assert_eq!(body.contains(p), w > 0.5, "{p}: winding {w}");
+            inside += (w > 0.5) as usize;
+        }
+        inside
+    }
+
+    /// A sphere with the triangles whose centroid has `y > cut` removed.
+    fn holed_sphere(cut: f32) -> crate::testmesh::TestMesh {
+        let mut m = sphere(12, 24);
+        let p = m.p.clone();
+        m.t.retain(|t| t.iter().map(|&v| p[v as usize][1]).sum::<f32>() / 3.0 <= cut);
+        m
+    }
+
+    #[test]
+    fn open_meshes_follow_the_generalized_winding_number() {
+        // a small hole (an eye socket), a wide one (a bowl), and a sliver
+        for cut in [0.9f32, 0.2, -0.6] {
+            let m = holed_sphere(cut);
+            let mesh = m.mesh();
+            let inside =
+                agrees_with_winding(&mesh, Vec3::splat(-1.3), Vec3::splat(1.3), 4000, 1e-4);
+            assert!(inside > 50, "cut {cut}: {inside} inside");
+        }
+    }
+
+    #[test]
+    fn intersecting_shells_and_a_shell_inside_another() {
+        // a sphere, a second one overlapping it, and a small one inside the
+        // first: inside one or more counts as inside
+        let (a, b, c) = (sphere(10, 20), sphere(10, 20), sphere(6, 12));
+        let mut p: Vec<[f32; 3]> = a.p.clone();
+        p.extend(b.p.iter().map(|v| [v[0] + 0.8, v[1] * 0.7, v[2]]));
+        p.extend(c.p.iter().map(|v| [v[0] * 0.3 - 0.4, v[1] * 0.3, v[2] * 0.3]));
+        let mut t = a.t.clone();
+        let shift = |m: &crate::testmesh::TestMesh, by: usize| {
+            m.t.iter()
+                .map(move |f| f.map(|v| v + by as u32))
+                .collect::<Vec<_>>()
+        };
+        t.extend(shift(&b, a.p.len()));
+        t.extend(shift(&c, a.p.len() + b.p.len()));
+        let mesh = Mesh::new(crate::Strided::from_slice(&p), crate::Strided::from_slice(&t));
+        let lo = Vec3::new(-1.2, -1.2, -1.2);
+        let hi = Vec3::new(2.0, 1.2, 1.2);
+        assert!(agrees_with_winding(&mesh, lo, hi, 4000, 1e-4) > 500);
+        let mut buf = vec![];
+        let body = build(&mesh, &mut buf);
+        // inside both spheres, and inside the inner one (winding 2)
+        assert!(body.contains(Vec3::new(0.5, 0.0, 0.0)));
+        assert!(body.contains(Vec3::new(-0.4, 0.0, 0.0)));
+    }
+
     #[test]
     fn open_and_degenerate_meshes() {
         let m = graded_plane(8, 1.0);
@@ -613,10 +833,12 @@ mod tests {
         ));
         // a plan from another mesh is refused, not trusted
         let other = sphere(8, 16);
-        let plan = BodyPlan::of(&other.mesh()).unwrap();
+        let mut rim_memory = vec![0u8; Rim::required_bytes(&other.mesh())];
+        let rim = Rim::new(&other.mesh(), &mut Arena::new(&mut rim_memory)).unwrap();
+        let plan = BodyPlan::of(&other.mesh(), &rim).unwrap();
         let mut big = vec![0u8; plan.bytes().max(Body::required_bytes(&mesh).unwrap())];
         assert!(matches!(
-            Body::build(&plan, &mesh, &mut Arena::new(&mut big)),
+            Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut big)),
             Err(Error::InvalidArgument(_))
         ));
         let mut small = vec![0u8; Body::required_bytes(&mesh).unwrap() - 1];

@@ -8,3 +8,4 @@ pub mod grid;
 pub mod map;
 pub mod mesh;
 pub mod region;
+pub mod rim;

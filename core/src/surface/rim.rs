@@ -1,0 +1,205 @@
+//! The open boundary of a mesh: the edges that lack a partner running the
+//! other way, gathered into closed loops (eye sockets, a mouth, a neck).
+//!
+//! The boundary depends on the triangle indices only, so a host finds it
+//! once per topology and reuses it for every frame (see
+//! [`BodyPlan::of`](crate::surface::body::BodyPlan::of)). An edge listed
+//! `a -> b` by `m` triangles and `b -> a` by `n` is a boundary edge `m - n`
+//! times (in the direction of the surplus); a closed mesh, however many
+//! shells it has, has none. The surplus edges meet every vertex as often
+//! going in as going out (each triangle does), so they always split into
+//! closed loops.
+
+use crate::arena::{Arena, ArenaLayout};
+use crate::{Error, Mesh};
+
+/// The boundary loops of a mesh, in caller-provided memory.
+#[derive(Clone, Copy, Debug)]
+pub struct Rim<'a> {
+    /// Boundary edges as their triangles list them (`[a, b]` for `a -> b`),
+    /// loop after loop, each loop in order around it.
+    edges: &'a [[u32; 2]],
+    /// Loop `k` is `edges[starts[k]..starts[k + 1]]`.
+    starts: &'a [u32],
+    /// Vertices and triangles of the mesh it was found on.
+    vertices: usize,
+    triangles: usize,
+}
+
+impl<'a> Rim<'a> {
+    /// Arena bytes [`Rim::new`] takes for `mesh` (an upper bound: every edge
+    /// could be a boundary edge).
+    pub fn required_bytes(mesh: &Mesh) -> usize {
+        let edges = 3 * mesh.triangle_count();
+        let mut layout = ArenaLayout::new();
+        layout
+            .add::<[u32; 4]>(edges)
+            .add::<[u32; 2]>(edges)
+            .add::<u32>(edges / 3 + 2);
+        layout.bytes()
+    }
+
+    /// Finds the boundary loops of `mesh` (checks its indices).
+    pub fn new(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
+        mesh.check()?;
+        let needed = Self::required_bytes(mesh);
+        if arena.remaining() < needed {
+            return Err(Error::CapacityExceeded {
+                needed: arena.capacity() - arena.remaining() + needed,
+                available: arena.capacity(),
+            });
+        }
+        // each edge keyed by its ends in increasing order, with its
+        // direction: after sorting, an edge's copies are adjacent
+        let keys = arena.alloc::<[u32; 4]>(3 * mesh.triangle_count())?;
+        let mut n = 0;
+        for [a, b, c] in mesh.triangles.iter() {
+            for (from, to) in [(a, b), (b, c), (c, a)] {
+                if from != to {
+                    keys[n] = [from.min(to), from.max(to), (from > to) as u32, 0];
+                    n += 1;
+                }
+            }
+        }
+        let keys = &mut keys[..n];
+        keys.sort_unstable();
+        // the surplus edges, compacted to the front as `[from, to, 0, 0]`
+        let (mut i, mut e) = (0, 0);
+        while i < n {
+            let [lo, hi, ..] = keys[i];
+            let mut net = 0i64;
+            while i < n && keys[i][0] == lo && keys[i][1] == hi {
+                net += if keys[i][2] == 0 { 1 } else { -1 };
+                i += 1;
+            }
+            let edge = if net > 0 { [lo, hi, 0, 0] } else { [hi, lo, 0, 0] };
+            for _ in 0..net.unsigned_abs() {
+                keys[e] = edge;
+                e += 1;
+            }
+        }
+        let open = &mut keys[..e];
+        open.sort_unstable();
+        let edges = arena.alloc::<[u32; 2]>(e)?;
+        let starts = arena.alloc::<u32>(e / 3 + 2)?;
+        // walk each loop from an unused edge to the unused edge leaving its
+        // end, until the walk is back where it began
+        const USED: u32 = 1;
+        let (mut written, mut loops) = (0, 0);
+        for first in 0..e {
+            if open[first][2] == USED {
+                continue;
+            }
+            starts[loops] = written as u32;
+            loops += 1;
+            let begin = open[first][0];
+            let mut at = first;
+            loop {
+                open[at][2] = USED;
+                let [from, to, ..] = open[at];
+                edges[written] = [from, to];
+                written += 1;
+                if to == begin {
+                    break;
+                }
+                let leaving = open.partition_point(|k| k[0] < to);
+                match open[leaving..]
+                    .iter()
+                    .take_while(|k| k[0] == to)
+                    .position(|k| k[2] != USED)
+                {
+                    Some(j) => at = leaving + j,
+                    None => break,
+                }
+            }
+        }
+        starts[loops] = written as u32;
+        Ok(Rim {
+            edges: &edges[..written],
+            starts: &starts[..=loops],
+            vertices: mesh.positions.len(),
+            triangles: mesh.triangle_count(),
+        })
+    }
+
+    /// Number of boundary edges.
+    pub fn edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Number of boundary loops (holes).
+    pub fn loop_count(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// True when the mesh has no boundary: every edge has a partner
+    /// running the other way.
+    pub fn is_closed(&self) -> bool {
+        self.edges.is_empty()
+    }
+
+    /// The edges of loop `k`, in order around it, as `[from, to]`.
+    pub fn loop_edges(&self, k: usize) -> &'a [[u32; 2]] {
+        &self.edges[self.starts[k] as usize..self.starts[k + 1] as usize]
+    }
+
+    /// Checks that `mesh` has the counts of the mesh the rim was found on.
+    pub(crate) fn check_mesh(&self, mesh: &Mesh) -> Result<(), Error> {
+        if mesh.positions.len() != self.vertices || mesh.triangle_count() != self.triangles {
+            return Err(Error::InvalidArgument(
+                "the rim was found on a mesh of another topology",
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testmesh::{graded_plane, sphere};
+    use crate::Strided;
+
+    fn rim_of<'a>(mesh: &Mesh, buf: &'a mut Vec<u8>) -> Rim<'a> {
+        *buf = vec![0u8; Rim::required_bytes(mesh)];
+        Rim::new(mesh, &mut Arena::new(buf)).unwrap()
+    }
+
+    #[test]
+    fn a_closed_mesh_has_no_rim_and_a_plane_has_one_loop() {
+        let m = sphere(8, 16);
+        let mut buf = vec![];
+        assert!(rim_of(&m.mesh(), &mut buf).is_closed());
+        let plane = graded_plane(6, 1.0);
+        let rim = rim_of(&plane.mesh(), &mut buf);
+        assert_eq!((rim.loop_count(), rim.edge_count()), (1, 24));
+        let edges = rim.loop_edges(0);
+        // in order: each edge starts where the last one ended, and back
+        for w in edges.windows(2) {
+            assert_eq!(w[0][1], w[1][0]);
+        }
+        assert_eq!(edges.last().unwrap()[1], edges[0][0]);
+    }
+
+    #[test]
+    fn holes_give_one_loop_each_and_a_short_arena_is_refused() {
+        // two triangles removed far apart on a sphere: two triangular holes
+        let m = sphere(8, 16);
+        let tris: Vec<[u32; 3]> = m
+            .t
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| i != 40 && i != 150)
+            .map(|(_, &t)| t)
+            .collect();
+        let mesh = Mesh::new(Strided::from_slice(&m.p), Strided::from_slice(&tris));
+        let mut buf = vec![];
+        let rim = rim_of(&mesh, &mut buf);
+        assert_eq!((rim.loop_count(), rim.edge_count()), (2, 6));
+        let mut short = vec![0u8; Rim::required_bytes(&mesh) - 1];
+        assert!(matches!(
+            Rim::new(&mesh, &mut Arena::new(&mut short)),
+            Err(Error::CapacityExceeded { .. })
+        ));
+    }
+}
