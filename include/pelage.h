@@ -636,6 +636,9 @@ typedef struct PelageStampInfo {
   uint32_t degenerate_triangles;
   // Stamping passes (radius corrections + 1).
   uint32_t passes;
+  // Points the fill pass added where the edge pass left holes, in the
+  // final pass.
+  uint32_t filled;
 } PelageStampInfo;
 
 #ifdef __cplusplus

@@ -59,6 +59,9 @@ pub struct PelageStampInfo {
     pub degenerate_triangles: u32,
     /// Stamping passes (radius corrections + 1).
     pub passes: u32,
+    /// Points the fill pass added where the edge pass left holes, in the
+    /// final pass.
+    pub filled: u32,
 }
 
 /// Default parameters: density constant 1, black_scale 0.5, bald_below 1/512,
@@ -189,6 +192,7 @@ pub extern "C" fn pelage_stamp(
                         trimmed: report.trimmed,
                         degenerate_triangles: report.degenerate_triangles,
                         passes: report.passes,
+                        filled: report.filled,
                     };
                 }
                 Ok(())

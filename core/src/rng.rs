@@ -21,6 +21,8 @@ pub enum Purpose {
     NeighbourCount = 7,
     /// Phase of a strand's kink.
     KinkPhase = 8,
+    /// Darts of the stamp's fill pass.
+    FillDart = 9,
 }
 
 /// Mixes (seed, id, purpose, counter) into 64 well-distributed bits.

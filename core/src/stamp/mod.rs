@@ -41,11 +41,13 @@
 // and ranks), with the records and buffers the passes share in `near` and
 // `scratch`.
 pub mod chart;
+mod fill;
 mod lod;
 mod near;
 mod place;
 mod prune;
 mod scratch;
+mod shell;
 mod sizing;
 pub mod tile;
 
@@ -58,6 +60,7 @@ use core::ops::Range;
 use glam::Vec3;
 use place::{ChartFrame, TilePlace};
 pub use scratch::Scratch;
+use shell::Shells;
 use sizing::*;
 pub use sizing::{max_roots, required_bytes, DENSITY_STEPS};
 
@@ -165,6 +168,8 @@ pub struct StampReport {
     pub candidates: u32,
     /// Points the edge pass removed in the last pass.
     pub pruned: u32,
+    /// Points the fill pass added in the last pass.
+    pub filled: u32,
     /// Surplus roots trimmed by LOD rank to land exactly on the target.
     pub trimmed: u32,
     /// Degenerate triangles skipped.
@@ -226,6 +231,7 @@ pub struct Stamper<'m, 'a> {
     target: u32,
     faces: &'a [Face],
     places: &'a [TilePlace],
+    shells: Shells<'a>,
     first_radius: f32,
     radius: f32,
     /// The radius was given: one pass, every root kept.
@@ -288,6 +294,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             .add::<TilePlace>(mesh.triangle_count())
             .add::<Unfolded>(mesh.triangle_count());
         chart::layout(layout, mesh);
+        Shells::layout(layout, mesh);
     }
 
     /// Validates the inputs, builds the tile and the per-face data, and picks
@@ -324,6 +331,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
         };
         let (scale, normal) = (|f: usize| faces[f].scale, |f: usize| faces[f].normal.into());
         chart::unfold(&mesh, scale, normal, CHART_REACH * radius, arena, laid)?;
+        let reach = |f: usize| match faces[f].scale {
+            0.0 => 0.0,
+            s => shell::REACH_MARGIN * radius / s,
+        };
+        let shells = Shells::new(&mesh, reach, arena)?;
         // a chart's first face comes before its others: its frame is made
         // once, kept in its slot, and read by the others
         for f in 0..faces.len() {
@@ -345,6 +357,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             target: params.target_count,
             faces,
             places,
+            shells,
             first_radius: radius,
             fixed,
             radius,
@@ -483,12 +496,13 @@ impl<'m, 'a> Stamper<'m, 'a> {
         kept.min(self.target as usize)
     }
 
-    fn report(&self, candidates: usize, kept: usize) -> StampReport {
+    fn report(&self, candidates: usize, pruned_to: usize, filled_to: usize) -> StampReport {
         StampReport {
             radius: self.radius,
             candidates: candidates as u32,
-            pruned: (candidates - kept) as u32,
-            trimmed: (kept - self.output_count(kept)) as u32,
+            pruned: (candidates - pruned_to) as u32,
+            filled: (filled_to - pruned_to) as u32,
+            trimmed: (filled_to - self.output_count(filled_to)) as u32,
             degenerate_triangles: self.degenerate,
             passes: self.passes,
         }
@@ -577,9 +591,10 @@ pub fn stamp_with_progress(
             done(pass_start + (placed_end - pass_start) * last as f32 / faces as f32)?;
         }
         let kept = stamper.prune(&mut cands[..n], &mut scratch)?;
+        let filled = stamper.fill(cands, kept, &mut scratch)?;
         done(pass_end)?;
-        if stamper.converged(n, kept) {
-            let m = stamper.output_count(kept);
+        if stamper.converged(n, filled) {
+            let m = stamper.output_count(filled);
             if out.len() < m {
                 return Err(Error::OutputTooSmall {
                     needed: m,
@@ -588,12 +603,12 @@ pub fn stamp_with_progress(
             }
             let mut finishing = |share: f32| done(pass_end + (1.0 - pass_end) * share);
             stamper.finish_reporting(
-                &cands[..kept],
+                &cands[..filled],
                 &mut scratch,
                 &mut out[..m],
                 &mut finishing,
             )?;
-            return Ok((m, stamper.report(n, kept)));
+            return Ok((m, stamper.report(n, kept, filled)));
         }
         pass_start = pass_end;
     }
@@ -974,6 +989,7 @@ mod tests {
                     n += k;
                 }
                 let kept = stamper.prune(&mut cands[..n], &mut scratch).unwrap();
+                let kept = stamper.fill(&mut cands, kept, &mut scratch).unwrap();
                 if stamper.converged(n, kept) {
                     break kept;
                 }

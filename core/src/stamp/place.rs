@@ -100,6 +100,9 @@ pub(super) fn row_span(t: &[Vec2; 3], y0: f32, y1: f32) -> Option<(f32, f32)> {
     (lo <= hi).then_some((lo, hi))
 }
 
+/// How far off the skin the buried test looks, in local disk radii.
+pub(super) const BURY_LIFT: f32 = 1e-3;
+
 /// Tile points a face collects before they become candidates: the inside
 /// test runs on every tile point the face covers, the rest only on the
 /// points inside, a batch at a time, as vector code.
@@ -193,6 +196,13 @@ impl Placing {
         place.cross = cross.map(Vec4::from_array);
         place.ties = BVec4A::new(ties[0], ties[1], ties[2], false);
         place
+    }
+
+    /// The point at barycentric `(u, v)` of the face, in tile units.
+    #[inline]
+    pub(super) fn tile_point(&self, u: f32, v: f32) -> Vec2 {
+        let [a, b, c] = self.corners;
+        a + (b - a) * u + (c - a) * v
     }
 
     /// [`cross`](Self::cross) as arrays, for code that reads it by edge
@@ -331,9 +341,37 @@ impl<'m, 'a> Stamper<'m, 'a> {
             if self.faces[f].scale == 0.0 {
                 continue;
             }
+            let first = n;
             n = self.stamp_face(f, &squares, &mut batch, out, n)?;
+            n = self.near_shells(f, &mut out[..n], first);
         }
         Ok(n)
+    }
+
+    /// Applies [`Shells`](super::shell::Shells) to face `f`'s candidates,
+    /// `out[first..]`: near another shell they take part in the edge pass
+    /// and every LOD level; buried ones are dropped. Returns the new count.
+    fn near_shells(&self, f: usize, out: &mut [Candidate], first: usize) -> usize {
+        let shells = &self.shells;
+        if shells.near_other(f) {
+            for c in &mut out[first..] {
+                c.near_levels = LOD_LEVELS as u16;
+            }
+        }
+        if !shells.may_bury() {
+            return out.len();
+        }
+        let [a, e1, e2] = super::face_frame(&self.mesh, f);
+        let normal = glam::Vec3::from(self.faces[f].normal);
+        let lift = BURY_LIFT * self.local_radius(f as u32);
+        let mut n = first;
+        for i in first..out.len() {
+            let c = out[i];
+            let p = a + e1 * c.uv[0] + e2 * c.uv[1];
+            out[n] = c;
+            n += !shells.buried(p, normal, lift) as usize;
+        }
+        n
     }
 
     /// Stamps triangle `f` into `out` from slot `n` (`squares`: the squared

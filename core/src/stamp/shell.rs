@@ -1,0 +1,214 @@
+//! Separate shells and buried skin. Production meshes are often several
+//! pieces that touch or pass through each other (eyeballs in their
+//! sockets, a horn or an ear modelled apart), and have holes (eye sockets,
+//! a mouth). The stamp keeps its spacing across shells and grows no hair
+//! where the skin is buried:
+//! - **Spacing across shells.** Points of a face that comes within its disk
+//!   radius of a face of another shell take part in the edge pass and every
+//!   LOD level (as points near a cut edge do), so the spacing holds between
+//!   the shells as it holds across cuts.
+//! - **Buried skin.** A point is dropped when the spot just outside the
+//!   skin there (a thousandth of the local disk radius along the face
+//!   normal) is inside the body, by the body's winding number (see
+//!   [`Body`]): skin inside another closed shell (the part of the head a
+//!   horn passes through, an eyeball's back inside the head) grows no hair.
+//!   A mesh of one closed shell has no buried skin and skips the test.
+
+use crate::arena::{Arena, ArenaLayout};
+use crate::surface::body::{Body, Rim};
+use crate::surface::grid::floor_i32;
+use crate::{Error, Mesh};
+use glam::Vec3;
+
+/// Per-face bit: the face comes within its reach of another shell.
+const NEAR_OTHER: u8 = 1;
+
+/// What the stamp knows of a mesh's shells.
+pub(super) struct Shells<'a> {
+    /// Per face, [`NEAR_OTHER`]; empty for a mesh of one shell.
+    flags: &'a [u8],
+    /// The body, when some skin may be buried (several shells, or holes).
+    body: Option<Body<'a>>,
+}
+
+/// How far past its disk radius a face looks for other shells: the radius
+/// correction moves the radius by a few percent.
+pub(super) const REACH_MARGIN: f32 = 1.5;
+
+impl<'a> Shells<'a> {
+    /// Adds the bytes [`Shells::new`] may take for `mesh` (validated).
+    pub(super) fn layout(layout: &mut ArenaLayout, mesh: &Mesh) {
+        let faces = mesh.triangle_count();
+        layout
+            .add::<u32>(mesh.positions.len())
+            .add::<u8>(faces)
+            .add::<u32>(2 * faces + 1)
+            .add::<u8>(Rim::required_bytes(mesh))
+            .add::<u8>(Body::required_bytes(mesh).unwrap_or(0));
+    }
+
+    /// Labels the shells of `mesh` and, when there are several or the mesh
+    /// is open, flags the faces near another shell (each face reaching
+    /// `reach(f)`, 0 for a face without roots) and builds the body.
+    pub(super) fn new(
+        mesh: &Mesh,
+        reach: impl Fn(usize) -> f32,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        let faces = mesh.triangle_count();
+        // union-find over the vertices, each triangle joining its corners;
+        // the larger root joins the smaller, so the labels do not depend on
+        // the order of the unions
+        let parent = arena.alloc::<u32>(mesh.positions.len())?;
+        for (i, p) in parent.iter_mut().enumerate() {
+            *p = i as u32;
+        }
+        fn root(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                let up = parent[parent[v as usize] as usize];
+                parent[v as usize] = up;
+                v = up;
+            }
+            v
+        }
+        for [a, b, c] in mesh.triangles.iter() {
+            for other in [b, c] {
+                let (ra, rb) = (root(parent, a), root(parent, other));
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+        for v in 0..parent.len() as u32 {
+            let r = root(parent, v);
+            parent[v as usize] = r;
+        }
+        // each shell counted once, at its first face, by a mark on its root
+        const COUNTED: u32 = 1 << 31;
+        let mut shells = 0;
+        for [a, ..] in mesh.triangles.iter() {
+            let r = (parent[a as usize] & !COUNTED) as usize;
+            shells += (parent[r] & COUNTED == 0) as usize;
+            parent[r] |= COUNTED;
+        }
+        let shell_of = |f: usize| parent[mesh.triangles.get(f)[0] as usize] & !COUNTED;
+        let near = arena.alloc::<u8>(faces)?;
+        near.fill(0);
+        let mut flags: &'a [u8] = &[];
+        if shells > 1 {
+            mark_near_other_shells(mesh, &shell_of, &reach, near, arena)?;
+            flags = near;
+        }
+        let open = !Rim::new(mesh, arena)?.is_closed();
+        let body = if shells > 1 || open {
+            match Body::new(mesh, arena) {
+                Ok(body) => Some(body),
+                // a mesh without a solid triangle has no roots to test
+                Err(Error::InvalidArgument(_)) => None,
+                Err(e) => return Err(e),
+            }
+        } else {
+            None
+        };
+        Ok(Shells { flags, body })
+    }
+
+    /// Whether face `f` comes within its reach of another shell.
+    #[inline]
+    pub(super) fn near_other(&self, f: usize) -> bool {
+        self.flags.get(f).is_some_and(|&b| b & NEAR_OTHER != 0)
+    }
+
+    /// Whether the skin at `p` on a face of unit normal `n` is buried:
+    /// `lift` along the normal is inside the body.
+    #[inline]
+    pub(super) fn buried(&self, p: Vec3, n: Vec3, lift: f32) -> bool {
+        self.body.as_ref().is_some_and(|b| b.contains(p + n * lift))
+    }
+
+    /// Whether [`buried`](Self::buried) can be true at all.
+    #[inline]
+    pub(super) fn may_bury(&self) -> bool {
+        self.body.is_some()
+    }
+}
+
+/// Flags the faces whose box, widened by half their reach, shares a cell
+/// of a hashed grid with the widened box of a face of another shell. Two
+/// faces within reach of each other always share one; a shared bucket of
+/// unrelated cells only flags more faces than needed (their points then
+/// take part in the edge pass for nothing).
+fn mark_near_other_shells(
+    mesh: &Mesh,
+    shell_of: &dyn Fn(usize) -> u32,
+    reach: &dyn Fn(usize) -> f32,
+    near: &mut [u8],
+    arena: &mut Arena,
+) -> Result<(), Error> {
+    let faces = mesh.triangle_count();
+    const EMPTY: u32 = u32::MAX;
+    const MIXED: u32 = u32::MAX - 1;
+    let table = arena.alloc::<u32>(2 * faces + 1)?;
+    table.fill(EMPTY);
+    // cells about the size of a face and its reach
+    let mut extent = 0.0f64;
+    let mut counted = 0usize;
+    for f in 0..faces {
+        let r = reach(f);
+        if r > 0.0 {
+            let [a, b, c] = mesh.corners(f);
+            extent += ((a.max(b).max(c) - a.min(b).min(c)).max_element() + r) as f64;
+            counted += 1;
+        }
+    }
+    if counted == 0 {
+        return Ok(());
+    }
+    // cells near the mean face, coarse enough that the largest face
+    // covers at most 17 cells a side
+    let largest = (0..faces)
+        .filter(|&f| reach(f) > 0.0)
+        .map(|f| {
+            let [a, b, c] = mesh.corners(f);
+            (a.max(b).max(c) - a.min(b).min(c)).max_element() + reach(f)
+        })
+        .fold(0.0f32, f32::max);
+    let inv_cell = (counted as f64 / extent).min(16.0 / largest as f64);
+    let boxed = |f: usize| {
+        let [a, b, c] = mesh.corners(f);
+        let pad = Vec3::splat(0.5 * reach(f));
+        let cell = |p: Vec3| (p * inv_cell as f32).to_array().map(floor_i32);
+        (cell(a.min(b).min(c) - pad), cell(a.max(b).max(c) + pad))
+    };
+    let slots = table.len();
+    let slot = |x: i32, y: i32, z: i32| {
+        let h = (x as u32).wrapping_mul(0x9E37_79B1)
+            ^ (y as u32).wrapping_mul(0x85EB_CA77)
+            ^ (z as u32).wrapping_mul(0xC2B2_AE3D);
+        h as usize % slots
+    };
+    let cells = |f: usize, visit: &mut dyn FnMut(usize)| {
+        let (lo, hi) = boxed(f);
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    visit(slot(x, y, z));
+                }
+            }
+        }
+    };
+    for f in (0..faces).filter(|&f| reach(f) > 0.0) {
+        let s = shell_of(f);
+        cells(f, &mut |c| {
+            table[c] = match table[c] {
+                EMPTY => s,
+                t if t == s => s,
+                _ => MIXED,
+            }
+        });
+    }
+    for f in (0..faces).filter(|&f| reach(f) > 0.0) {
+        let mut mixed = false;
+        cells(f, &mut |c| mixed |= table[c] == MIXED);
+        near[f] = mixed as u8 * NEAR_OTHER;
+    }
+    Ok(())
+}
