@@ -356,7 +356,7 @@ int main(int argc, char** argv) try {
     auto match = [&](double Coverage::Seen::*metric) {
       std::vector<std::pair<double, double>> random;
       for (size_t k = 1; k < rows.size(); ++k) random.emplace_back(rows[k].multiple, rows[k].seen.*metric);
-      return check::matching_multiple(rows[0].seen.*metric, random);
+      return check::matching_multiple(rows[0].seen.*metric, random).text();
     };
     std::printf("\n  random roots needed to match stamped: %s (skin visible), %s (bald patches)\n",
                 match(&Coverage::Seen::skin).c_str(), match(&Coverage::Seen::patches).c_str());
