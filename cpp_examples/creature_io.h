@@ -284,7 +284,7 @@ struct Coverage {
     double skin;     // fraction of the furred-skin rays whose first hit is the skin
     double worst;    // 99th percentile over tiles of the fraction of a tile's rays that see skin
     double patches;  // fraction of tiles where >= 25 % of the rays see skin
-    size_t tiles;
+    size_t tiles;    // tiles measured
   };
   Seen skin_visible(RTCScene scene, unsigned skin_id) const;
 };
