@@ -489,7 +489,16 @@ Coverage::Coverage(const Mesh& m, const GrayImage& d, int r)
     : mesh(m),
       density(d),
       views{{"front", {0, 0, -1}}, {"right", {-1, 0, 0}}, {"back", {0, 0, 1}}, {"left", {1, 0, 0}}},
-      resolution(r) {}
+      resolution(r) {
+  V3 lo = at3(m.positions, 0), hi = lo;
+  for (size_t i = 1; i < m.vertex_count(); ++i) {
+    const V3 p = at3(m.positions, i);
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  center = 0.5f * (lo + hi);
+  half = 1.1f * 0.5f * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+}
 
 void Coverage::ray(size_t view, int x, int y, V3& org, V3& dir) const {
   const V3 f = views[view].forward;
@@ -538,7 +547,7 @@ Coverage::Seen Coverage::skin_visible(RTCScene scene, unsigned skin_id) const {
     });
   }
   const size_t visible = size_t(std::count(sees_skin.begin(), sees_skin.end(), uint8_t(1)));
-  size_t tiles = 0, patchy = 0;
+  std::vector<double> share;
   for (size_t v = 0; v < views.size(); ++v) {
     for (int ty = 0; ty + tile <= resolution; ty += tile) {
       for (int tx = 0; tx + tile <= resolution; tx += tile) {
@@ -550,13 +559,20 @@ Coverage::Seen Coverage::skin_visible(RTCScene scene, unsigned skin_id) const {
             skin += sees_skin[i];
           }
         }
-        if (on_fur < size_t(tile * tile)) continue;
-        ++tiles;
-        patchy += 4 * skin >= on_fur;
+        if (on_fur == size_t(tile * tile)) share.push_back(double(skin) / double(on_fur));
       }
     }
   }
-  return {double(visible) / double(furred_rays), double(patchy) / double(std::max<size_t>(tiles, 1))};
+  std::sort(share.begin(), share.end());
+  double worst = 0.0;
+  if (!share.empty()) {  // linear between the two nearest ranks, as numpy.percentile
+    const double at = 0.99 * double(share.size() - 1);
+    const size_t k = size_t(at);
+    worst = share[k] + (at - double(k)) * (share[std::min(k + 1, share.size() - 1)] - share[k]);
+  }
+  const size_t patchy = size_t(share.end() - std::lower_bound(share.begin(), share.end(), 0.25));
+  return {double(visible) / double(furred_rays), worst, double(patchy) / double(std::max<size_t>(share.size(), 1)),
+          share.size()};
 }
 
 }  // namespace creature

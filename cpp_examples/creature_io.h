@@ -253,7 +253,7 @@ std::vector<PelageRoot> random_roots(const std::vector<double>& cdf, size_t coun
 // First hit of a ray, or geomID == RTC_INVALID_GEOMETRY_ID.
 RTCRayHit trace(RTCScene scene, V3 org, V3 dir, float tfar = 1e30f);
 
-// Orthographic views of `resolution`^2 parallel rays around the creature;
+// Orthographic views of `resolution`^2 parallel rays around the mesh;
 // measures how much furred skin a set of strands leaves visible.
 struct Coverage {
   struct View {
@@ -264,13 +264,14 @@ struct Coverage {
   const GrayImage& density;
   std::vector<View> views;
   int resolution;
-  V3 center{0.0f, 0.06f, 0.0f};
-  float half = 1.3f;            // half the side of the square each view covers
+  V3 center;                    // of the mesh's bounding box
+  float half;                   // half the side of the square each view covers
   std::vector<uint8_t> furred;  // per ray: hits skin with density > 0 in the skin-only scene
   size_t furred_rays = 0;
-  static constexpr int tile = 8;
+  static constexpr int tile = 16;
 
-  // The four side views (front, right, back, left).
+  // The four side views (front, right, back, left), framing the mesh's
+  // bounding box with a 10 % margin.
   Coverage(const Mesh& mesh, const GrayImage& density, int resolution);
   void ray(size_t view, int x, int y, V3& org, V3& dir) const;
   size_t rays_per_view() const { return size_t(resolution) * size_t(resolution); }
@@ -278,9 +279,12 @@ struct Coverage {
   void prepare(RTCScene skin_only);
 
   // What one set of strands leaves visible.
+  // Tiles are tile x tile rays of one view, all on furred skin.
   struct Seen {
     double skin;     // fraction of the furred-skin rays whose first hit is the skin
-    double patches;  // fraction of tiles (tile x tile rays, all on furred skin) where >= 25 % of the rays see skin
+    double worst;    // 99th percentile over tiles of the fraction of a tile's rays that see skin
+    double patches;  // fraction of tiles where >= 25 % of the rays see skin
+    size_t tiles;    // tiles measured
   };
   Seen skin_visible(RTCScene scene, unsigned skin_id) const;
 };

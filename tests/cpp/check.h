@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdarg>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,17 +29,36 @@ inline std::string fmt(const char* f, ...) {
   return buf;
 }
 
-// How many times more random roots match the stamped value of a "lower is
-// better" measure, interpolated between measured (multiple, value) pairs in
-// increasing multiple; "<= 1x" or "> Nx" outside the measured range.
-inline std::string matching_multiple(double stamped, const std::vector<std::pair<double, double>>& random) {
-  if (random.empty() || stamped >= random.front().second) return "<= 1x";
+// How many times more uniformly random roots give the stamped roots' value of
+// a "lower is better" measure, linear between measured (multiple, value)
+// pairs in increasing multiple. Outside the measured range nothing is
+// extrapolated: `where` says on which side the stamped value lies.
+struct Multiple {
+  enum Where { below, within, above } where;
+  double value;  // within: the interpolated multiple; below/above: the range's end
+
+  std::string text() const {
+    if (where == below) return fmt("< %.2fx", value);
+    if (where == above) return fmt("> %.2fx", value);
+    return fmt("%.2fx", value);
+  }
+  // `min` must lie within the measured range, or "above" would not prove it.
+  bool at_least(double min) const { return where == above || (where == within && value >= min); }
+};
+
+// Noisy measures need not fall monotonically with the multiple: the first
+// crossing counts.
+inline Multiple matching_multiple(double stamped, const std::vector<std::pair<double, double>>& random) {
+  if (random.empty()) throw std::invalid_argument("matching_multiple: no random measurements");
+  if (stamped > random.front().second) return {Multiple::below, random.front().first};
   for (size_t k = 0; k + 1 < random.size(); ++k) {
     const auto [ma, a] = random[k];
     const auto [mb, b] = random[k + 1];
-    if (stamped <= a && stamped >= b) return fmt("~%.1fx", ma + (a - stamped) / std::max(a - b, 1e-12) * (mb - ma));
+    if (stamped <= a && stamped >= b) {
+      return {Multiple::within, ma + (a - stamped) / std::max(a - b, 1e-12) * (mb - ma)};
+    }
   }
-  return fmt("> %.0fx", random.back().first);
+  return {Multiple::above, random.back().first};
 }
 
 }  // namespace check

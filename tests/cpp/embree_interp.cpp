@@ -650,7 +650,7 @@ int main(int argc, char** argv) try {
     auto match = [&](double creature::Coverage::Seen::*metric) {
       std::vector<std::pair<double, double>> random;
       for (size_t k = 1; k < rows.size(); ++k) random.emplace_back(rows[k].multiple, rows[k].seen.*metric);
-      return check::matching_multiple(rows[0].seen.*metric, random);
+      return check::matching_multiple(rows[0].seen.*metric, random).text();
     };
     std::printf("\n  random roots needed to match stamped: %s (skin visible), %s (bald patches)  (%.1f s)\n",
                 match(&creature::Coverage::Seen::skin).c_str(), match(&creature::Coverage::Seen::patches).c_str(),
