@@ -56,12 +56,14 @@ impl<'a> Shells<'a> {
         arena: &mut Arena<'a>,
     ) -> Result<Self, Error> {
         let faces = mesh.triangle_count();
-        // union-find over the vertices, each triangle joining its corners;
-        // the larger root joins the smaller, so the labels do not depend on
-        // the order of the unions
+        let rim = Rim::new(mesh, arena)?;
+        // union-find over the welded vertices (a UV seam joins its two
+        // sides), each triangle joining its corners; the larger root joins
+        // the smaller, so the labels do not depend on the order of the
+        // unions
         let parent = arena.alloc::<u32>(mesh.positions.len())?;
         for (i, p) in parent.iter_mut().enumerate() {
-            *p = i as u32;
+            *p = rim.welded(i as u32);
         }
         fn root(parent: &mut [u32], mut v: u32) -> u32 {
             while parent[v as usize] != v {
@@ -97,7 +99,7 @@ impl<'a> Shells<'a> {
             mark_near_other_shells(mesh, &shell_of, &reach, near, arena)?;
             flags = near;
         }
-        let open = !Rim::new(mesh, arena)?.is_closed();
+        let open = !rim.is_closed();
         let body = if shells > 1 || open {
             match Body::new(mesh, arena) {
                 Ok(body) => Some(body),

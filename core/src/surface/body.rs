@@ -162,7 +162,34 @@ pub struct Body<'a> {
     triangles: &'a [Stored],
     /// The caps' triangles, one per boundary edge (see the module docs).
     caps: &'a [Stored],
+    /// Each cap's bounding ball and the end of its triangles in `caps`.
+    loops: &'a [CapBall],
     class: &'a [u8],
+}
+
+/// A ball around one cap: every triangle of the cap lies inside it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct CapBall {
+    centre: [f32; 3],
+    radius: f32,
+    /// The cap's triangles end here in [`Body::caps`] (they start where
+    /// the previous cap's end).
+    end: u32,
+}
+
+impl CapBall {
+    /// An upper bound on the solid angle anything inside the ball
+    /// subtends at `p`, infinite when `p` is inside.
+    fn bound(&self, p: Vec3) -> f64 {
+        let d = p.distance(Vec3::from(self.centre)) as f64;
+        let r = self.radius as f64 * 1.001;
+        if d <= r {
+            return f64::INFINITY;
+        }
+        let s = r / d;
+        2.0 * core::f64::consts::PI * (1.0 - libm::sqrt(1.0 - s * s))
+    }
 }
 
 /// The grid a mesh's body will have, worked out before its memory is
@@ -193,10 +220,10 @@ impl BodyPlan {
 
     /// Arena bytes [`Body::build`] needs.
     pub fn bytes(&self) -> usize {
-        Self::bytes_with(&self.shape, self.cap_triangles)
+        Self::bytes_with(&self.shape, self.cap_triangles, self.loops)
     }
 
-    fn bytes_with(shape: &Shape, cap_triangles: usize) -> usize {
+    fn bytes_with(shape: &Shape, cap_triangles: usize, loops: usize) -> usize {
         let cells = shape.cells();
         let mut layout = ArenaLayout::new();
         layout
@@ -204,6 +231,7 @@ impl BodyPlan {
             .add::<u32>(shape.refs)
             .add::<Stored>(shape.triangles)
             .add::<Stored>(cap_triangles)
+            .add::<CapBall>(loops)
             .add::<u8>(cells);
         layout.bytes()
     }
@@ -214,7 +242,9 @@ impl<'a> Body<'a> {
     /// and its body's, for the most boundary edges the mesh could have.
     pub fn required_bytes(mesh: &Mesh) -> Result<usize, Error> {
         let shape = Shape::of(mesh)?;
-        let body = BodyPlan::bytes_with(&shape, 3 * mesh.triangle_count());
+        // a loop has three edges or more
+        let edges = 3 * mesh.triangle_count();
+        let body = BodyPlan::bytes_with(&shape, edges, edges / 3);
         Ok(Rim::required_bytes(mesh).saturating_add(body))
     }
 
@@ -258,6 +288,7 @@ impl<'a> Body<'a> {
         let refs = arena.alloc::<u32>(shape.refs)?;
         let triangles = arena.alloc::<Stored>(shape.triangles)?;
         let caps = arena.alloc::<Stored>(plan.cap_triangles)?;
+        let loops = arena.alloc::<CapBall>(plan.loops)?;
         let class = arena.alloc::<u8>(cells)?;
 
         let mut solid = (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f));
@@ -305,17 +336,18 @@ impl<'a> Body<'a> {
                 refs[start[c] as usize] = t as u32;
             });
         }
-        cap(mesh, rim, caps);
+        cap(mesh, rim, caps, loops);
         let mut body = Body {
             shape,
             start,
             refs,
             triangles,
             caps,
+            loops,
             class: &[],
         };
         body.classify(class);
-        body.mark_near_caps(class, rim);
+        body.mark_near_caps(class);
         body.class = class;
         Ok(body)
     }
@@ -388,23 +420,14 @@ impl<'a> Body<'a> {
     /// `2 pi (1 - sqrt(1 - R^2 / D^2))` from a distance `D > R` to the
     /// ball's centre; with `K` caps, each kept below `2 pi / K`, their sum
     /// stays below a half turn.
-    fn mark_near_caps(&self, class: &mut [u8], rim: &Rim) {
-        let loops = rim.loop_count();
+    fn mark_near_caps(&self, class: &mut [u8]) {
         let shape = &self.shape;
-        let share = 1.0 - 1.0 / loops as f32;
+        let share = 1.0 - 1.0 / self.loops.len() as f32;
         let reach = 1.0 / libm::sqrtf(1.0 - share * share);
         let half_diagonal = 0.5 * libm::sqrtf(3.0) / shape.inv_cell;
-        let mut first = 0;
-        for k in 0..loops {
-            let fan = &self.caps[first..first + rim.loop_edges(k).len()];
-            first += fan.len();
-            let centre = Vec3::from(fan[0][2]);
-            let radius = fan
-                .iter()
-                .flat_map(|t| [t[0], t[1]])
-                .map(|p| Vec3::from(p).distance(centre))
-                .fold(0.0f32, f32::max);
-            let d = radius * reach * 1.001 + half_diagonal;
+        for ball in self.loops {
+            let centre = Vec3::from(ball.centre);
+            let d = ball.radius * reach * 1.001 + half_diagonal;
             let (a, b) = shape.cell_range(centre - Vec3::splat(d), centre + Vec3::splat(d));
             for z in a[2]..=b[2] {
                 for y in a[1]..=b[1] {
@@ -460,8 +483,33 @@ impl<'a> Body<'a> {
         if !near_cap {
             return w >= 1;
         }
-        let caps: f64 = self.caps.iter().map(|t| solid_angle(t, p)).sum();
-        w as f64 - caps / (4.0 * core::f64::consts::PI) > INSIDE_WINDING as f64
+        self.caps_decide(w, p)
+    }
+
+    /// Whether `w` less the caps' solid angle at `p` over 4 pi is above
+    /// [`INSIDE_WINDING`]. Caps near `p` are evaluated exactly; the far
+    /// ones only when their bounds leave the answer open.
+    fn caps_decide(&self, w: i32, p: Vec3) -> bool {
+        const NEAR: f64 = 0.8;
+        let turn = 4.0 * core::f64::consts::PI;
+        let (mut exact, mut slack) = (0.0f64, 0.0f64);
+        let mut first = 0;
+        for ball in self.loops {
+            let fan = &self.caps[first..ball.end as usize];
+            first = ball.end as usize;
+            let bound = ball.bound(p);
+            if bound > NEAR {
+                exact += fan.iter().map(|t| solid_angle(t, p)).sum::<f64>();
+            } else {
+                slack += bound;
+            }
+        }
+        let value = w as f64 - exact / turn - INSIDE_WINDING as f64;
+        if libm::fabs(value) > slack / turn {
+            return value > 0.0;
+        }
+        let all: f64 = self.caps.iter().map(|t| solid_angle(t, p)).sum();
+        w as f64 - all / turn > INSIDE_WINDING as f64
     }
 
     /// True when the segment from `a` to `b` meets a triangle of the body.
@@ -584,19 +632,26 @@ fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
 /// Fills `caps` with the fans that close `rim`'s loops on `mesh`: for a
 /// boundary edge `a -> b` of a loop whose corners have the mean `m`, the
 /// triangle `(b, a, m)`, which runs the edge the other way.
-fn cap(mesh: &Mesh, rim: &Rim, caps: &mut [Stored]) {
+fn cap(mesh: &Mesh, rim: &Rim, caps: &mut [Stored], loops: &mut [CapBall]) {
     let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
     let mut next = 0;
-    for k in 0..rim.loop_count() {
+    for (k, ball) in loops.iter_mut().enumerate() {
         let edges = rim.loop_edges(k);
         let sum: Vec3 = edges.iter().map(|e| at(e[0])).sum();
         let mean = sum / edges.len() as f32;
+        let mut radius = 0.0f32;
         for e in edges {
             let (a, b) = (at(e[0]), at(e[1]));
             let (lo, hi) = (a.min(b).min(mean), a.max(b).max(mean));
             caps[next] = [b, a, mean, lo, hi].map(Into::into);
+            radius = radius.max(a.distance(mean));
             next += 1;
         }
+        *ball = CapBall {
+            centre: mean.into(),
+            radius,
+            end: next as u32,
+        };
     }
 }
 

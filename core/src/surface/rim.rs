@@ -1,6 +1,10 @@
 //! The open boundary of a mesh: the edges that lack a partner running the
 //! other way, gathered into closed loops (eye sockets, a mouth, a neck).
 //!
+//! Vertices at the same position are one vertex here (they are welded):
+//! meshes split their vertices along UV seams and normal creases, and a
+//! seam is not a hole.
+//!
 //! The boundary depends on the triangle indices only, so a host finds it
 //! once per topology and reuses it for every frame (see
 //! [`BodyPlan::of`](crate::surface::body::BodyPlan::of)). An edge listed
@@ -16,8 +20,10 @@ use crate::{Error, Mesh};
 /// The boundary loops of a mesh, in caller-provided memory.
 #[derive(Clone, Copy, Debug)]
 pub struct Rim<'a> {
-    /// Boundary edges as their triangles list them (`[a, b]` for `a -> b`),
-    /// loop after loop, each loop in order around it.
+    /// Each vertex's welded index: the lowest index at its position.
+    weld: &'a [u32],
+    /// Boundary edges as their triangles list them (`[a, b]` for `a -> b`,
+    /// welded indices), loop after loop, each loop in order around it.
     edges: &'a [[u32; 2]],
     /// Loop `k` is `edges[starts[k]..starts[k + 1]]`.
     starts: &'a [u32],
@@ -31,9 +37,11 @@ impl<'a> Rim<'a> {
     /// could be a boundary edge).
     pub fn required_bytes(mesh: &Mesh) -> usize {
         let edges = 3 * mesh.triangle_count();
+        let vertices = mesh.positions.len();
         let mut layout = ArenaLayout::new();
         layout
-            .add::<[u32; 4]>(edges)
+            .add::<u32>(vertices)
+            .add::<[u32; 4]>(edges.max(vertices))
             .add::<[u32; 2]>(edges)
             .add::<u32>(edges / 3 + 2);
         layout.bytes()
@@ -49,11 +57,28 @@ impl<'a> Rim<'a> {
                 available: arena.capacity(),
             });
         }
+        let vertices = mesh.positions.len();
+        let weld = arena.alloc::<u32>(vertices)?;
+        let keys = arena.alloc::<[u32; 4]>((3 * mesh.triangle_count()).max(vertices))?;
+        // vertices sorted by position (their bits, with -0 as 0): equal
+        // positions are adjacent and take the first index among them
+        for (v, key) in keys[..vertices].iter_mut().enumerate() {
+            let p = mesh.positions.get(v).map(|c| (c + 0.0).to_bits());
+            *key = [p[0], p[1], p[2], v as u32];
+        }
+        keys[..vertices].sort_unstable();
+        let mut first = 0;
+        for i in 0..vertices {
+            if keys[i][..3] != keys[first][..3] {
+                first = i;
+            }
+            weld[keys[i][3] as usize] = keys[first][3];
+        }
         // each edge keyed by its ends in increasing order, with its
         // direction: after sorting, an edge's copies are adjacent
-        let keys = arena.alloc::<[u32; 4]>(3 * mesh.triangle_count())?;
         let mut n = 0;
-        for [a, b, c] in mesh.triangles.iter() {
+        for t in mesh.triangles.iter() {
+            let [a, b, c] = t.map(|v| weld[v as usize]);
             for (from, to) in [(a, b), (b, c), (c, a)] {
                 if from != to {
                     keys[n] = [from.min(to), from.max(to), (from > to) as u32, 0];
@@ -115,6 +140,7 @@ impl<'a> Rim<'a> {
         }
         starts[loops] = written as u32;
         Ok(Rim {
+            weld,
             edges: &edges[..written],
             starts: &starts[..=loops],
             vertices: mesh.positions.len(),
@@ -143,6 +169,11 @@ impl<'a> Rim<'a> {
         &self.edges[self.starts[k] as usize..self.starts[k + 1] as usize]
     }
 
+    /// The welded index of vertex `v`: the lowest index at its position.
+    pub fn welded(&self, v: u32) -> u32 {
+        self.weld[v as usize]
+    }
+
     /// Checks that `mesh` has the counts of the mesh the rim was found on.
     pub(crate) fn check_mesh(&self, mesh: &Mesh) -> Result<(), Error> {
         if mesh.positions.len() != self.vertices || mesh.triangle_count() != self.triangles {
@@ -157,7 +188,7 @@ impl<'a> Rim<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testmesh::{graded_plane, sphere};
+    use crate::testmesh::{graded_plane, seamed_sphere, sphere};
     use crate::Strided;
 
     fn rim_of<'a>(mesh: &Mesh, buf: &'a mut Vec<u8>) -> Rim<'a> {
@@ -179,6 +210,13 @@ mod tests {
             assert_eq!(w[0][1], w[1][0]);
         }
         assert_eq!(edges.last().unwrap()[1], edges[0][0]);
+    }
+
+    #[test]
+    fn a_seam_of_split_vertices_is_not_a_hole() {
+        let m = seamed_sphere(12, 24);
+        let mut buf = vec![];
+        assert!(rim_of(&m.mesh(), &mut buf).is_closed());
     }
 
     #[test]
