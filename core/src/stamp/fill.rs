@@ -15,7 +15,7 @@ use super::near::{Near, LANES};
 use super::place::Placing;
 use super::{face_frame, Candidate, Scratch, Stamper, SMALL_TARGET};
 use crate::rng::{self, Purpose};
-use crate::stamp::tile::{LOD_LEVELS, TILE};
+use crate::stamp::tile::{LEVEL_STEPS, LOD_LEVELS, TILE};
 use crate::surface::grid::HashGrid;
 use crate::Error;
 use glam::Vec3;
@@ -114,7 +114,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     let c = Candidate {
                         face: f as u32,
                         uv: uv[d],
-                        level: (LOD_LEVELS - 1) as u16,
+                        level: (LOD_LEVELS - 1) as u8,
+                        step: (LEVEL_STEPS - 1) as u8,
                         near_levels: LOD_LEVELS as u16,
                     };
                     let q = Near::new(&c, n, &frame);
@@ -161,10 +162,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     cands[n] = Candidate {
                         face: f as u32,
                         uv: uv[d],
-                        level: (LOD_LEVELS - 1) as u16,
+                        level: (LOD_LEVELS - 1) as u8,
+                        step: (LEVEL_STEPS - 1) as u8,
                         near_levels: LOD_LEVELS as u16,
                     };
-                    near[n] = Near { index: n as u32, ..*q };
+                    near[n] = Near {
+                        index: n as u32,
+                        ..*q
+                    };
                     grid.insert(n as u32, p);
                     n += 1;
                 }

@@ -3,18 +3,18 @@
 use super::near::Near;
 use super::{face_frame, Candidate, Scratch, Stamper, GRID_CELL};
 use crate::rng::{self, Purpose};
-use crate::stamp::tile::LOD_LEVELS;
+use crate::stamp::tile::{LEVEL_STEPS, LOD_LEVELS};
 use crate::surface::grid::HashGrid;
 use crate::{Error, Root};
 use glam::Vec3;
 
-/// Bits of the hash that orders the candidates within one LOD level (ties
-/// keep candidate order).
-pub(super) const RANK_HASH_BITS: u32 = 12;
+/// Bits of the hash that orders the candidates within one step of a LOD
+/// level (ties keep candidate order).
+pub(super) const RANK_HASH_BITS: u32 = 10;
 /// 2^64 over the golden ratio, odd.
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
-/// Counters of the rank sort: one per (level, hash) key.
-pub(super) const RANK_KEYS: usize = LOD_LEVELS << RANK_HASH_BITS;
+/// Counters of the rank sort: one per (level, step, hash) key.
+pub(super) const RANK_KEYS: usize = (LOD_LEVELS * LEVEL_STEPS) << RANK_HASH_BITS;
 
 impl<'m, 'a> Stamper<'m, 'a> {
     /// Assigns LOD levels across triangles, ranks the candidates, and writes
@@ -60,9 +60,18 @@ impl<'m, 'a> Stamper<'m, 'a> {
         // the golden ratio around the key range, so they land far apart in
         // the order, and any run of keys takes candidates from all over
         let offset = rng::hash(self.seed, 0, Purpose::LodOrder, 0);
-        for (j, (key, &l)) in keys.iter_mut().zip(&scratch.level[..n]).enumerate() {
+        let levels = scratch.level[..n].iter();
+        for (j, ((key, &l), c)) in keys.iter_mut().zip(levels).zip(cands).enumerate() {
             let h = offset.wrapping_add(j as u64).wrapping_mul(GOLDEN) >> (64 - RANK_HASH_BITS);
-            *key = ((l as u32) << RANK_HASH_BITS) | h as u32;
+            // a point raised to a finer level comes after that level's
+            // own points
+            let step = if l == c.level {
+                c.step
+            } else {
+                LEVEL_STEPS as u8 - 1
+            };
+            let fine = l as u32 * LEVEL_STEPS as u32 + step as u32;
+            *key = (fine << RANK_HASH_BITS) | h as u32;
             counts[*key as usize] += 1;
         }
         let mut first = 0;
@@ -121,12 +130,13 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let finest = LOD_LEVELS - 1;
         let squares = self.spacings.map(|s| s * s);
         let level = &mut scratch.level[..n];
-        let takes_part = |c: &Candidate| c.level < c.near_levels && (c.level as usize) < finest;
+        let takes_part =
+            |c: &Candidate| (c.level as u16) < c.near_levels && (c.level as usize) < finest;
         let taking = &mut *scratch.next;
         let mut start = [0usize; LOD_LEVELS + 1];
         let mut m = 0;
         for (j, (c, l)) in cands.iter().zip(level.iter_mut()).enumerate() {
-            *l = c.level as u8;
+            *l = c.level;
             // branch-free: which candidates take part is close to random
             let takes = takes_part(c) as usize;
             start[c.level as usize + 1] += takes;

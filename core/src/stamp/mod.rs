@@ -187,7 +187,11 @@ pub struct Candidate {
     /// Barycentric coordinates on the triangle.
     pub uv: [f32; 2],
     /// LOD level inherited from the tile (0 = coarsest).
-    pub level: u16,
+    pub level: u8,
+    /// The step of its level the tile took it in (see
+    /// [`step_spacing`](tile::step_spacing)): the rank orders a level's
+    /// points by step.
+    pub step: u8,
     /// How many LOD levels, coarsest first, have a spacing (in units of the
     /// local disk radius) that reaches from the point past a cut edge of its
     /// triangle or the far side of a linked neighbour. Within that distance
@@ -779,8 +783,8 @@ mod tests {
     fn check_lod_spacing(stamper: &Stamper, cands: &[Candidate], levels: &[u8]) -> usize {
         let mut raised = 0;
         for (c, &l) in cands.iter().zip(levels) {
-            assert!(l as u16 >= c.level && (l as usize) < LOD_LEVELS);
-            raised += (l as u16 > c.level) as usize;
+            assert!(l >= c.level && (l as usize) < LOD_LEVELS);
+            raised += (l > c.level) as usize;
         }
         let at = |c: &Candidate| position(&stamper.mesh, c);
         let spacings = stamper.spacings;

@@ -5,7 +5,7 @@ use super::near::LANES;
 use super::{Candidate, Stamper};
 use crate::rng::{self, Purpose};
 use crate::stamp::chart::Unfolded;
-use crate::stamp::tile::{CELL, CELLS, LOD_LEVELS, TILE, TILE_SIDE};
+use crate::stamp::tile::{CELL, CELLS, LEVEL_STEPS, LOD_LEVELS, TILE, TILE_SIDE};
 use crate::surface::grid::floor_i32;
 use crate::{Error, Mesh};
 use bytemuck::{Pod, Zeroable};
@@ -261,7 +261,8 @@ impl Placing {
             *c = Candidate {
                 face: f,
                 uv: [u, v],
-                level: batch.level[i] as u16,
+                level: batch.level[i] / LEVEL_STEPS as u8,
+                step: batch.level[i] % LEVEL_STEPS as u8,
                 near_levels: near[i],
             };
         }

@@ -846,7 +846,10 @@ mod tests {
         let (a, b, c) = (sphere(10, 20), sphere(10, 20), sphere(6, 12));
         let mut p: Vec<[f32; 3]> = a.p.clone();
         p.extend(b.p.iter().map(|v| [v[0] + 0.8, v[1] * 0.7, v[2]]));
-        p.extend(c.p.iter().map(|v| [v[0] * 0.3 - 0.4, v[1] * 0.3, v[2] * 0.3]));
+        p.extend(
+            c.p.iter()
+                .map(|v| [v[0] * 0.3 - 0.4, v[1] * 0.3, v[2] * 0.3]),
+        );
         let mut t = a.t.clone();
         let shift = |m: &crate::testmesh::TestMesh, by: usize| {
             m.t.iter()
@@ -855,7 +858,10 @@ mod tests {
         };
         t.extend(shift(&b, a.p.len()));
         t.extend(shift(&c, a.p.len() + b.p.len()));
-        let mesh = Mesh::new(crate::Strided::from_slice(&p), crate::Strided::from_slice(&t));
+        let mesh = Mesh::new(
+            crate::Strided::from_slice(&p),
+            crate::Strided::from_slice(&t),
+        );
         let lo = Vec3::new(-1.2, -1.2, -1.2);
         let hi = Vec3::new(2.0, 1.2, 1.2);
         assert!(agrees_with_winding(&mesh, lo, hi, 4000, 1e-4) > 500);

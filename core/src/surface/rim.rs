@@ -97,7 +97,11 @@ impl<'a> Rim<'a> {
                 net += if keys[i][2] == 0 { 1 } else { -1 };
                 i += 1;
             }
-            let edge = if net > 0 { [lo, hi, 0, 0] } else { [hi, lo, 0, 0] };
+            let edge = if net > 0 {
+                [lo, hi, 0, 0]
+            } else {
+                [hi, lo, 0, 0]
+            };
             for _ in 0..net.unsigned_abs() {
                 keys[e] = edge;
                 e += 1;
@@ -223,13 +227,12 @@ mod tests {
     fn holes_give_one_loop_each_and_a_short_arena_is_refused() {
         // two triangles removed far apart on a sphere: two triangular holes
         let m = sphere(8, 16);
-        let tris: Vec<[u32; 3]> = m
-            .t
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| i != 40 && i != 150)
-            .map(|(_, &t)| t)
-            .collect();
+        let tris: Vec<[u32; 3]> =
+            m.t.iter()
+                .enumerate()
+                .filter(|&(i, _)| i != 40 && i != 150)
+                .map(|(_, &t)| t)
+                .collect();
         let mesh = Mesh::new(Strided::from_slice(&m.p), Strided::from_slice(&tris));
         let mut buf = vec![];
         let rim = rim_of(&mesh, &mut buf);

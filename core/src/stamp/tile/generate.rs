@@ -5,7 +5,7 @@
 //! so a stamp pays nothing for its tile; the crate's tests include it too,
 //! to check the baked tile against a fresh run.
 
-use super::shape::{level_spacing, CELL, CELLS, LOD_LEVELS, TILE_SIDE};
+use super::shape::{step_spacing, CELL, CELLS, LEVEL_STEPS, LOD_LEVELS, TILE_SIDE};
 use crate::rng::{self, Purpose};
 
 /// Seed of the tile's random draws. Every stamp uses this one tile, as the
@@ -197,47 +197,54 @@ fn bucket(src: &[[f32; 2]], dst: &mut [[f32; 2]], cell_start: &mut [u32]) {
     }
 }
 
-/// Greedy nested selection: level `k` points are at least `sqrt(2)^(L-1-k)`
-/// apart from every point of level `<= k`, so each level prefix is itself a
-/// Poisson set with half the density of the next. `points` are bucketed by
-/// `cell_start`; each point is tested against the chosen ones in the cells
-/// within the spacing, or against the list of chosen ones when that is
+/// Greedy nested selection, step by step: step `j` of level `k` takes every
+/// point still free that is at least [`step_spacing`]`(k, j)` from every
+/// point taken before, so level `k`'s points (all its steps) are at least
+/// `level_spacing(k)` apart from every point of level `<= k`, and each level
+/// prefix is itself a Poisson set with about half the density of the next.
+/// A point's value is `level * LEVEL_STEPS + step`. `points` are bucketed
+/// by `cell_start`; each point is tested against the taken ones in the
+/// cells within the spacing, or against the list of taken ones when that is
 /// shorter (the coarse levels), which tests the same points.
 fn assign_levels(points: &[[f32; 2]], cell_start: &[u32], levels: &mut [u8]) {
-    let finest = (LOD_LEVELS - 1) as u8;
-    levels.fill(finest);
+    const FREE: u8 = u8::MAX;
+    levels.fill(FREE);
     let mut chosen = [0u32; MAX_POINTS];
     let mut n_chosen = 0;
     let side = CELLS as isize;
-    for k in 0..finest {
-        let r = level_spacing(k as usize);
-        let r2 = r * r;
-        let reach = libm::ceilf(r / CELL as f32) as isize;
-        let by_cells = 2 * reach < side;
-        for i in 0..points.len() {
-            if levels[i] != finest {
-                continue;
-            }
-            let p = points[i];
-            let far = |j: usize| torus_dist2(p, points[j]) >= r2;
-            let free = if by_cells && (2 * reach + 1).pow(2) < n_chosen as isize {
-                let (cx, cy) = (p[0] as isize / CELL as isize, p[1] as isize / CELL as isize);
-                (-reach..=reach).all(|dy| {
-                    let row = (cy + dy).rem_euclid(side) * side;
-                    (-reach..=reach).all(|dx| {
-                        let c = (row + (cx + dx).rem_euclid(side)) as usize;
-                        let cell = cell_start[c] as usize..cell_start[c + 1] as usize;
-                        cell.into_iter().all(|j| levels[j] == finest || far(j))
+    for k in 0..LOD_LEVELS {
+        for j in 0..LEVEL_STEPS {
+            let r = step_spacing(k, j);
+            let r2 = r * r;
+            let reach = libm::ceilf(r / CELL as f32) as isize;
+            let by_cells = 2 * reach < side;
+            for i in 0..points.len() {
+                if levels[i] != FREE {
+                    continue;
+                }
+                let p = points[i];
+                let far = |j: usize| torus_dist2(p, points[j]) >= r2;
+                let free = if by_cells && (2 * reach + 1).pow(2) < n_chosen as isize {
+                    let (cx, cy) = (p[0] as isize / CELL as isize, p[1] as isize / CELL as isize);
+                    (-reach..=reach).all(|dy| {
+                        let row = (cy + dy).rem_euclid(side) * side;
+                        (-reach..=reach).all(|dx| {
+                            let c = (row + (cx + dx).rem_euclid(side)) as usize;
+                            let cell = cell_start[c] as usize..cell_start[c + 1] as usize;
+                            cell.into_iter().all(|j| levels[j] == FREE || far(j))
+                        })
                     })
-                })
-            } else {
-                chosen[..n_chosen].iter().all(|&j| far(j as usize))
-            };
-            if free {
-                levels[i] = k;
-                chosen[n_chosen] = i as u32;
-                n_chosen += 1;
+                } else {
+                    chosen[..n_chosen].iter().all(|&j| far(j as usize))
+                };
+                if free {
+                    levels[i] = (k * LEVEL_STEPS + j) as u8;
+                    chosen[n_chosen] = i as u32;
+                    n_chosen += 1;
+                }
             }
         }
     }
+    // the last step's spacing is the tile's own: it takes every point left
+    debug_assert!(levels.iter().all(|&l| l != FREE));
 }

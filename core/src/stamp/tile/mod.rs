@@ -11,7 +11,7 @@
 mod generate;
 mod shape;
 
-pub use shape::{level_spacing, CELL, CELLS, LOD_LEVELS, TILE_SIDE};
+pub use shape::{level_spacing, step_spacing, CELL, CELLS, LEVEL_STEPS, LOD_LEVELS, TILE_SIDE};
 
 // the baked tile: `POINTS`, `LEVELS` and `CELL_START`, as the fields of `Tile`
 include!(concat!(env!("OUT_DIR"), "/tile.rs"));
@@ -48,7 +48,8 @@ impl Tile {
     }
 
     /// Points of the `len` cells (x, y) to (x + len - 1, y) of one row,
-    /// and their LOD levels: cells are stored row by row, so a run of cells
+    /// and their LOD steps (`level * LEVEL_STEPS + step`, see
+    /// [`step_spacing`]): cells are stored row by row, so a run of cells
     /// is one slice. `x + len <= CELLS`, `y < CELLS`.
     #[inline]
     pub fn run(&self, x: usize, y: usize, len: usize) -> (&[[f32; 2]], &[u8]) {
@@ -60,7 +61,7 @@ impl Tile {
         (&self.points[s..e], &self.levels[s..e])
     }
 
-    /// All points with their LOD levels.
+    /// All points with their LOD steps (`level * LEVEL_STEPS + step`).
     pub fn points(&self) -> impl Iterator<Item = ([f32; 2], u8)> + '_ {
         self.points.iter().copied().zip(self.levels.iter().copied())
     }
@@ -102,19 +103,27 @@ mod tests {
             "{}",
             TILE.density()
         );
-        for (i, &(a, la)) in all.iter().enumerate() {
-            for &(b, lb) in &all[i + 1..] {
+        // every pair respects the spacing of the later step of the two
+        for (i, &(a, sa)) in all.iter().enumerate() {
+            for &(b, sb) in &all[i + 1..] {
                 let d2 = torus_dist2(a, b);
                 assert!(d2 >= 0.999, "points too close: {d2}");
-                let k = la.max(lb);
-                let r = level_spacing(k as usize);
-                assert!(d2 >= r * r * 0.999, "level {k} spacing violated");
+                let s = sa.max(sb) as usize;
+                let r = step_spacing(s / LEVEL_STEPS, s % LEVEL_STEPS);
+                assert!(d2 >= r * r * 0.999, "step {s} spacing violated");
             }
         }
-        let finest = all
-            .iter()
-            .filter(|p| p.1 as usize == LOD_LEVELS - 1)
-            .count();
+        let mut per_level = [0usize; LOD_LEVELS];
+        for p in &all {
+            per_level[p.1 as usize / LEVEL_STEPS] += 1;
+        }
+        // each level about doubles the points of the levels before it
+        for k in 6..LOD_LEVELS {
+            let before: usize = per_level[..k].iter().sum();
+            let ratio = (before + per_level[k]) as f32 / before as f32;
+            assert!((1.5..2.8).contains(&ratio), "level {k}: {per_level:?}");
+        }
+        let finest = per_level[LOD_LEVELS - 1];
         let share = finest as f32 / all.len() as f32;
         assert!(share > 0.3 && share < 0.7, "finest level holds {share}");
     }

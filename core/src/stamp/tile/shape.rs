@@ -5,6 +5,11 @@
 pub const TILE_SIDE: usize = 48;
 /// Number of nested LOD levels (see [`level_spacing`]).
 pub const LOD_LEVELS: usize = 12;
+/// Steps each level's points are chosen in, at spacings from just under the
+/// next coarser level's down to the level's own: a rank prefix that ends
+/// inside a level then takes its points step by step, the earlier steps
+/// spread wider, instead of a random share of the level.
+pub const LEVEL_STEPS: usize = 4;
 /// Side of the lookup cells, in units of the disk radius. Placing a
 /// triangle walks the cells it crosses row by row: cells of 2 hold about
 /// three points, so the walk takes half the rows and runs that unit cells
@@ -18,4 +23,12 @@ pub const CELLS: usize = TILE_SIDE / CELL;
 /// finest.
 pub fn level_spacing(k: usize) -> f32 {
     libm::powf(2.0, 0.5 * (LOD_LEVELS - 1 - k) as f32)
+}
+
+/// The spacing of step `j` of level `k`: `level_spacing(k) *
+/// 2^((LEVEL_STEPS - 1 - j) / (2 LEVEL_STEPS))`, from just under the
+/// coarser level's spacing (`j = 0`) to the level's own (the last step).
+pub fn step_spacing(k: usize, j: usize) -> f32 {
+    let above = (LEVEL_STEPS - 1 - j) as f32 / (2 * LEVEL_STEPS) as f32;
+    level_spacing(k) * libm::powf(2.0, above)
 }
