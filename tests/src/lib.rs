@@ -2,4 +2,5 @@
 
 pub mod animated;
 pub mod creature;
+pub mod head;
 pub mod measure;
