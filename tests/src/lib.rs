@@ -4,3 +4,4 @@ pub mod animated;
 pub mod creature;
 pub mod head;
 pub mod measure;
+pub mod quality;
