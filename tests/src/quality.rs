@@ -117,12 +117,12 @@ impl<'a> Skin<'a> {
         }
     }
 
+    /// The items of `roots`, indexed by their place in `roots`.
     fn items(&self, roots: &[Root]) -> Vec<Item> {
-        (0..roots.len())
-            .map(|i| {
-                let r = roots[i];
-                self.item(r.face as usize, r.u, r.v, i as u32)
-            })
+        roots
+            .iter()
+            .enumerate()
+            .map(|(i, r)| self.item(r.face as usize, r.u, r.v, i as u32))
             .collect()
     }
 }
@@ -229,7 +229,8 @@ impl Grid {
             self.cell_of(p + Vec3::splat(r)),
         );
         let mask = self.start.len() - 2;
-        let row = (hi[0] - lo[0]) as usize + 1;
+        // a row longer than the table reads the table once
+        let row = ((hi[0] - lo[0]) as usize + 1).min(mask + 1);
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 let b = cell_hash([lo[0], y, z]) & mask;
