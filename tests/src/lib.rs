@@ -2,4 +2,6 @@
 
 pub mod animated;
 pub mod creature;
+pub mod head;
 pub mod measure;
+pub mod quality;
