@@ -397,7 +397,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 };
             }
         }
-        EDGE_LOSS as f64 * loss as f64
+        let refilled = if self.fills() { fill::REFILLED } else { 0.0 };
+        (EDGE_LOSS * (1.0 - refilled)) as f64 * loss as f64
     }
 
     /// The radius whose stamp is expected to keep the middle of the count

@@ -198,13 +198,6 @@ impl Placing {
         place
     }
 
-    /// The point at barycentric `(u, v)` of the face, in tile units.
-    #[inline]
-    pub(super) fn tile_point(&self, u: f32, v: f32) -> Vec2 {
-        let [a, b, c] = self.corners;
-        a + (b - a) * u + (c - a) * v
-    }
-
     /// [`cross`](Self::cross) as arrays, for code that reads it by edge
     /// (a vector read by a varying lane is slower).
     #[inline]

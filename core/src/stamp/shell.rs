@@ -9,10 +9,11 @@
 //!   the shells as it holds across cuts.
 //! - **Buried skin.** A point is dropped when the spot just outside the
 //!   skin there (a thousandth of the local disk radius along the face
-//!   normal) is inside the body, by the body's winding number (see
-//!   [`Body`]): skin inside another closed shell (the part of the head a
-//!   horn passes through, an eyeball's back inside the head) grows no hair.
-//!   A mesh of one closed shell has no buried skin and skips the test.
+//!   normal) is inside the body with its holes closed by flat caps, by the
+//!   winding number (see [`Body::capped_winding`]): skin inside another
+//!   shell (the part of the head a horn passes through, the horn's base
+//!   inside the head, an eyeball behind the rim of its socket) grows no
+//!   hair. A mesh of one closed shell has no buried skin and skips the test.
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::surface::body::{Body, Rim};
@@ -120,10 +121,12 @@ impl<'a> Shells<'a> {
     }
 
     /// Whether the skin at `p` on a face of unit normal `n` is buried:
-    /// `lift` along the normal is inside the body.
+    /// `lift` along the normal is inside the body with its holes capped.
     #[inline]
     pub(super) fn buried(&self, p: Vec3, n: Vec3, lift: f32) -> bool {
-        self.body.as_ref().is_some_and(|b| b.contains(p + n * lift))
+        self.body
+            .as_ref()
+            .is_some_and(|b| b.capped_winding(p + n * lift) >= 1)
     }
 
     /// Whether [`buried`](Self::buried) can be true at all.

@@ -444,24 +444,65 @@ impl<'a> Body<'a> {
     /// True when `p` is inside the body: its generalized winding number is
     /// above [`INSIDE_WINDING`].
     pub fn contains(&self, p: Vec3) -> bool {
+        match self.capped(p) {
+            (w, false) => w >= 1,
+            (w, true) => self.caps_decide(w, p),
+        }
+    }
+
+    /// The winding number at `p` of the mesh with its holes closed by the
+    /// caps (see the module docs): an integer, exact everywhere, and equal
+    /// to the generalized winding number on a closed mesh. It reads a
+    /// hole's cap as skin, where [`contains`](Self::contains) follows the
+    /// winding number's smooth fall across the hole; cheaper near a hole.
+    pub fn capped_winding(&self, p: Vec3) -> i32 {
+        self.capped(p).0
+    }
+
+    /// [`capped_winding`](Self::capped_winding), and whether a cap may
+    /// decide [`contains`](Self::contains) at `p`.
+    fn capped(&self, p: Vec3) -> (i32, bool) {
         let c = self.shape.cell_of(p);
         let inside = (0..3).all(|k| c[k] >= 0 && (c[k] as usize) < self.shape.dims[k]);
         if !inside {
-            return false;
+            return (0, false);
         }
         let cell = [c[0] as usize, c[1] as usize, c[2] as usize];
         let c = self.shape.index(cell[0], cell[1], cell[2]);
         let class = self.class[c];
         let mut w = ((class as i8) >> WINDING_SHIFT) as i32;
-        if class & (SURFACE | NEAR_CAP) == 0 {
-            return w >= 1;
-        }
         let near_cap = class & NEAR_CAP != 0;
+        if class & (SURFACE | NEAR_CAP) == 0 {
+            return (w, false);
+        }
+        let mut at = self.centre(cell[0], cell[1], cell[2]);
+        // the caps whose ball reaches the cell (their triangles cross no
+        // other cell's paths)
+        let reach = 0.5 * libm::sqrtf(3.0) / self.shape.inv_cell;
+        let mut fans = [(0, 0); 4];
+        let mut spill = false;
+        let mut listed = 0;
+        if near_cap {
+            let mut first = 0;
+            for ball in self.loops {
+                let range = (first, ball.end as usize);
+                first = ball.end as usize;
+                if Vec3::from(ball.centre).distance(at) <= ball.radius * 1.001 + reach {
+                    if listed < fans.len() {
+                        fans[listed] = range;
+                        listed += 1;
+                    } else {
+                        spill = true;
+                    }
+                }
+            }
+        }
+        let caps: &[Stored] = if spill { self.caps } else { &[] };
+        let fans = &fans[..if spill { 0 } else { listed }];
         // the path centre -> (p.x, centre.y, centre.z) -> (p.x, p.y,
         // centre.z) -> p, a leg per axis; a crossing h of a leg from `from`
         // to `to` counts when from < h <= to, and counts negated when
         // to < h <= from (as the sweep counts them)
-        let mut at = self.centre(cell[0], cell[1], cell[2]);
         let mut leg = |axis: usize, hit: &dyn Fn(&Stored, Vec3) -> Option<(f32, i32)>| {
             let (from, to) = (at[axis], p[axis]);
             let (lo, hi, sign) = if from <= to {
@@ -469,8 +510,8 @@ impl<'a> Body<'a> {
             } else {
                 (to, from, -1)
             };
-            let caps = if near_cap { self.caps } else { &[] };
-            for t in self.listed(c).chain(caps) {
+            let near = fans.iter().flat_map(|&(a, b)| &self.caps[a..b]);
+            for t in self.listed(c).chain(caps).chain(near) {
                 if let Some((h, step)) = hit(t, at) {
                     w += if lo < h && h <= hi { sign * step } else { 0 };
                 }
@@ -480,10 +521,7 @@ impl<'a> Body<'a> {
         leg(0, &crossing::<0>);
         leg(1, &crossing::<1>);
         leg(2, &crossing::<2>);
-        if !near_cap {
-            return w >= 1;
-        }
-        self.caps_decide(w, p)
+        (w, near_cap)
     }
 
     /// Whether `w` less the caps' solid angle at `p` over 4 pi is above
