@@ -7,7 +7,9 @@
 //! random roots by area (ranked at random).
 //!
 //! Every distance is in units of r_hex = sqrt(2A / (sqrt(3) N)), same-side
-//! pairs only (see `pelage_tests::quality`):
+//! pairs only (see `pelage_tests::quality`); A and the empty space leave out
+//! buried skin (inside the body with its holes capped), where pelage grows
+//! no hair:
 //! - r/rhex: the set's promised spacing (the stamp's `StampReport::radius`,
 //!   the darts' last spacing; random sets promise nothing and are checked
 //!   against the stamp's);
@@ -23,6 +25,7 @@
 //! - worst hole: the shell and point of the largest empty distance.
 
 use pelage_core::stamp::{self, StampParams};
+use pelage_core::surface::body::Body;
 use pelage_core::{Arena, Root};
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::head::head_with_parts;
@@ -74,8 +77,11 @@ fn row(skin: &Skin, shells: &[u32], set: &str, roots: &[Root], radius: f32, ms: 
 
 fn bench(name: &str, legend: &str, m: &CreatureMesh, shells: &[u32]) {
     let mesh = mesh_view(m);
-    // constant density 1: every face grows fur
-    let skin = Skin::new(mesh, shells, |_| true);
+    // constant density 1: every face grows fur, except where it is buried
+    // in the body (pelage's rule)
+    let mut body_memory = vec![0u8; Body::required_bytes(&mesh).unwrap()];
+    let body = Body::new(&mesh, &mut Arena::new(&mut body_memory)).unwrap();
+    let skin = Skin::unburied(mesh, shells, |_| true, &body);
     let count = shells.iter().max().map_or(0, |s| s + 1);
     println!(
         "\n{name}: {} triangles, {count} shells, area {:.3}{legend}",

@@ -17,6 +17,7 @@
 
 use glam::Vec3;
 use pelage_core::rng::{self, Purpose};
+use pelage_core::surface::body::Body;
 use pelage_core::surface::grid::{floor_i32, HashGrid};
 use pelage_core::{Mesh, Root};
 
@@ -46,6 +47,8 @@ const EMPTY_START: f32 = 0.7;
 pub struct Skin<'a> {
     mesh: Mesh<'a>,
     shells: &'a [u32],
+    /// The body, when skin inside it (buried) grows no fur.
+    body: Option<&'a Body<'a>>,
     /// Furred area of each face (0 for a bald or degenerate one).
     areas: Vec<f64>,
     /// Their sum (in f64: a million small faces add up without drift).
@@ -61,20 +64,58 @@ impl<'a> Skin<'a> {
     /// grows fur when `furred(f)` (with a constant density, every face).
     /// Degenerate faces are never furred, as the stamp skips them.
     pub fn new(mesh: Mesh<'a>, shells: &'a [u32], furred: impl Fn(usize) -> bool) -> Self {
+        Self::build(mesh, shells, furred, None)
+    }
+
+    /// [`Skin::new`], where the skin is furred only where it is not buried:
+    /// where the point a thousandth of a radius outside it is not inside
+    /// `body` with its holes capped (pelage's rule). The furred area counts
+    /// each face's share that is not buried, from a grid of 36 points on it.
+    pub fn unburied(
+        mesh: Mesh<'a>,
+        shells: &'a [u32],
+        furred: impl Fn(usize) -> bool,
+        body: &'a Body<'a>,
+    ) -> Self {
+        Self::build(mesh, shells, furred, Some(body))
+    }
+
+    fn build(
+        mesh: Mesh<'a>,
+        shells: &'a [u32],
+        furred: impl Fn(usize) -> bool,
+        body: Option<&'a Body<'a>>,
+    ) -> Self {
         assert_eq!(shells.len(), mesh.triangle_count(), "one shell per face");
+        const SIDE: usize = 8;
         let areas: Vec<f64> = (0..mesh.triangle_count())
             .map(|f| {
-                if furred(f) && !mesh.is_degenerate(f) {
-                    mesh.area(f) as f64
-                } else {
-                    0.0
+                if !furred(f) || mesh.is_degenerate(f) {
+                    return 0.0;
                 }
+                let Some(body) = body else {
+                    return mesh.area(f) as f64;
+                };
+                // the centres of a triangular grid of 36 sub-triangles
+                let (mut open, mut all) = (0, 0);
+                for i in 0..SIDE {
+                    for j in 0..SIDE - i {
+                        let (u, v) = (
+                            (i as f32 + 1.0 / 3.0) / SIDE as f32,
+                            (j as f32 + 1.0 / 3.0) / SIDE as f32,
+                        );
+                        all += 1;
+                        open += !buried(body, &mesh, f, u, v, mesh.area(f).sqrt()) as usize;
+                    }
+                }
+                mesh.area(f) as f64 * open as f64 / all as f64
             })
             .collect();
         let area = areas.iter().sum();
         Skin {
             mesh,
             shells,
+            body,
             alias: alias_table(&areas, area),
             areas,
             area,
@@ -350,6 +391,12 @@ pub fn empty_space(skin: &Skin, roots: &[Root], samples_per_root: usize, seed: u
             for j in 0..share as u64 + extra as u64 {
                 let (u, v) = fold(rng::to_unit(h(id | j, 0)), rng::to_unit(h(id | j, 1)));
                 let p = skin.mesh.point(face, u, v);
+                if skin
+                    .body
+                    .is_some_and(|b| buried(b, &skin.mesh, face, u, v, rh))
+                {
+                    continue;
+                }
                 let dist = grid.nearest(p, normal, u32::MAX, EMPTY_START * rh) / rh;
                 if dist > worst.0 {
                     worst = (dist, face, p);
@@ -370,6 +417,13 @@ pub fn empty_space(skin: &Skin, roots: &[Root], samples_per_root: usize, seed: u
         max: worst.0,
         worst: (worst.1, worst.2),
     }
+}
+
+/// Whether the skin at `(u, v)` on `face` is buried: the point `scale /
+/// 1000` outside it is inside `body` with its holes capped.
+fn buried(body: &Body, mesh: &Mesh, face: usize, u: f32, v: f32, scale: f32) -> bool {
+    let p = mesh.point(face, u, v) + mesh.face_normal(face) * (1e-3 * scale);
+    body.capped_winding(p) >= 1
 }
 
 /// Same-side nearest-neighbour statistics of a root set, in units of its

@@ -117,6 +117,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
             let [a, e1, e2] = frame;
             let corners = [a, a + e1, a + e2];
             let twice_area = e1.cross(e2).length();
+            let lift = super::place::BURY_LIFT * r;
+            let whole_face = self.shells.face_buried(&self.mesh, f, lift);
+            if whole_face == Some(true) {
+                continue;
+            }
             let first_dart = n;
             // each cut edge's strip reaches `r` from the edge, or the far
             // corner; its darts are numbered on after the last edge's
@@ -169,7 +174,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                         || n == room
                         || (own..own_end).any(|j| close(&cands[j]) && clash(j))
                         || (first_dart..n).any(clash)
-                        || self.shells.buried(at, normal, super::place::BURY_LIFT * r)
+                        || (whole_face.is_none() && self.shells.buried(at, normal, lift))
                     {
                         continue;
                     }

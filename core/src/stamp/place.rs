@@ -352,12 +352,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 c.near_levels = LOD_LEVELS as u16;
             }
         }
-        if !shells.may_bury() {
-            return out.len();
+        let lift = BURY_LIFT * self.local_radius(f as u32);
+        match shells.face_buried(&self.mesh, f, lift) {
+            Some(false) => return out.len(),
+            Some(true) => return first,
+            None => {}
         }
         let [a, e1, e2] = super::face_frame(&self.mesh, f);
         let normal = glam::Vec3::from(self.faces[f].normal);
-        let lift = BURY_LIFT * self.local_radius(f as u32);
         let mut n = first;
         for i in first..out.len() {
             let c = out[i];

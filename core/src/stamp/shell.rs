@@ -13,7 +13,8 @@
 //!   winding number (see [`Body::capped_winding`]): skin inside another
 //!   shell (the part of the head a horn passes through, the horn's base
 //!   inside the head, an eyeball behind the rim of its socket) grows no
-//!   hair. A mesh of one closed shell has no buried skin and skips the test.
+//!   hair. A mesh of one closed shell has no buried skin and skips the
+//!   test; a face no other shell comes near is decided at its centroid.
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::surface::body::{Body, Rim};
@@ -129,10 +130,20 @@ impl<'a> Shells<'a> {
             .is_some_and(|b| b.capped_winding(p + n * lift) >= 1)
     }
 
-    /// Whether [`buried`](Self::buried) can be true at all.
-    #[inline]
-    pub(super) fn may_bury(&self) -> bool {
-        self.body.is_some()
+    /// Whether all of face `f` is buried (`Some`), or `None` when its
+    /// points must be tested one by one. The capped winding number changes
+    /// only across a surface, so on a face no other shell comes near, the
+    /// skin a hair off it is all buried or all free (up to `lift` at a
+    /// crease): its centroid decides.
+    pub(super) fn face_buried(&self, mesh: &Mesh, f: usize, lift: f32) -> Option<bool> {
+        if self.body.is_none() {
+            return Some(false);
+        }
+        if self.near_other(f) {
+            return None;
+        }
+        let [a, b, c] = mesh.corners(f);
+        Some(self.buried((a + b + c) / 3.0, mesh.face_normal(f), lift))
     }
 }
 

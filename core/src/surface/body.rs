@@ -476,29 +476,40 @@ impl<'a> Body<'a> {
             return (w, false);
         }
         let mut at = self.centre(cell[0], cell[1], cell[2]);
-        // the caps whose ball reaches the cell (their triangles cross no
-        // other cell's paths)
-        let reach = 0.5 * libm::sqrtf(3.0) / self.shape.inv_cell;
-        let mut fans = [(0, 0); 4];
-        let mut spill = false;
-        let mut listed = 0;
+        // the cap triangles whose bounds meet the cell (the legs stay in it),
+        // from the caps whose ball reaches it
+        let half = 0.5 / self.shape.inv_cell;
+        let (lo, hi) = (
+            at - Vec3::splat(half * 1.001),
+            at + Vec3::splat(half * 1.001),
+        );
+        let mut met = [0u32; 32];
+        let (mut listed, mut spill) = (0, false);
         if near_cap {
+            let reach = libm::sqrtf(3.0) * half;
             let mut first = 0;
             for ball in self.loops {
-                let range = (first, ball.end as usize);
+                let fan = first..ball.end as usize;
                 first = ball.end as usize;
-                if Vec3::from(ball.centre).distance(at) <= ball.radius * 1.001 + reach {
-                    if listed < fans.len() {
-                        fans[listed] = range;
-                        listed += 1;
-                    } else {
-                        spill = true;
+                if Vec3::from(ball.centre).distance(at) > ball.radius * 1.001 + reach {
+                    continue;
+                }
+                for t in fan {
+                    let [.., tlo, thi] = self.caps[t];
+                    let meets = Vec3::from(tlo).cmple(hi).all() && Vec3::from(thi).cmpge(lo).all();
+                    if meets {
+                        if listed < met.len() {
+                            met[listed] = t as u32;
+                            listed += 1;
+                        } else {
+                            spill = true;
+                        }
                     }
                 }
             }
         }
         let caps: &[Stored] = if spill { self.caps } else { &[] };
-        let fans = &fans[..if spill { 0 } else { listed }];
+        let met = &met[..if spill { 0 } else { listed }];
         // the path centre -> (p.x, centre.y, centre.z) -> (p.x, p.y,
         // centre.z) -> p, a leg per axis; a crossing h of a leg from `from`
         // to `to` counts when from < h <= to, and counts negated when
@@ -510,7 +521,7 @@ impl<'a> Body<'a> {
             } else {
                 (to, from, -1)
             };
-            let near = fans.iter().flat_map(|&(a, b)| &self.caps[a..b]);
+            let near = met.iter().map(|&t| &self.caps[t as usize]);
             for t in self.listed(c).chain(caps).chain(near) {
                 if let Some((h, step)) = hit(t, at) {
                     w += if lo < h && h <= hi { sign * step } else { 0 };

@@ -1,0 +1,184 @@
+//! Issue 30 on a mesh like a production creature's: the test head, open at
+//! its eye sockets and neck, with eyeballs, a horn and ears as separate
+//! closed shells that pass through it, and very uneven triangles.
+//! - the stamp keeps its spacing across the shells and grows no root where
+//!   the skin is buried in the body;
+//! - settle leaves no hair point inside the body, by the generalized winding
+//!   number of the whole mesh (checked triangle by triangle on a sample),
+//!   and resolves every strand.
+
+use glam::Vec3;
+use pelage::*;
+use pelage_core::surface::body::Body;
+use pelage_core::{Arena, Root};
+use pelage_tests::head::head_with_parts;
+use pelage_tests::measure::{
+    combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots, stamp_vec, ExpandCall,
+};
+use pelage_tests::quality::{neighbours, Skin};
+
+const CVS: usize = 12;
+
+/// The generalized winding number of `mesh` at `p`, triangle by triangle
+/// (Van Oosterom and Strackee's solid angles, in f64).
+fn winding(mesh: &pelage_core::Mesh, p: Vec3) -> f64 {
+    let total: f64 = (0..mesh.triangle_count())
+        .map(|f| {
+            let [a, b, c] = mesh.corners(f).map(|v| (v - p).as_dvec3());
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let det = a.dot(b.cross(c));
+            let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+            2.0 * det.atan2(den)
+        })
+        .sum();
+    total / (4.0 * std::f64::consts::PI)
+}
+
+#[test]
+fn the_stamp_keeps_its_spacing_across_shells_and_skips_buried_skin() {
+    let (m, parts) = head_with_parts();
+    let mesh = mesh_view(&m);
+    let shells = parts.shells();
+    let mut memory = vec![0u8; Body::required_bytes(&mesh).unwrap()];
+    let body = Body::new(&mesh, &mut Arena::new(&mut memory)).unwrap();
+    let skin = Skin::new(mesh, &shells, |_| true);
+    for target in [30_000u32, 100_000] {
+        let (roots, report) = stamp_vec(
+            mesh,
+            &pelage_core::stamp::StampParams {
+                target_count: target,
+                seed: 3,
+                ..Default::default()
+            },
+        );
+        assert_eq!(roots.len(), target as usize, "{report:?}");
+        // 3D distances run a hair under the radius on curved faces (the
+        // tile spaces points on the unfolded surface)
+        let n = neighbours(&skin, &roots, report.radius * 0.999);
+        assert_eq!((n.close_pairs, n.close_across_shells), (0, 0), "{target}");
+        let buried = roots
+            .iter()
+            .filter(|r| {
+                let f = r.face as usize;
+                let lift = mesh.face_normal(f) * (1e-3 * report.radius);
+                body.capped_winding(mesh.point(f, r.u, r.v) + lift) >= 1
+            })
+            .count();
+        assert_eq!(buried, 0, "{target}: roots on buried skin");
+        // the horn's base and the eyeballs' backs lie inside the head
+        let on = |range: &std::ops::Range<usize>| {
+            roots
+                .iter()
+                .filter(|r| range.contains(&(r.face as usize)))
+                .count()
+        };
+        assert!(on(&parts.horn) > 0 && on(&parts.head) > 0);
+    }
+}
+
+#[test]
+fn settle_leaves_no_point_inside_an_open_head_with_shells() {
+    let (m, _) = head_with_parts();
+    let mesh = mesh_view(&m);
+    let guide_roots = stamp_roots(mesh, 3_000, 1);
+    let strands = stamp_roots(mesh, 40_000, 2);
+    let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.12);
+    let desc = mesh_desc(&m);
+    let guides = guides_desc(&guide_roots, &guide_points);
+    let c_strands = bytemuck::cast_slice::<Root, PelageRoot>(&strands);
+
+    let mut bytes = 0usize;
+    assert_eq!(
+        pelage_bind_query(&desc, guide_roots.len(), &mut bytes),
+        PelageStatus::Ok
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut bindings = vec![PelageStrandBinding::default(); strands.len()];
+    let params = PelageBindParams {
+        thread_count: 2,
+        ..pelage_bind_params_defaults()
+    };
+    let s = pelage_bind(
+        &desc,
+        &guides,
+        c_strands.as_ptr(),
+        strands.len(),
+        &params,
+        arena.as_mut_ptr().cast(),
+        bytes,
+        bindings.as_mut_ptr(),
+        bindings.len(),
+        &mut PelageBindInfo::default(),
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let mut maps = pelage_groom_maps_defaults();
+    maps.clump.constant = 0.3;
+    maps.bend.constant = 0.2;
+    let mut grooms = vec![PelageStrandGroom::default(); strands.len()];
+    let s = pelage_groom_evaluate(
+        &desc,
+        &maps,
+        c_strands.as_ptr(),
+        strands.len(),
+        grooms.as_mut_ptr(),
+        grooms.len(),
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let params = PelageExpandParams {
+        thread_count: 2,
+        ..pelage_expand_params_defaults()
+    };
+    assert_eq!(
+        pelage_settle_query(&desc, guide_roots.len(), &params, &mut bytes),
+        PelageStatus::Ok
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut settle = PelageSettleInfo::default();
+    let s = pelage_settle(
+        &desc,
+        &guides,
+        c_strands.as_ptr(),
+        bindings.as_ptr(),
+        grooms.as_mut_ptr(),
+        strands.len(),
+        &params,
+        arena.as_mut_ptr().cast(),
+        bytes,
+        &mut settle,
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    assert!(settle.lifted > 0, "{settle:?}");
+    assert_eq!(settle.unresolved, 0, "{settle:?}");
+
+    let mut per = 0usize;
+    assert_eq!(pelage_expand_query(&params, &mut per), PelageStatus::Ok);
+    let mut out = vec![[0.0f32; 4]; strands.len() * per];
+    let call = ExpandCall {
+        mesh: &desc,
+        guides: &guides,
+        strands: &strands,
+        bindings: &bindings,
+        grooms: &grooms,
+        params: &params,
+    };
+    assert_eq!(call.run(&mut out, None), PelageStatus::Ok);
+    let mut memory = vec![0u8; Body::required_bytes(&mesh).unwrap()];
+    let body = Body::new(&mesh, &mut Arena::new(&mut memory)).unwrap();
+    // every point after the root by the body, and a sample of them
+    // triangle by triangle
+    let points: Vec<Vec3> = out
+        .chunks(per)
+        .flat_map(|s| s[1..].iter().map(|p| Vec3::new(p[0], p[1], p[2])))
+        .collect();
+    let inside: Vec<&Vec3> = points.iter().filter(|&&p| body.contains(p)).collect();
+    assert!(
+        inside.is_empty(),
+        "{} points inside, e.g. {:?}",
+        inside.len(),
+        inside.first()
+    );
+    for p in points.iter().step_by(points.len() / 1500) {
+        let w = winding(&mesh, *p);
+        assert!(w <= 0.5, "{p}: winding number {w}");
+    }
+}
