@@ -583,7 +583,9 @@ typedef struct PelageColliders {
   // Number of half-spaces.
   size_t plane_count;
   // Nonzero: collide with the body itself, the frame's (deformed) mesh
-  // as a solid (its grid is built each step).
+  // as a solid: inside where its generalized winding number is above 0.5
+  // (open meshes and intersecting shells work; its grid is built each
+  // step).
   uint32_t body;
   // A signed distance field, or NULL.
   PelageDistanceFn distance;
@@ -972,7 +974,8 @@ enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, si
 // Settles strands out of the body at the rest pose, once per groom, after
 // pelage_groom_evaluate: each strand is expanded on the rest mesh from the
 // rest guides, and where a control point after the root lies inside the
-// (closed) mesh, the strand is rotated about its root toward the normal and
+// body (its generalized winding number over the whole mesh is above 0.5,
+// so open meshes and intersecting shells work), the strand is rotated about its root toward the normal and
 // the angle stored in its groom's `lift`; strands a full lift does not free
 // lose their clump pull, are turned about other axes, then shortened. pelage_expand applies `lift` in the
 // strand's own frame at every frame. `grooms` is updated in place; it is

@@ -60,7 +60,8 @@ pub extern "C" fn pelage_settle_query(
 /// Settles strands out of the body at the rest pose, once per groom, after
 /// pelage_groom_evaluate: each strand is expanded on the rest mesh from the
 /// rest guides, and where a control point after the root lies inside the
-/// (closed) mesh, the strand is rotated about its root toward the normal and
+/// body (its generalized winding number over the whole mesh is above 0.5,
+/// so open meshes and intersecting shells work), the strand is rotated about its root toward the normal and
 /// the angle stored in its groom's `lift`; strands a full lift does not free
 /// lose their clump pull, are turned about other axes, then shortened. pelage_expand applies `lift` in the
 /// strand's own frame at every frame. `grooms` is updated in place; it is

@@ -301,7 +301,9 @@ pub struct PelageColliders {
     /// Number of half-spaces.
     pub plane_count: usize,
     /// Nonzero: collide with the body itself, the frame's (deformed) mesh
-    /// as a solid (its grid is built each step).
+    /// as a solid: inside where its generalized winding number is above 0.5
+    /// (open meshes and intersecting shells work; its grid is built each
+    /// step).
     pub body: u32,
     /// A signed distance field, or NULL.
     pub distance: PelageDistanceFn,

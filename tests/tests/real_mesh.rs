@@ -66,7 +66,10 @@ fn the_stamp_keeps_its_spacing_across_shells_and_skips_buried_skin() {
             .count();
         // a face no other shell comes near is decided at its centroid: a
         // root a hair from a concave crease may read otherwise
-        assert!(buried * 10_000 <= roots.len(), "{target}: {buried} roots on buried skin");
+        assert!(
+            buried * 10_000 <= roots.len(),
+            "{target}: {buried} roots on buried skin"
+        );
         // the horn's base and the eyeballs' backs lie inside the head
         let on = |range: &std::ops::Range<usize>| {
             roots

@@ -5,10 +5,9 @@
 //! the room either leaves. After the edge pass, each cut edge takes darts
 //! at random in the strip of its face within the local disk radius of it,
 //! [`DARTS_PER_ROOT`] for each root such a strip holds on average. A dart
-//! stays when it is at least the disk radius from every point kept so far
-//! (the edge pass's rule: the pair's larger density scale, points of
-//! opposed faces never clash) and its skin is not buried, as the finest LOD
-//! level. Faces go in order, and each face's edges and darts in order, so
+//! stays when it is at least its face's local disk radius from every point
+//! kept so far (points of opposed faces never clash) and its skin is not
+//! buried, as the finest LOD level. Faces go in order, and each face's edges and darts in order, so
 //! the result does not depend on how the stamp was split.
 
 use super::near::Near;
@@ -156,10 +155,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let mut clashed = [false; RUN];
                 let buf = &mut scratch.gathered;
                 Self::gather(&grid, near, group, r * 1.0001, buf, |buf| {
-                    self.weigh(buf, f as u32, |scale| {
-                        let r = self.radius / scale;
-                        r * r
-                    });
+                    // the dart's own radius, which the pair's (that of the
+                    // denser side) never exceeds: a dart does not crowd a
+                    // sparse face next to a dense one
+                    self.weigh(buf, f as u32, |_| r * r);
                     for (hit, q) in clashed.iter_mut().zip(group) {
                         *hit = *hit || buf.clashes(q.position);
                     }
