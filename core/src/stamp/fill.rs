@@ -53,7 +53,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// candidates in face order; darts that stay are written after them.
     /// Returns the new count (at most the room in `cands` and `scratch`).
     ///
-    /// Stamps of fewer than [`SMALL_TARGET`] roots are not filled: their
+    /// Stamps of fewer than 256 roots are not filled: their
     /// count is a lottery over the tile's windows already, and darts would
     /// make it jump further between passes.
     pub fn fill(

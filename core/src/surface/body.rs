@@ -409,7 +409,7 @@ impl<'a> Body<'a> {
             for (c, ends) in row.iter_mut().zip(listed) {
                 w += (*c as i8) as i32;
                 let winding = w.clamp(-MAX_WINDING - 1, MAX_WINDING) as i8;
-                *c = ((winding << WINDING_SHIFT) as u8) | (ends[0] != ends[1]) as u8 * SURFACE;
+                *c = ((winding << WINDING_SHIFT) as u8) | ((ends[0] != ends[1]) as u8 * SURFACE);
             }
         }
     }
@@ -514,7 +514,7 @@ impl<'a> Body<'a> {
         // centre.z) -> p, a leg per axis; a crossing h of a leg from `from`
         // to `to` counts when from < h <= to, and counts negated when
         // to < h <= from (as the sweep counts them)
-        let mut leg = |axis: usize, hit: &dyn Fn(&Stored, Vec3) -> Option<(f32, i32)>| {
+        let mut leg = |axis: usize, hit: &Crossing| {
             let (from, to) = (at[axis], p[axis]);
             let (lo, hi, sign) = if from <= to {
                 (from, to, 1)
@@ -649,6 +649,9 @@ fn meets(t: &Stored, a: Vec3, d: Vec3) -> bool {
 /// A triangle as stored: its three corners, then the low and the high
 /// corner of its bounds.
 type Stored = [[f32; 3]; 5];
+
+/// [`crossing`] along one axis.
+type Crossing = dyn Fn(&Stored, Vec3) -> Option<(f32, i32)>;
 
 /// Where the line through `p` along axis `AXIS` crosses triangle `t` (that
 /// coordinate), if it passes through it, and how the winding number changes
