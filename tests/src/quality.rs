@@ -531,8 +531,8 @@ const DART_BATCH: usize = 1 << 16;
 /// The Poisson reference: `n` roots thrown as darts uniformly by furred
 /// area (the stream of `seed`), each kept only if no kept same-side root is
 /// within the spacing, in three phases that stop at n/4, n/2 and n roots.
-/// Each phase starts at [`DART_SPACING`] times the r_hex of its count and
-/// shrinks its spacing by 2% after every round of [`DARTS_PER_ROOT`] darts
+/// Each phase starts at `DART_SPACING` times the r_hex of its count and
+/// shrinks its spacing by 2% after every round of `DARTS_PER_ROOT` darts
 /// per root of its count that ends short of the count; earlier roots keep
 /// their larger spacing. So the set is close to maximal (few darts would
 /// still find room), each rank prefix at 25% and 50% is a dart-throwing set

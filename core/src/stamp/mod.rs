@@ -14,8 +14,12 @@
 //!    points whose disk reaches a cut edge, or past a linked neighbour, take
 //!    part (27% of them at 1M roots on the creature, 69% with a placement per
 //!    triangle). Across a linked edge that bends by `a`, the tile's spacing
-//!    shrinks by at most `cos(a / 2)` in 3D (0.99905 at 5 degrees).
-//! 2. **Count.** The radius is derived so the *expected* number of stamped
+//!    shrinks by at most `cos(a / 2)` in 3D (0.99905 at 5 degrees). Points
+//!    of faces near another shell take part too, and buried skin grows no
+//!    root (the `shell` module).
+//! 2. **Fill.** Darts thrown along the cut edges fill the holes the edge
+//!    pass leaves ([`Stamper::fill`]).
+//! 3. **Count.** The radius is derived so the *expected* number of stamped
 //!    points equals the target: for a uniform random placement in a periodic
 //!    tile of density `rho` points per `r^2`, a triangle of flattened area `A`
 //!    scaled by `s` receives `rho * A * s^2 / r^2` points on average, hence
@@ -25,12 +29,12 @@
 //!    corrects the radius until the count is within [`COUNT_TOLERANCE`] of
 //!    the target (dense stamps usually need no correction). (The paper's
 //!    `0.35 / (sqrt(N) * A_max_normalized)` is not dimensionally a length.)
-//! 3. **LOD.** Each tile point carries a nested level. Across triangles, a
+//! 4. **LOD.** Each tile point carries a nested level. Across triangles, a
 //!    point moves to the first level whose spacing it respects from every
 //!    point of another triangle that comes before it (a coarser tile level,
 //!    or the same level on an earlier triangle); the rule reads tile levels
 //!    only, so it needs one query per point and level and no re-checking.
-//!    The rank is a counting sort by (level, hash of the index).
+//!    The rank is a counting sort by (level, step, hash of the index).
 //!
 //! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
 //! spread it over threads; the result is bitwise identical for any split.
@@ -198,7 +202,8 @@ pub struct Candidate {
     /// every point comes from the same piece of the tile, so only at those
     /// levels can the point conflict with points of other triangles;
     /// [`LOD_LEVELS`] means even the disk radius reaches (the point takes
-    /// part in the edge pass).
+    /// part in the edge pass), and is also given to every point of a face
+    /// near another shell and to the fill's darts.
     pub near_levels: u16,
 }
 
@@ -376,11 +381,12 @@ impl<'m, 'a> Stamper<'m, 'a> {
         Ok((Some(stamper), sums))
     }
 
-    /// Expected number of points the edge pass removes at radius `r`: each
-    /// face's half of an edge of length `l` (scaled by density, `x = l / 2r`)
-    /// loses `EDGE_LOSS * x^2 / (x + EDGE_LOSS_KNEE)` points. Long edges lose
-    /// a fixed number per radius of length; short ones less, as their faces
-    /// hold fewer points.
+    /// Expected number of points the edge pass removes at radius `r`, net of
+    /// what the fill wins back: each face's half of an edge of length `l`
+    /// (scaled by density, `x = l / 2r`) loses `EDGE_LOSS * x^2 / (x +
+    /// EDGE_LOSS_KNEE)` points, of which the fill restores
+    /// [`REFILLED`](fill::REFILLED). Long edges lose a fixed number per
+    /// radius of length; short ones less, as their faces hold fewer points.
     fn predicted_loss(&self, r: f32) -> f64 {
         let k = 0.5 / r;
         let mut loss = 0.0f32;

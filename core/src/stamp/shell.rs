@@ -9,7 +9,8 @@
 //!   the shells as it holds across cuts.
 //! - **Buried skin.** A point is dropped when the spot just outside the
 //!   skin there (a thousandth of the local disk radius along the face
-//!   normal) is inside the body with its holes closed by flat caps, by the
+//!   normal) is inside the body with its holes closed by caps (fans from
+//!   the mean of each hole's rim), by the
 //!   winding number (see [`Body::capped_winding`]): skin inside another
 //!   shell (the part of the head a horn passes through, the horn's base
 //!   inside the head, an eyeball behind the rim of its socket) grows no
@@ -17,17 +18,19 @@
 //!   test; a face no other shell comes near is decided at its centroid.
 
 use crate::arena::{Arena, ArenaLayout};
-use crate::surface::body::{Body, Rim};
+use crate::surface::body::{Body, BodyPlan, Rim};
 use crate::surface::grid::floor_i32;
 use crate::{Error, Mesh};
 use glam::Vec3;
 
 /// Per-face bit: the face comes within its reach of another shell.
 const NEAR_OTHER: u8 = 1;
+/// Per-face bit: the face comes within its reach of a hole's cap.
+const NEAR_CAP: u8 = 2;
 
 /// What the stamp knows of a mesh's shells.
 pub(super) struct Shells<'a> {
-    /// Per face, [`NEAR_OTHER`]; empty for a mesh of one shell.
+    /// Per face, [`NEAR_OTHER`] and [`NEAR_CAP`].
     flags: &'a [u8],
     /// The body, when some skin may be buried (several shells, or holes).
     body: Option<Body<'a>>,
@@ -58,6 +61,9 @@ impl<'a> Shells<'a> {
         arena: &mut Arena<'a>,
     ) -> Result<Self, Error> {
         let faces = mesh.triangle_count();
+        if mesh.positions.len() >= 1 << 31 {
+            return Err(Error::InvalidArgument("over 2^31 vertices"));
+        }
         let rim = Rim::new(mesh, arena)?;
         // union-find over the welded vertices (a UV seam joins its two
         // sides), each triangle joining its corners; the larger root joins
@@ -96,29 +102,22 @@ impl<'a> Shells<'a> {
         let shell_of = |f: usize| parent[mesh.triangles.get(f)[0] as usize] & !COUNTED;
         let near = arena.alloc::<u8>(faces)?;
         near.fill(0);
-        let mut flags: &'a [u8] = &[];
         if shells > 1 {
             mark_near_other_shells(mesh, &shell_of, &reach, near, arena)?;
-            flags = near;
         }
-        let open = !rim.is_closed();
-        let body = if shells > 1 || open {
-            match Body::new(mesh, arena) {
-                Ok(body) => Some(body),
-                // a mesh without a solid triangle has no roots to test
-                Err(Error::InvalidArgument(_)) => None,
-                Err(e) => return Err(e),
-            }
+        mark_near_caps(mesh, &rim, &reach, near);
+        let body = if shells > 1 || !rim.is_closed() {
+            Some(Body::build(&BodyPlan::of(mesh, &rim)?, mesh, &rim, arena)?)
         } else {
             None
         };
-        Ok(Shells { flags, body })
+        Ok(Shells { flags: near, body })
     }
 
     /// Whether face `f` comes within its reach of another shell.
     #[inline]
     pub(super) fn near_other(&self, f: usize) -> bool {
-        self.flags.get(f).is_some_and(|&b| b & NEAR_OTHER != 0)
+        self.flags[f] & NEAR_OTHER != 0
     }
 
     /// Whether the skin at `p` on a face of unit normal `n` is buried:
@@ -132,14 +131,14 @@ impl<'a> Shells<'a> {
 
     /// Whether all of face `f` is buried (`Some`), or `None` when its
     /// points must be tested one by one. The capped winding number changes
-    /// only across a surface, so on a face no other shell comes near, the
-    /// skin a hair off it is all buried or all free (up to `lift` at a
-    /// crease): its centroid decides.
+    /// only across a surface, so on a face no other shell and no cap comes
+    /// near, the skin a hair off it is all buried or all free (up to `lift`
+    /// at a crease): its centroid decides.
     pub(super) fn face_buried(&self, mesh: &Mesh, f: usize, lift: f32) -> Option<bool> {
         if self.body.is_none() {
             return Some(false);
         }
-        if self.near_other(f) {
+        if self.flags[f] != 0 {
             return None;
         }
         let [a, b, c] = mesh.corners(f);
@@ -147,11 +146,33 @@ impl<'a> Shells<'a> {
     }
 }
 
-/// Flags the faces whose box, widened by half their reach, shares a cell
-/// of a hashed grid with the widened box of a face of another shell. Two
-/// faces within reach of each other always share one; a shared bucket of
-/// unrelated cells only flags more faces than needed (their points then
-/// take part in the edge pass for nothing).
+/// Flags the faces whose box, widened by their reach, meets the ball around
+/// a hole's cap (the mean of the loop's corners, out to its farthest).
+fn mark_near_caps(mesh: &Mesh, rim: &Rim, reach: &dyn Fn(usize) -> f32, near: &mut [u8]) {
+    let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
+    for k in 0..rim.loop_count() {
+        let edges = rim.loop_edges(k);
+        let mean = edges.iter().map(|e| at(e[0])).sum::<Vec3>() / edges.len() as f32;
+        let radius = edges
+            .iter()
+            .map(|e| at(e[0]).distance(mean))
+            .fold(0.0f32, f32::max);
+        for (f, flag) in near.iter_mut().enumerate() {
+            let [a, b, c] = mesh.corners(f);
+            let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+            let gap = mean.clamp(lo, hi).distance(mean);
+            if gap <= radius * 1.001 + reach(f) {
+                *flag |= NEAR_CAP;
+            }
+        }
+    }
+}
+
+/// Flags the faces whose box, widened by their reach, shares a cell of a
+/// hashed grid with the box of a face of another shell (bald ones
+/// included). A face within reach of another always shares one; a shared
+/// bucket of unrelated cells only flags more faces than needed (their
+/// points then take part in the edge pass for nothing).
 fn mark_near_other_shells(
     mesh: &Mesh,
     shell_of: &dyn Fn(usize) -> u32,
@@ -190,7 +211,7 @@ fn mark_near_other_shells(
     let inv_cell = (counted as f64 / extent).min(16.0 / largest as f64);
     let boxed = |f: usize| {
         let [a, b, c] = mesh.corners(f);
-        let pad = Vec3::splat(0.5 * reach(f));
+        let pad = Vec3::splat(reach(f));
         let cell = |p: Vec3| (p * inv_cell as f32).to_array().map(floor_i32);
         (cell(a.min(b).min(c) - pad), cell(a.max(b).max(c) + pad))
     };
@@ -211,7 +232,9 @@ fn mark_near_other_shells(
             }
         }
     };
-    for f in (0..faces).filter(|&f| reach(f) > 0.0) {
+    // bald faces too: a hairy face that a bald shell passes through must
+    // be flagged (its skin is partly buried)
+    for f in (0..faces).filter(|&f| !mesh.is_degenerate(f)) {
         let s = shell_of(f);
         cells(f, &mut |c| {
             table[c] = match table[c] {

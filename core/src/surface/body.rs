@@ -204,7 +204,7 @@ pub struct BodyPlan {
 
 impl BodyPlan {
     /// Validates `mesh` and places the grid; `rim` is the mesh's boundary
-    /// (found once per topology, for every frame).
+    /// (see [`Rim`] for when it must be found again).
     pub fn of(mesh: &Mesh, rim: &Rim) -> Result<Self, Error> {
         rim.check_mesh(mesh)?;
         let shape = Shape::of(mesh)?;
@@ -821,7 +821,7 @@ mod tests {
             }
         }
         assert!(checked > 190_000);
-        // points on the grid's own lattice and on mesh vertices do not break parity
+        // points on the grid's own lattice and on mesh vertices do not break the count
         for &v in m.p.iter() {
             let p = Vec3::from(v) * 0.999;
             assert!(body.contains(p), "{p} just inside a vertex");

@@ -5,8 +5,11 @@
 //! meshes split their vertices along UV seams and normal creases, and a
 //! seam is not a hole.
 //!
-//! The boundary depends on the triangle indices only, so a host finds it
-//! once per topology and reuses it for every frame (see
+//! The boundary depends on the triangle indices, on which vertices share a
+//! position (welding) and on which triangles are degenerate (skipped, as
+//! the body skips them, so a sliver becomes a capped hole rather than a
+//! slit): find it again when the positions may change those (the
+//! simulation finds it every step; see
 //! [`BodyPlan::of`](crate::surface::body::BodyPlan::of)). An edge listed
 //! `a -> b` by `m` triangles and `b -> a` by `n` is a boundary edge `m - n`
 //! times (in the direction of the surplus); a closed mesh, however many
@@ -77,7 +80,10 @@ impl<'a> Rim<'a> {
         // each edge keyed by its ends in increasing order, with its
         // direction: after sorting, an edge's copies are adjacent
         let mut n = 0;
-        for t in mesh.triangles.iter() {
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            if mesh.is_degenerate(f) {
+                continue;
+            }
             let [a, b, c] = t.map(|v| weld[v as usize]);
             for (from, to) in [(a, b), (b, c), (c, a)] {
                 if from != to {
