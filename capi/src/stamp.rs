@@ -129,8 +129,7 @@ pub extern "C" fn pelage_stamp_query(
 }
 
 /// Stamps Poisson-distributed roots on `mesh` (paper section 2.3, without its
-/// edge violations), in face order and then the fill pass's roots (in face
-/// order too), each with a stable id (its index) and an LOD rank: the roots
+/// edge violations), in face order, each with a stable id (its index) and an LOD rank: the roots
 /// with rank < k are an evenly spread subset of k roots. Several shells
 /// keep their spacing; no root grows on buried skin (inside the body, its
 /// holes capped).

@@ -50,8 +50,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     }
 
     /// Fills holes after the edge pass: `cands[..kept]` are the kept
-    /// candidates in face order; darts that stay are written after them.
-    /// Returns the new count (at most the room in `cands` and `scratch`).
+    /// candidates in face order; the darts that stay join them, each after
+    /// its face's points. Returns the new count (at most the room in `cands`
+    /// and `scratch`).
     ///
     /// Stamps of fewer than 256 roots are not filled: their
     /// count is a lottery over the tile's windows already, and darts would
@@ -185,6 +186,28 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     grid.insert(n as u32, at);
                     n += 1;
                 }
+            }
+        }
+        // the darts go among the kept points, after those of their face, so
+        // the candidates (and the roots) stay in face order; the records'
+        // memory is free now and holds the darts meanwhile
+        let darts = n - kept;
+        let held: &mut [Candidate] = bytemuck::cast_slice_mut(
+            &mut bytemuck::cast_slice_mut::<Near, u8>(near)
+                [..darts * core::mem::size_of::<Candidate>()],
+        );
+        held.copy_from_slice(&cands[kept..n]);
+        let (mut i, mut j) = (kept, darts);
+        for w in (0..n).rev() {
+            if j == 0 {
+                break;
+            }
+            if i > 0 && cands[i - 1].face > held[j - 1].face {
+                cands[w] = cands[i - 1];
+                i -= 1;
+            } else {
+                cands[w] = held[j - 1];
+                j -= 1;
             }
         }
         Ok(n)

@@ -639,6 +639,8 @@ mod tests {
         let mut arena = Arena::new(&mut buf);
         let (n, report) = stamp(mesh, params, &mut arena, &mut out).unwrap();
         out.truncate(n);
+        // in face order, as documented (the fill's darts included)
+        assert!(out.windows(2).all(|w| w[0].face <= w[1].face));
         // in the triangle, in f32 as a host checks it
         for r in &out {
             assert!(r.u >= 0.0 && r.v >= 0.0 && r.u + r.v <= 1.0, "{r:?}");
