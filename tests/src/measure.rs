@@ -184,6 +184,124 @@ pub fn bind_vec(
     bindings
 }
 
+/// A groom made through the C API on a mesh: guides and strands stamped
+/// (seeds 1 and 2), the guides combed, the strands bound and their groom
+/// maps evaluated.
+pub struct Groomed {
+    /// Guide roots.
+    pub guide_roots: Vec<Root>,
+    /// Their points, `cvs` per guide.
+    pub guide_points: Vec<[f32; 3]>,
+    /// Strand roots.
+    pub strands: Vec<Root>,
+    /// One binding per strand.
+    pub bindings: Vec<pelage::PelageStrandBinding>,
+    /// One groom record per strand.
+    pub grooms: Vec<pelage::PelageStrandGroom>,
+    /// What binding reported.
+    pub info: pelage::PelageBindInfo,
+}
+
+/// Grooms `m` with `guides` combed guides of `cvs` points and `length`,
+/// and `strands` strands bound on `threads` threads with `maps`.
+pub fn groomed(
+    m: &CreatureMesh,
+    (guides, cvs, length): (u32, usize, f32),
+    strands: u32,
+    maps: &pelage::PelageGroomMaps,
+    threads: u32,
+) -> Groomed {
+    use pelage::*;
+    let mesh = mesh_view(m);
+    let guide_roots = stamp_roots(mesh, guides, 1);
+    let guide_points = combed_guides(&mesh, &guide_roots, cvs, length);
+    let strands = stamp_roots(mesh, strands, 2);
+    let d = mesh_desc(m);
+    let g = guides_desc(&guide_roots, &guide_points);
+    let c_strands = bytemuck::cast_slice::<Root, PelageRoot>(&strands);
+    let params = PelageBindParams {
+        thread_count: threads,
+        ..pelage_bind_params_defaults()
+    };
+    let mut bytes = 0usize;
+    assert_eq!(
+        pelage_bind_query(&d, guide_roots.len(), &mut bytes),
+        PelageStatus::Ok
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut bindings = vec![PelageStrandBinding::default(); strands.len()];
+    let mut info = PelageBindInfo::default();
+    let s = pelage_bind(
+        &d,
+        &g,
+        c_strands.as_ptr(),
+        strands.len(),
+        &params,
+        arena.as_mut_ptr().cast(),
+        bytes,
+        bindings.as_mut_ptr(),
+        bindings.len(),
+        &mut info,
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let mut grooms = vec![PelageStrandGroom::default(); strands.len()];
+    let s = pelage_groom_evaluate(
+        &d,
+        maps,
+        c_strands.as_ptr(),
+        strands.len(),
+        grooms.as_mut_ptr(),
+        grooms.len(),
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    Groomed {
+        guide_roots,
+        guide_points,
+        strands,
+        bindings,
+        grooms,
+        info,
+    }
+}
+
+impl Groomed {
+    /// The guides as a C API description (borrows them).
+    pub fn guides(&self) -> pelage::PelageGuidesDesc {
+        guides_desc(&self.guide_roots, &self.guide_points)
+    }
+
+    /// Settles the grooms out of `m`'s body with `params` (`pelage_settle`).
+    pub fn settle(
+        &mut self,
+        m: &CreatureMesh,
+        params: &pelage::PelageExpandParams,
+    ) -> pelage::PelageSettleInfo {
+        use pelage::*;
+        let d = mesh_desc(m);
+        let mut bytes = 0usize;
+        assert_eq!(
+            pelage_settle_query(&d, self.guide_roots.len(), params, &mut bytes),
+            PelageStatus::Ok
+        );
+        let mut arena = vec![0u8; bytes];
+        let mut info = PelageSettleInfo::default();
+        let s = pelage_settle(
+            &d,
+            &self.guides(),
+            bytemuck::cast_slice::<Root, PelageRoot>(&self.strands).as_ptr(),
+            self.bindings.as_ptr(),
+            self.grooms.as_mut_ptr(),
+            self.strands.len(),
+            params,
+            arena.as_mut_ptr().cast(),
+            bytes,
+            &mut info,
+        );
+        assert_eq!(s, PelageStatus::Ok);
+        info
+    }
+}
+
 /// The creature as a C API mesh description (borrows `m`).
 pub fn mesh_desc(m: &CreatureMesh) -> pelage::PelageMeshDesc {
     pelage::PelageMeshDesc {

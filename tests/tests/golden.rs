@@ -10,9 +10,7 @@
 use pelage::*;
 use pelage_core::Root;
 use pelage_tests::creature::{default_creature, CreatureMesh};
-use pelage_tests::measure::{
-    combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots, ExpandCall,
-};
+use pelage_tests::measure::{groomed, guides_desc, mesh_desc, ExpandCall, Groomed};
 
 const CVS: usize = 12;
 
@@ -63,84 +61,31 @@ fn expand(
 #[test]
 fn every_stage_gives_the_recorded_bits() {
     let m = default_creature();
-    let mesh = mesh_view(&m);
-    let guide_roots = stamp_roots(mesh, 13_030, 1);
-    let strands = stamp_roots(mesh, 100_000, 2);
-    let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.08);
-    let desc = mesh_desc(&m);
-    let guides = guides_desc(&guide_roots, &guide_points);
-    let c_strands = bytemuck::cast_slice::<Root, PelageRoot>(&strands);
-
-    let mut bytes = 0usize;
-    assert_eq!(
-        pelage_bind_query(&desc, guide_roots.len(), &mut bytes),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
-    let mut bindings = vec![PelageStrandBinding::default(); strands.len()];
-    let mut info = PelageBindInfo::default();
-    let params = PelageBindParams {
-        thread_count: 2,
-        ..pelage_bind_params_defaults()
-    };
-    let s = pelage_bind(
-        &desc,
-        &guides,
-        c_strands.as_ptr(),
-        strands.len(),
-        &params,
-        arena.as_mut_ptr().cast(),
-        bytes,
-        bindings.as_mut_ptr(),
-        bindings.len(),
-        &mut info,
-    );
-    assert_eq!(s, PelageStatus::Ok);
-
     let mut maps = pelage_groom_maps_defaults();
     maps.kink_amplitude.constant = 0.05;
     maps.clump.constant = 0.3;
     maps.bend.constant = 0.1;
     maps.seed = 7;
-    let mut grooms = vec![PelageStrandGroom::default(); strands.len()];
-    let s = pelage_groom_evaluate(
-        &desc,
-        &maps,
-        c_strands.as_ptr(),
-        strands.len(),
-        grooms.as_mut_ptr(),
-        grooms.len(),
-    );
-    assert_eq!(s, PelageStatus::Ok);
-    let groom_hash = hash(&grooms);
-
+    let mut g = groomed(&m, (13_030, CVS, 0.08), 100_000, &maps, 2);
+    let groom_hash = hash(&g.grooms);
     let params = PelageExpandParams {
         thread_count: 2,
         ..pelage_expand_params_defaults()
     };
-    assert_eq!(
-        pelage_settle_query(&desc, guide_roots.len(), &params, &mut bytes),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
-    let mut settle = PelageSettleInfo::default();
-    let s = pelage_settle(
-        &desc,
-        &guides,
-        c_strands.as_ptr(),
-        bindings.as_ptr(),
-        grooms.as_mut_ptr(),
-        strands.len(),
-        &params,
-        arena.as_mut_ptr().cast(),
-        bytes,
-        &mut settle,
-    );
-    assert_eq!(s, PelageStatus::Ok);
+    let settle = g.settle(&m, &params);
     // the settle hash means something only where settle changed grooms
     assert!(settle.lifted > 0, "{settle:?}");
+    let Groomed {
+        guide_roots,
+        guide_points,
+        strands,
+        bindings,
+        grooms,
+        ..
+    } = &g;
+    let guides = g.guides();
 
-    let rest = expand(&m, &guides, &strands, &bindings, &grooms);
+    let rest = expand(&m, &guides, strands, bindings, grooms);
     let posed_mesh = CreatureMesh {
         positions: m.positions.iter().map(|&p| warp(p)).collect(),
         ..m.clone()
@@ -148,18 +93,18 @@ fn every_stage_gives_the_recorded_bits() {
     let posed_points: Vec<[f32; 3]> = guide_points.iter().map(|&p| warp(p)).collect();
     let posed = expand(
         &posed_mesh,
-        &guides_desc(&guide_roots, &posed_points),
-        &strands,
-        &bindings,
-        &grooms,
+        &guides_desc(guide_roots, &posed_points),
+        strands,
+        bindings,
+        grooms,
     );
 
     let got = [
-        ("guide roots", hash(&guide_roots)),
-        ("strand roots", hash(&strands)),
-        ("bindings", hash(&bindings)),
+        ("guide roots", hash(guide_roots)),
+        ("strand roots", hash(strands)),
+        ("bindings", hash(bindings)),
         ("groom maps", groom_hash),
-        ("settled grooms", hash(&grooms)),
+        ("settled grooms", hash(grooms)),
         (
             "settle counts",
             hash(&[

@@ -6,7 +6,7 @@ use pelage::*;
 use pelage_core::Root;
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
-    combed_guides, guides_desc, mesh_desc as desc, mesh_view, stamp_roots, ExpandCall,
+    groomed, guides_desc, mesh_desc as desc, mesh_view, stamp_roots, ExpandCall, Groomed,
 };
 use std::ptr::{null, null_mut};
 
@@ -16,79 +16,11 @@ fn as_c(roots: &[Root]) -> &[PelageRoot] {
     bytemuck::cast_slice(roots)
 }
 
-struct Groom {
-    guide_roots: Vec<Root>,
-    guide_points: Vec<[f32; 3]>,
-    strands: Vec<Root>,
-    bindings: Vec<PelageStrandBinding>,
-    grooms: Vec<PelageStrandGroom>,
-    info: PelageBindInfo,
+fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) -> Groomed {
+    groomed(m, (guides, CVS, 0.08), strands, maps, 1)
 }
 
-fn groom(m: &CreatureMesh, guides: u32, strands: u32, maps: &PelageGroomMaps) -> Groom {
-    groom_on_threads(m, guides, strands, maps, 1)
-}
-
-/// [`groom`], bound on `threads` threads.
-fn groom_on_threads(
-    m: &CreatureMesh,
-    guides: u32,
-    strands: u32,
-    maps: &PelageGroomMaps,
-    threads: u32,
-) -> Groom {
-    let mesh = mesh_view(m);
-    let guide_roots = stamp_roots(mesh, guides, 1);
-    let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.08);
-    let strands = stamp_roots(mesh, strands, 2);
-    let d = desc(m);
-    let g = guides_desc(&guide_roots, &guide_points);
-    let params = PelageBindParams {
-        thread_count: threads,
-        ..pelage_bind_params_defaults()
-    };
-    let mut bytes = 0usize;
-    assert_eq!(
-        pelage_bind_query(&d, guide_roots.len(), &mut bytes),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
-    let mut bindings = vec![PelageStrandBinding::default(); strands.len()];
-    let mut info = PelageBindInfo::default();
-    let s = pelage_bind(
-        &d,
-        &g,
-        as_c(&strands).as_ptr(),
-        strands.len(),
-        &params,
-        arena.as_mut_ptr().cast(),
-        bytes,
-        bindings.as_mut_ptr(),
-        bindings.len(),
-        &mut info,
-    );
-    assert_eq!(s, PelageStatus::Ok);
-    let mut grooms = vec![PelageStrandGroom::default(); strands.len()];
-    let s = pelage_groom_evaluate(
-        &d,
-        maps,
-        as_c(&strands).as_ptr(),
-        strands.len(),
-        grooms.as_mut_ptr(),
-        grooms.len(),
-    );
-    assert_eq!(s, PelageStatus::Ok);
-    Groom {
-        guide_roots,
-        guide_points,
-        strands,
-        bindings,
-        grooms,
-        info,
-    }
-}
-
-fn expand(m: &CreatureMesh, g: &Groom, params: &PelageExpandParams) -> Vec<[f32; 4]> {
+fn expand(m: &CreatureMesh, g: &Groomed, params: &PelageExpandParams) -> Vec<[f32; 4]> {
     let guides = guides_desc(&g.guide_roots, &g.guide_points);
     expand_from(m, &guides, g, params).unwrap()
 }
@@ -105,7 +37,7 @@ fn points_per_curve(params: &PelageExpandParams) -> usize {
 fn expand_from(
     m: &CreatureMesh,
     guides: &PelageGuidesDesc,
-    g: &Groom,
+    g: &Groomed,
     params: &PelageExpandParams,
 ) -> Result<Vec<[f32; 4]>, PelageStatus> {
     let per = points_per_curve(params);
@@ -291,7 +223,7 @@ fn bindings_are_the_same_on_any_thread_count() {
     let m = default_creature();
     let one = groom(&m, 2000, 30_000, &styled());
     for threads in [2, 7, 0] {
-        let other = groom_on_threads(&m, 2000, 30_000, &styled(), threads);
+        let other = groomed(&m, (2000, CVS, 0.08), 30_000, &styled(), threads);
         assert!(other.bindings == one.bindings, "{threads} threads");
         assert_eq!(other.info.orphans, one.info.orphans);
     }

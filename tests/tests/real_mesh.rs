@@ -10,11 +10,9 @@
 use glam::Vec3;
 use pelage::*;
 use pelage_core::surface::body::Body;
-use pelage_core::{Arena, Root};
+use pelage_core::Arena;
 use pelage_tests::head::head_with_parts;
-use pelage_tests::measure::{
-    combed_guides, guides_desc, mesh_desc, mesh_view, stamp_roots, stamp_vec, ExpandCall,
-};
+use pelage_tests::measure::{groomed, mesh_desc, mesh_view, stamp_vec, ExpandCall};
 use pelage_tests::quality::{neighbours, Skin};
 
 const CVS: usize = 12;
@@ -85,85 +83,27 @@ fn the_stamp_keeps_its_spacing_across_shells_and_skips_buried_skin() {
 fn settle_leaves_no_point_inside_an_open_head_with_shells() {
     let (m, _) = head_with_parts();
     let mesh = mesh_view(&m);
-    let guide_roots = stamp_roots(mesh, 3_000, 1);
-    let strands = stamp_roots(mesh, 40_000, 2);
-    let guide_points = combed_guides(&mesh, &guide_roots, CVS, 0.12);
-    let desc = mesh_desc(&m);
-    let guides = guides_desc(&guide_roots, &guide_points);
-    let c_strands = bytemuck::cast_slice::<Root, PelageRoot>(&strands);
-
-    let mut bytes = 0usize;
-    assert_eq!(
-        pelage_bind_query(&desc, guide_roots.len(), &mut bytes),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
-    let mut bindings = vec![PelageStrandBinding::default(); strands.len()];
-    let params = PelageBindParams {
-        thread_count: 2,
-        ..pelage_bind_params_defaults()
-    };
-    let s = pelage_bind(
-        &desc,
-        &guides,
-        c_strands.as_ptr(),
-        strands.len(),
-        &params,
-        arena.as_mut_ptr().cast(),
-        bytes,
-        bindings.as_mut_ptr(),
-        bindings.len(),
-        &mut PelageBindInfo::default(),
-    );
-    assert_eq!(s, PelageStatus::Ok);
     let mut maps = pelage_groom_maps_defaults();
     maps.clump.constant = 0.3;
     maps.bend.constant = 0.2;
-    let mut grooms = vec![PelageStrandGroom::default(); strands.len()];
-    let s = pelage_groom_evaluate(
-        &desc,
-        &maps,
-        c_strands.as_ptr(),
-        strands.len(),
-        grooms.as_mut_ptr(),
-        grooms.len(),
-    );
-    assert_eq!(s, PelageStatus::Ok);
+    let mut g = groomed(&m, (3_000, CVS, 0.12), 40_000, &maps, 2);
     let params = PelageExpandParams {
         thread_count: 2,
         ..pelage_expand_params_defaults()
     };
-    assert_eq!(
-        pelage_settle_query(&desc, guide_roots.len(), &params, &mut bytes),
-        PelageStatus::Ok
-    );
-    let mut arena = vec![0u8; bytes];
-    let mut settle = PelageSettleInfo::default();
-    let s = pelage_settle(
-        &desc,
-        &guides,
-        c_strands.as_ptr(),
-        bindings.as_ptr(),
-        grooms.as_mut_ptr(),
-        strands.len(),
-        &params,
-        arena.as_mut_ptr().cast(),
-        bytes,
-        &mut settle,
-    );
-    assert_eq!(s, PelageStatus::Ok);
+    let settle = g.settle(&m, &params);
     assert!(settle.lifted > 0, "{settle:?}");
     assert_eq!(settle.unresolved, 0, "{settle:?}");
 
     let mut per = 0usize;
     assert_eq!(pelage_expand_query(&params, &mut per), PelageStatus::Ok);
-    let mut out = vec![[0.0f32; 4]; strands.len() * per];
+    let mut out = vec![[0.0f32; 4]; g.strands.len() * per];
     let call = ExpandCall {
-        mesh: &desc,
-        guides: &guides,
-        strands: &strands,
-        bindings: &bindings,
-        grooms: &grooms,
+        mesh: &mesh_desc(&m),
+        guides: &g.guides(),
+        strands: &g.strands,
+        bindings: &g.bindings,
+        grooms: &g.grooms,
         params: &params,
     };
     assert_eq!(call.run(&mut out, None), PelageStatus::Ok);
