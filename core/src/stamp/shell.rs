@@ -149,14 +149,8 @@ impl<'a> Shells<'a> {
 /// Flags the faces whose box, widened by their reach, meets the ball around
 /// a hole's cap (the mean of the loop's corners, out to its farthest).
 fn mark_near_caps(mesh: &Mesh, rim: &Rim, reach: &dyn Fn(usize) -> f32, near: &mut [u8]) {
-    let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
     for k in 0..rim.loop_count() {
-        let edges = rim.loop_edges(k);
-        let mean = edges.iter().map(|e| at(e[0])).sum::<Vec3>() / edges.len() as f32;
-        let radius = edges
-            .iter()
-            .map(|e| at(e[0]).distance(mean))
-            .fold(0.0f32, f32::max);
+        let (mean, radius) = rim.ball(k, mesh);
         for (f, flag) in near.iter_mut().enumerate() {
             let [a, b, c] = mesh.corners(f);
             let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));

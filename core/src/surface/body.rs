@@ -688,15 +688,11 @@ fn cap(mesh: &Mesh, rim: &Rim, caps: &mut [Stored], loops: &mut [CapBall]) {
     let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
     let mut next = 0;
     for (k, ball) in loops.iter_mut().enumerate() {
-        let edges = rim.loop_edges(k);
-        let sum: Vec3 = edges.iter().map(|e| at(e[0])).sum();
-        let mean = sum / edges.len() as f32;
-        let mut radius = 0.0f32;
-        for e in edges {
+        let (mean, radius) = rim.ball(k, mesh);
+        for e in rim.loop_edges(k) {
             let (a, b) = (at(e[0]), at(e[1]));
             let (lo, hi) = (a.min(b).min(mean), a.max(b).max(mean));
             caps[next] = [b, a, mean, lo, hi].map(Into::into);
-            radius = radius.max(a.distance(mean));
             next += 1;
         }
         *ball = CapBall {

@@ -19,6 +19,7 @@
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::{Error, Mesh};
+use glam::Vec3;
 
 /// The boundary loops of a mesh, in caller-provided memory.
 #[derive(Clone, Copy, Debug)]
@@ -177,6 +178,20 @@ impl<'a> Rim<'a> {
     /// The edges of loop `k`, in order around it, as `[from, to]`.
     pub fn loop_edges(&self, k: usize) -> &'a [[u32; 2]] {
         &self.edges[self.starts[k] as usize..self.starts[k + 1] as usize]
+    }
+
+    /// The ball around loop `k` on `mesh`: the mean of its corners, and the
+    /// distance from there to the farthest. A cap, a fan from the mean,
+    /// lies inside it.
+    pub fn ball(&self, k: usize, mesh: &Mesh) -> (Vec3, f32) {
+        let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
+        let edges = self.loop_edges(k);
+        let mean = edges.iter().map(|e| at(e[0])).sum::<Vec3>() / edges.len() as f32;
+        let radius = edges
+            .iter()
+            .map(|e| at(e[0]).distance(mean))
+            .fold(0.0f32, f32::max);
+        (mean, radius)
     }
 
     /// The welded index of vertex `v`: the lowest index at its position.
