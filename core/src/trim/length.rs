@@ -52,7 +52,7 @@ pub fn guide_lengths(
 /// down, so a stored cut never reaches past the meet.
 pub fn hair_length(binding: &StrandBinding, groom: &StrandGroom, guides: &[f32]) -> u16 {
     let s = groom.length;
-    if !(s > 0.0) {
+    if s <= 0.0 {
         return WHOLE;
     }
     let untrimmed = s.max(1.0);
