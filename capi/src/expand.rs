@@ -189,7 +189,7 @@ pub extern "C" fn pelage_expand(
             let (start, b) = part?;
             bounds = bounds.merge(b, start);
         }
-        run(frame.posed(), all, &bounds, p, req(curves, "curves")?)
+        run(frame.posed(), all, &bounds, None, p, req(curves, "curves")?)
     }
 }
 
@@ -200,6 +200,7 @@ pub(crate) fn run(
     frame: &PosedFrame,
     all: Strands,
     bounds: &StrandBounds,
+    trim: Option<&[u16]>,
     p: &PelageExpandParams,
     out: &PelageCurves,
 ) -> Result<(), Failure> {
@@ -226,7 +227,10 @@ pub(crate) fn run(
     let optional = |p: *mut u32| if p.is_null() { 0 } else { strand_count };
     let counts = slice_mut(out.curve_counts, optional(out.curve_counts), "curve_counts")?;
     let ids = slice_mut(out.curve_ids, optional(out.curve_ids), "curve_ids")?;
-    let job = ExpandJob::new(frame, all, bounds, &core, points.len(), point_stride)?;
+    let mut job = ExpandJob::new(frame, all, bounds, &core, points.len(), point_stride)?;
+    if let Some(lengths) = trim {
+        job = job.trimmed(lengths)?;
+    }
     let progress = Progress::new(p.progress, p.progress_user_data);
     split_with_progress(
         strand_count,
