@@ -29,6 +29,10 @@
 // Most guides a strand can use.
 #define PELAGE_MAX_NEIGHBOURS 8
 
+// The stored length of an untrimmed strand (lengths are fractions of a
+// strand's length in 1/65535).
+#define PELAGE_TRIM_WHOLE 65535
+
 // Result of every pelage call. Values are stable: a retired code is never reused.
 typedef enum PelageStatus {
   // Success; outputs were written.
@@ -259,6 +263,12 @@ typedef struct PelageExpandParams {
   uint32_t end_points;
   // Length of orphan strands, 0..1e9 (use PelageBindInfo.mean_guide_length).
   float orphan_length;
+  // Factor on every strand's radii, in (0, 1e6] (default 1). A shadow or
+  // distance LOD that expands the first k of n strands by rank (a
+  // cutoff in every patch: `pelage_groom_lod_counts`) passes n / k, so
+  // the fur covers as much: coverage `1 - exp(-n w l / A)` of n strands
+  // of width w and length l over an area A depends on n w alone.
+  float width_scale;
   // Threads the call splits the strands over: 0 = all cores, 1 = the
   // calling thread only; at most max(cores, 64). The output is bitwise
   // identical for any value.
@@ -722,7 +732,8 @@ enum PelageStatus pelage_bind_query(const struct PelageMeshDesc *rest_mesh, size
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, void *arena, size_t arena_bytes, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);
 
-// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread,
+// Defaults: 16 points per strand, pinned ends, orphan_length 0.1,
+// width_scale 1, 1 thread,
 // no progress callback.
 //
 // Thread safety: may be called from any thread at any time.
@@ -982,6 +993,19 @@ enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const str
 // Thread safety: may be called from any thread; the frame may be read by
 // other calls meanwhile.
 enum PelageStatus pelage_patch_boxes(PelageFrame frame, const struct PelageStrands *strands, const struct PelageExpandParams *params, const struct PelagePatch *patches, size_t patch_count, float *boxes);
+
+// The shadow or distance LOD that keeps `groom`'s strands of rank below
+// `cutoff` (for example half the strand count): writes to `counts[i]` how
+// many of patch `i`'s strands it keeps, always its first ones, since
+// `pelage_patch_plan` sorts each patch by rank (the groom's strands must
+// be in that plan's order). Expand those with `width_scale` = strand
+// count / kept strands in PelageExpandParams so the fur covers as much.
+//
+// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
+// strands), MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread while `groom` is alive.
+enum PelageStatus pelage_groom_lod_counts(PelageGroom groom, const struct PelagePatch *patches, size_t patch_count, uint32_t cutoff, uint32_t *counts);
 
 // Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 // positions into `positions` (float3, `position_stride` bytes apart) and, if

@@ -56,7 +56,7 @@ pub use guide_cache::{
 pub use guides::PelageGuidesDesc;
 pub use map::{PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
-pub use patch::{pelage_patch_boxes, pelage_patch_plan};
+pub use patch::{pelage_groom_lod_counts, pelage_patch_boxes, pelage_patch_plan};
 pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};

@@ -46,7 +46,8 @@ pub struct PelageTrimRecordsInfo {
 
 /// The stored length of an untrimmed strand (lengths are fractions of a
 /// strand's length in 1/65535).
-pub const PELAGE_TRIM_WHOLE: u16 = pelage_core::trim::WHOLE;
+pub const PELAGE_TRIM_WHOLE: u16 = 65535;
+const _: () = assert!(PELAGE_TRIM_WHOLE == pelage_core::trim::WHOLE);
 
 /// Finds where each posed guide of `frame` first meets `cloth` (a triangle
 /// mesh such as a shirt, deformed to this frame; NULL: none) or enters one

@@ -411,6 +411,7 @@ mod tests {
             points_per_strand: n,
             end_points: EndPoints::Raw,
             orphan_length: 0.1,
+            width_scale: 1.0,
         }
     }
 

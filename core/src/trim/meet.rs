@@ -263,6 +263,7 @@ mod tests {
             points_per_strand: POINTS,
             end_points: EndPoints::Pinned,
             orphan_length: 0.3,
+            width_scale: 1.0,
         };
         let per = params.output_points();
         let mut curves = vec![[0.0f32; 4]; hairs.len() * per];
