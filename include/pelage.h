@@ -991,6 +991,19 @@ enum PelageStatus pelage_guide_cache_info(const void *data, size_t length, struc
 // Thread safety: no other call may use `frame` during this one.
 enum PelageStatus pelage_guide_cache_read(const void *data, size_t length, const struct PelageGuideSet *guides, uint32_t sample, PelageFrame frame, uint32_t thread_count);
 
+// A user mask over the body (paper 3.3: the regions where render hairs are
+// pushed out, or re-simulated elsewhere): evaluates `map` on `mesh` at
+// `root_count` roots and writes 1 to `mask[i]` where the value is at least
+// `threshold`, else 0 (for `PelageStrandEdits.push_mask`). Every root is
+// checked before anything is written.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (the map, a root outside
+// its triangle, a stride), NON_FINITE, OUT_OF_RANGE (a face),
+// MISALIGNED, PANIC.
+//
+// Thread safety: reentrant; concurrent calls may share inputs but not outputs.
+enum PelageStatus pelage_map_mask(const struct PelageMeshDesc *mesh, const struct PelageMap *map, const struct PelageRoot *roots, size_t root_count, float threshold, uint8_t *mask);
+
 // Orders `root_count` strands rooted at `roots` on the rest `mesh` into
 // patches of `patch_size` strands: `order` (root_count entries) receives
 // the strand to place k-th (reorder roots, bindings and grooms by it),

@@ -55,7 +55,7 @@ pub use guide_cache::{
     pelage_guide_cache_write, PelageGuideCacheInfo, PelageGuideSet,
 };
 pub use guides::PelageGuidesDesc;
-pub use map::{PelageMap, PelageMapKind};
+pub use map::{pelage_map_mask, PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
 pub use patch::{pelage_groom_lod_counts, pelage_patch_boxes, pelage_patch_plan};
 pub use region::{PelageRegionKind, PelageRegionMap};

@@ -1,8 +1,8 @@
 //! Grayscale maps (density and, later, groom parameters).
 
-use crate::buffers::{bytes, strided};
+use crate::buffers::{bytes, req, slice, slice_mut, strided};
 use crate::status::Failure;
-use crate::PelageStatus;
+use crate::{PelageMeshDesc, PelageRoot, PelageStatus};
 use pelage_core::surface::map::{Texels, Texture};
 use pelage_core::ScalarMap;
 use std::ffi::c_void;
@@ -124,5 +124,40 @@ impl PelageMap {
                 ))
             }
         })
+    }
+}
+
+/// A user mask over the body (paper 3.3: the regions where render hairs are
+/// pushed out, or re-simulated elsewhere): evaluates `map` on `mesh` at
+/// `root_count` roots and writes 1 to `mask[i]` where the value is at least
+/// `threshold`, else 0 (for `PelageStrandEdits.push_mask`). Every root is
+/// checked before anything is written.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (the map, a root outside
+/// its triangle, a stride), NON_FINITE, OUT_OF_RANGE (a face),
+/// MISALIGNED, PANIC.
+///
+/// Thread safety: reentrant; concurrent calls may share inputs but not outputs.
+#[no_mangle]
+pub extern "C" fn pelage_map_mask(
+    mesh: *const PelageMeshDesc,
+    map: *const PelageMap,
+    roots: *const PelageRoot,
+    root_count: usize,
+    threshold: f32,
+    mask: *mut u8,
+) -> PelageStatus {
+    ffi_boundary! {
+        let mesh = req(mesh, "mesh")?.view()?;
+        mesh.validate()?;
+        let values = req(map, "map")?.view(mesh.positions.len(), "map")?;
+        values.validate(&mesh, "map")?;
+        let roots: &[pelage_core::Root] = bytemuck::cast_slice(slice(roots, root_count, "roots")?);
+        pelage_core::root::check_roots(&mesh, roots, "roots")?;
+        let mask = slice_mut(mask, root_count, "mask")?;
+        for (m, r) in mask.iter_mut().zip(roots) {
+            *m = (values.sample(&mesh, r.face as usize, r.u, r.v) >= threshold) as u8;
+        }
+        Ok(())
     }
 }

@@ -14,7 +14,7 @@
 //       into the same kind of scene; and the same half unwidened
 //       (width_scale 1). The LOD's curves are the full fur's strands, with
 //       the radius scaled;
-//   (c) self-shadowing: from points on the skin (their own stamped roots,
+//   (c) self-shadowing: from points on the skin (roots stamped for them,
 //       lifted off the skin along the normal) lit by the body, shadow rays
 //       (rtcOccluded1) toward a few directional lights against the hair
 //       curves only (an occlusion filter drops the body's hits): the
@@ -51,7 +51,7 @@ struct Options {
   uint32_t hairs = 300000;
   uint32_t guides = 13030;
   uint32_t samples = 20000;  // shadow-ray origins on the skin
-  int reps = 5;
+  int reps = 5;              // timed repetitions (the CTest runs 3)
 };
 
 constexpr uint32_t kCvs = 16;          // guide points, and points per strand
@@ -59,14 +59,15 @@ constexpr float kGuideLength = 0.05f;  // guide length (as embree_interp)
 constexpr uint32_t kPatchSize = 1000;  // strands per patch (as render_lazy)
 constexpr float kLift = 2e-4f;         // shadow-ray origins: this far off the skin along the normal
 
-// The LOD's occluded share must lie within this relative distance of the
-// full fur's. Measured at 300K hairs: +1.9 % (the Rust test, along a view:
-// +3.8 %). The Boolean model's coverage 1 - exp(-n w l / A) depends on n w
-// alone, but neighbouring strands of one patch lie alike and overlap more
-// than independent ones, so the widened half covers a little more; the
-// tolerance leaves room for that bias, not for a missing factor (the
-// unwidened half is 20-40 % below).
-constexpr double kTolerance = 0.04;
+// The LOD's occluded share (all lights) must lie within this relative
+// distance of the full fur's. Measured at 300K hairs: +1.45 % overall,
+// +1.1 .. +2.1 % per light (the Rust test, along a view: +3.8 %). The
+// Boolean model's coverage 1 - exp(-n w l / A) depends on n w alone, but the
+// strands of a clump lie alike and overlap more than independent ones, so
+// the widened half covers a little more than the full fur: the tolerance
+// leaves room for that bias, not for a missing factor (the unwidened half
+// is 17 % below).
+constexpr double kTolerance = 0.025;
 // The unwidened half must be at least this much (relative) below the full fur.
 constexpr double kThinBelow = 0.10;
 
@@ -153,15 +154,14 @@ void expand(Level& level, const creature::Groom& groom, const creature::Frame& f
 // The level's curves plus the creature mesh (its occlusion filtered out) as
 // one Embree scene; the commit's seconds in `commit_s`.
 RTCScene build(creature::Device& device, const creature::Mesh& mesh, Level& level, size_t per,
-               const std::vector<uint32_t>& indices, unsigned* curves_id = nullptr) {
+               const std::vector<uint32_t>& indices) {
   RTCScene scene = rtcNewScene(device.device);
   const unsigned mesh_id = creature::attach_mesh(device.device, scene, mesh);
   RTCGeometry g = rtcGetGeometry(scene, mesh_id);
   rtcSetGeometryOccludedFilterFunction(g, reject_all);
   rtcCommitGeometry(g);
-  const unsigned id = creature::attach_curves(device.device, scene, level.points.data(), per * level.curves,
-                                              indices.data(), level.curves * (per - 3));
-  if (curves_id) *curves_id = id;
+  creature::attach_curves(device.device, scene, level.points.data(), per * level.curves, indices.data(),
+                          level.curves * (per - 3));
   const creature::Stopwatch clock;
   rtcCommitScene(scene);
   level.commit_s.push_back(clock.seconds());
@@ -198,9 +198,8 @@ int main(int argc, char** argv) try {
   const PelageMeshDesc mesh_desc = mesh.desc();
   std::printf("creature: %zu vertices, %zu triangles\n", mesh.vertex_count(), mesh.triangle_count());
   creature::Device device;
-  {
-    bool filters = rtcGetDeviceProperty(device.device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) != 0;
-    if (!filters) throw std::runtime_error("this Embree has no filter functions (EMBREE_FILTER_FUNCTION)");
+  if (!rtcGetDeviceProperty(device.device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED)) {
+    throw std::runtime_error("this Embree has no filter functions (EMBREE_FILTER_FUNCTION)");
   }
   RTCScene body = rtcNewScene(device.device);  // the skin alone: which points the body itself leaves lit
   rtcSetSceneFlags(body, RTC_SCENE_FLAG_ROBUST);
@@ -404,9 +403,14 @@ int main(int argc, char** argv) try {
   }
   std::printf("  (differences in percentage points, relative in parentheses)\n");
   const double f = overall(full), h = overall(lod), t = overall(thin);
+  // near saturation a share hides differences; the Boolean model's optical
+  // depth -ln(1 - share) is proportional to n w (printed, not checked)
+  const double df = -std::log(1.0 - f), dh = -std::log(1.0 - h), dt = -std::log(1.0 - t);
+  std::printf("  all lights as Boolean-model depth -ln(1 - share): full %.3f, LOD widened %.3f (x %.3f), "
+              "unwidened %.3f (x %.3f; the model: x 1 and x 0.5)\n", df, dh, dh / df, dt, dt / df);
   expect(f > 0.05 && f < 0.95, fmt("the full fur's occluded share is informative, not 0 or 1 (%.2f %%)", 100.0 * f));
   expect(std::fabs(h - f) <= kTolerance * f,
-         fmt("the widened half occludes as much: |%.2f %% - %.2f %%| = %.2f %% of it <= %.0f %%", 100.0 * h,
+         fmt("the widened half occludes as much: |%.2f %% - %.2f %%| = %.2f %% of it <= %.1f %%", 100.0 * h,
              100.0 * f, 100.0 * std::fabs(h - f) / f, 100.0 * kTolerance));
   expect(t < (1.0 - kThinBelow) * f,
          fmt("the unwidened half occludes clearly less: %.2f %% < (1 - %.2f) x %.2f %%", 100.0 * t, kThinBelow,

@@ -9,6 +9,7 @@
 
 use crate::interp::lift::{first_clear, lift, toward_normal, LIFT_STEP, LIFT_STEPS};
 use crate::surface::body::Body;
+use crate::trim::length::{cut, WHOLE};
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
 use crate::Error;
@@ -220,6 +221,23 @@ impl<'c, 'r> Near<'c, 'r> {
         d.iter().all(|&x| x >= 0.0)
     }
 
+    /// The parameter at which the segment `a`-`b`, whose end `b` is
+    /// inside, enters the colliders: the largest tried parameter outside,
+    /// to 1/4096 of the segment.
+    pub(crate) fn entry(&self, a: Vec3, b: Vec3) -> f32 {
+        const BISECTIONS: u32 = 12;
+        let (mut out, mut inside) = (0.0f32, 1.0f32);
+        for _ in 0..BISECTIONS {
+            let mid = 0.5 * (out + inside);
+            if self.inside(a.lerp(b, mid)) {
+                inside = mid;
+            } else {
+                out = mid;
+            }
+        }
+        out
+    }
+
     /// True when no point of `points` is inside a shape.
     fn clear(&self, points: &[Vec3]) -> bool {
         !points.iter().any(|&p| self.in_shape(p)) && self.field_clear(points)
@@ -318,6 +336,9 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
 /// user regions): `points` are its world points with their radii, the
 /// first its root on `frame`'s origin. Its points are turned about the root
 /// as a guide's are; the radii stay. Unchanged (the same bits) when clear.
+/// A strand no tried rotation frees (in a crease narrower than it is long)
+/// is turned fully toward its normal and then cut where it enters a
+/// collider (as trimming cuts), so no point after the root stays inside.
 pub fn push_out_curve(colliders: &Colliders, frame: &Frame, points: &mut [[f32; 4]]) -> PushOut {
     let n = points.len().min(MAX_POINTS);
     let mut local = [Vec3::ZERO; MAX_POINTS];
@@ -329,10 +350,20 @@ pub fn push_out_curve(colliders: &Colliders, frame: &Frame, points: &mut [[f32; 
         }
     }
     let done = push_out(colliders, frame, &mut local[..n], reach);
-    if done != PushOut::Clear {
-        for (p, l) in points[..n].iter_mut().zip(&local[..n]) {
-            let w = frame.to_world(*l);
-            (p[0], p[1], p[2]) = (w.x, w.y, w.z);
+    if done == PushOut::Clear {
+        return done;
+    }
+    for (p, l) in points[..n].iter_mut().zip(&local[..n]) {
+        let w = frame.to_world(*l);
+        (p[0], p[1], p[2]) = (w.x, w.y, w.z);
+    }
+    if done == PushOut::Stuck {
+        let near = Near::new(colliders, frame.origin, reach);
+        let at = |j: usize| Vec3::new(points[j][0], points[j][1], points[j][2]);
+        if let Some(j) = (1..n).find(|&j| near.inside(at(j))) {
+            let t = near.entry(at(j - 1), at(j));
+            let length = ((j - 1) as f32 + t) / (n - 1) as f32;
+            cut(&mut points[..n], (length * WHOLE as f32) as u16);
         }
     }
     done

@@ -6,7 +6,6 @@ use crate::surface::body::Body;
 use crate::Error;
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;
-use glam::Vec3;
 
 /// Where one guide first meets the cloth or a collider in one frame.
 #[repr(C)]
@@ -58,10 +57,6 @@ impl TrimRecord {
     }
 }
 
-/// Halvings that place a collider's surface on a guide segment: to 1/4096
-/// of the segment.
-const BISECTIONS: u32 = 12;
-
 /// Where guide `g` of `frame` first meets `cloth` (its triangles: the
 /// body's inside test plays no part) or enters one of `colliders`, walking
 /// from the root: the record, or `None` when it meets nothing. A point
@@ -82,7 +77,7 @@ pub fn meet(
         let (a, b) = (at(j - 1), at(j));
         let mut t = cloth.and_then(|c| c.first_meet(a, b));
         if colliding && near.inside(b) {
-            t = Some(t.map_or(entry(&near, a, b), |t| t.min(entry(&near, a, b))));
+            t = Some(t.map_or(near.entry(a, b), |t| t.min(near.entry(a, b))));
         }
         if let Some(t) = t {
             return Some(TrimRecord {
@@ -93,21 +88,6 @@ pub fn meet(
         }
     }
     None
-}
-
-/// The segment parameter at which the segment `a`-`b`, whose end `b` is
-/// inside, enters the colliders: the largest tried parameter outside.
-fn entry(near: &Near, a: Vec3, b: Vec3) -> f32 {
-    let (mut out, mut inside) = (0.0f32, 1.0f32);
-    for _ in 0..BISECTIONS {
-        let mid = 0.5 * (out + inside);
-        if near.inside(a.lerp(b, mid)) {
-            inside = mid;
-        } else {
-            out = mid;
-        }
-    }
-    out
 }
 
 /// Finds the records of guides `guides` of `frame` (see [`meet`]) and
