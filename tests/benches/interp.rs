@@ -183,10 +183,107 @@ fn main() {
             t_patches / t_groom
         );
     }
+    edits(handle, &m, &guide_roots, &gdesc, &hairs, &ep, &mut out);
     pelage_groom_free(handle);
     println!("ratio = frame time / time to write the same bytes with the same threads (the bandwidth floor)");
     stages(&mesh, &guides, &hairs, &bindings, &grooms, &ep, &mut out);
     println!("paper: 2 frames/s with full interpolation (979,526 hairs)");
+}
+
+/// The per-frame cost of the strand edits (paper 3.3) at 2 threads: every
+/// hair cut (trimming), and a mask over the body's lowest tenth of the
+/// hairs pushed out
+/// of the body and 16 capsules, against the plain expansion.
+fn edits(
+    handle: PelageGroom,
+    m: &pelage_tests::creature::CreatureMesh,
+    guide_roots: &[Root],
+    gdesc: &PelageGuidesDesc,
+    hairs: &[Root],
+    ep: &PelageExpandParams,
+    out: &mut [[f32; 4]],
+) {
+    use pelage_tests::animated::{capsules, colliders};
+    let ep = PelageExpandParams {
+        thread_count: 2,
+        ..*ep
+    };
+    let desc = mesh_desc(m);
+    // the lowest tenth of the hairs, as a map over the body
+    let skin = mesh_view(m);
+    let mut ys: Vec<f32> = hairs
+        .iter()
+        .map(|r| skin.point(r.face as usize, r.u, r.v).y)
+        .collect();
+    ys.sort_by(f32::total_cmp);
+    let low = ys[ys.len() / 10];
+    let values: Vec<f32> = m
+        .positions
+        .iter()
+        .map(|p| (p[1] < low) as u32 as f32)
+        .collect();
+    let map = PelageMap {
+        kind: PelageMapKind::PerVertex as u32,
+        constant: 0.0,
+        data: values.as_ptr().cast(),
+        width: 0,
+        height: 0,
+        stride: 4,
+    };
+    let mut mask = vec![0u8; hairs.len()];
+    let roots: &[PelageRoot] = bytemuck::cast_slice(hairs);
+    let s = pelage_map_mask(
+        &desc,
+        &map,
+        roots.as_ptr(),
+        hairs.len(),
+        0.5,
+        mask.as_mut_ptr(),
+    );
+    assert_eq!(s, PelageStatus::Ok);
+    let masked = mask.iter().filter(|&&v| v != 0).count();
+    let lengths = vec![(PELAGE_TRIM_WHOLE / 5) * 3; hairs.len()];
+    let caps = capsules(m, guide_roots, 0);
+    let col = colliders(&caps, true);
+    let run = |edits: Option<PelageStrandEdits>, set: bool, out: &mut [[f32; 4]]| {
+        let f = frame(&desc, gdesc, CVS as u32, 2).unwrap();
+        if set {
+            assert_eq!(pelage_frame_set_colliders(f.0, &col), PelageStatus::Ok);
+        }
+        let curves = curves_desc(out, None);
+        let e = edits.as_ref().map_or(std::ptr::null(), |e| e as *const _);
+        let s = pelage_groom_expand_edited(handle, f.0, 0, hairs.len(), e, &ep, &curves);
+        assert_eq!(s, PelageStatus::Ok);
+        black_box(&*out);
+    };
+    let plain = time(7, || run(None, false, out));
+    let colliders_only = time(7, || run(None, true, out));
+    let cut = PelageStrandEdits {
+        lengths: lengths.as_ptr(),
+        push_mask: std::ptr::null(),
+    };
+    let t_cut = time(7, || run(Some(cut), false, out));
+    let push = PelageStrandEdits {
+        lengths: std::ptr::null(),
+        push_mask: mask.as_ptr(),
+    };
+    let t_push = time(7, || run(Some(push), true, out));
+    println!(
+        "strand edits, 2 threads, one frame each (frame made, expanded); {masked} hairs ({:.1}%) masked",
+        100.0 * masked as f64 / hairs.len() as f64
+    );
+    println!("{:>44} | {:>9} | {:>12}", "", "frame ms", "over plain");
+    for (name, t) in [
+        ("plain pelage_groom_expand_edited", plain),
+        (
+            "+ pelage_frame_set_colliders (body, 16 caps)",
+            colliders_only,
+        ),
+        ("every hair cut (trim lengths)", t_cut),
+        ("colliders set, masked hairs pushed out", t_push),
+    ] {
+        println!("{name:>44} | {:>9.1} | {:>11.2}x", t * 1e3, t / plain);
+    }
 }
 
 /// Patches of the render procedural: contiguous strand ranges.

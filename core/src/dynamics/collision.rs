@@ -9,9 +9,9 @@
 
 use crate::interp::lift::{first_clear, lift, toward_normal, LIFT_STEP, LIFT_STEPS};
 use crate::surface::body::Body;
-use crate::trim::length::{cut, WHOLE};
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
+use crate::trim::length::{cut, WHOLE};
 use crate::Error;
 use bytemuck::{Pod, Zeroable};
 use core::f32::consts::FRAC_PI_2;

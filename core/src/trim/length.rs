@@ -18,7 +18,6 @@
 
 use crate::interp::bind::StrandBinding;
 use crate::interp::groom::StrandGroom;
-use crate::interp::strand::MAX_STRAND_POINTS;
 use crate::interp::strands::Strands;
 use crate::trim::meet::TrimRecord;
 use crate::Error;
@@ -90,15 +89,20 @@ pub(crate) fn cut(points: &mut [[f32; 4]], length: u16) {
     if length == WHOLE || n < 2 {
         return;
     }
-    let mut whole = [[0.0f32; 4]; MAX_STRAND_POINTS];
-    whole[..n].copy_from_slice(points);
     let f = length as f32 / WHOLE as f32;
-    for (k, p) in points.iter_mut().enumerate() {
+    // in place from the tip down: point k reads the points at f k and the
+    // next, both at most k (f < 1), so not yet rewritten; the root stays
+    for k in (1..n).rev() {
         let u = f * k as f32;
         let i = (u as usize).min(n - 2);
         let a = u - i as f32;
-        let (lo, hi) = (whole[i], whole[i + 1]);
-        *p = [0, 1, 2, 3].map(|c| lo[c] + (hi[c] - lo[c]) * a);
+        let (lo, hi) = (points[i], points[i + 1]);
+        points[k] = [
+            lo[0] + (hi[0] - lo[0]) * a,
+            lo[1] + (hi[1] - lo[1]) * a,
+            lo[2] + (hi[2] - lo[2]) * a,
+            lo[3] + (hi[3] - lo[3]) * a,
+        ];
     }
 }
 
