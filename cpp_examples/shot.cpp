@@ -1,0 +1,406 @@
+// A shot on a render farm (paper 3.3, 4), one subcommand per kind of job:
+//
+//   shot sim <creature.obj> <dir> <frames> [hairs]
+//       The simulation pass, sequential over frames: the groom file (once per
+//       asset), then per frame the guides simulated over the shutter, written
+//       as the frame's guide cache (two shutter samples), and the frame's
+//       deformed mesh at both samples.
+//   shot reduce <dir> <frames>
+//       The shot pass: every frame's trim records into one file.
+//   shot render <dir> <first> <count>
+//       Frames first .. first + count - 1, each from its own files alone (and
+//       the groom file and the shot pass's file): all the fur expanded into
+//       one motion-blurred Embree scene, <dir>/frame_NNNN.png.
+//   shot local <creature.obj> <dir> <frames> [hairs]
+//       The three in one process, to compare with the farm's frames.
+//
+// farm/shot.sh submits sim, reduce and a job array of renders to Slurm.
+// Every image must have the same bits however the frames are split into
+// tasks and whatever the thread count: the farm_slurm test compares them.
+#include <embree3/rtcore.h>
+#include <pelage.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "creature_io.h"
+
+using creature::check;
+using creature::V3;
+
+namespace {
+
+const uint32_t kGuides = 4000, kCvs = 16, kPatchSize = 1000;
+const float kGuideLength = 0.05f, kFps = 24.0f;
+// Shutter samples: the frame's time and half a frame later (a 180 degree
+// shutter), each one simulation step.
+const int kSamples = 2;
+const int kImageSize = 512;
+
+std::vector<unsigned char> read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void write_file(const std::string& path, const unsigned char* data, size_t size) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+std::string frame_path(const std::string& dir, int frame, const char* suffix) {
+  char name[32];
+  std::snprintf(name, sizeof name, "/frame_%04d%s", frame, suffix);
+  return dir + name;
+}
+
+// The creature at time t (seconds): the upper body sways along x, a function
+// of time alone, as an animation cache would give it. Normals follow the
+// shear x += s(y) by its inverse transpose.
+creature::Mesh posed(const creature::Mesh& rest, float t) {
+  const float a = 0.12f * std::sin(6.2831853f * 1.5f * t);
+  creature::Mesh m = rest;
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    const float y = std::max(m.positions[3 * v + 1], 0.0f);
+    m.positions[3 * v] += a * y * y;
+    if (m.normals.empty()) continue;
+    float* n = &m.normals[3 * v];
+    n[1] -= 2.0f * a * y * n[0];
+    const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k) n[k] /= len;
+  }
+  return m;
+}
+
+// A frame's deformed mesh at each shutter sample, the renderer's animation
+// cache: vertex, triangle and normal counts (uint32), the triangles, then
+// each sample's positions and normals (float32, little-endian like every
+// machine we render on).
+void write_meshes(const std::string& path, const std::vector<creature::Mesh>& samples) {
+  const creature::Mesh& m = samples[0];
+  const uint32_t counts[3] = {uint32_t(m.vertex_count()), uint32_t(m.triangle_count()),
+                              uint32_t(m.normals.size() / 3)};
+  std::ofstream out(path, std::ios::binary);
+  const auto put = [&](const void* data, size_t bytes) {
+    out.write(static_cast<const char*>(data), std::streamsize(bytes));
+  };
+  put(counts, sizeof counts);
+  put(m.indices.data(), 4 * m.indices.size());
+  for (const creature::Mesh& s : samples) {
+    put(s.positions.data(), 4 * s.positions.size());
+    put(s.normals.data(), 4 * s.normals.size());
+  }
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+std::vector<creature::Mesh> read_meshes(const std::string& path) {
+  const std::vector<unsigned char> bytes = read_file(path);
+  uint32_t counts[3] = {};
+  if (bytes.size() >= sizeof counts) std::memcpy(counts, bytes.data(), sizeof counts);
+  const size_t v = counts[0], t = counts[1], normals = counts[2];
+  if ((normals != 0 && normals != v) || bytes.size() != sizeof counts + 12 * t + kSamples * 12 * (v + normals)) {
+    throw std::runtime_error(path + ": not a mesh file of " + std::to_string(kSamples) + " samples");
+  }
+  size_t at = sizeof counts;
+  const auto take = [&](auto& out, size_t count) {
+    out.resize(count);
+    std::memcpy(out.data(), &bytes[at], 4 * count);
+    at += 4 * count;
+  };
+  std::vector<creature::Mesh> samples(kSamples);
+  take(samples[0].indices, 3 * t);
+  for (creature::Mesh& s : samples) {
+    s.indices = samples[0].indices;
+    take(s.positions, 3 * v);
+    take(s.normals, 3 * normals);
+  }
+  return samples;
+}
+
+// Once per asset: guides combed on the rest pose, the render hairs stored
+// patch by patch with their bindings and groom values, as render_lazy does.
+void write_groom_file(const creature::Mesh& rest, const std::vector<PelageRoot>& guide_roots,
+                      const std::vector<float>& rest_points, uint32_t hairs, const std::string& path) {
+  PelageStampParams sp = pelage_stamp_params_defaults();
+  sp.target_count = hairs, sp.seed = 2;
+  const std::vector<PelageRoot> stamped = creature::stamp(rest, sp);
+  const size_t n = stamped.size();
+  std::vector<uint32_t> order(n);
+  std::vector<PelagePatch> patches((n + kPatchSize - 1) / kPatchSize);
+  size_t patch_count = 0;
+  const PelageMeshDesc rest_desc = rest.desc();
+  check(pelage_patch_plan(&rest_desc, stamped.data(), n, kPatchSize, order.data(), patches.data(), patches.size(),
+                          &patch_count),
+        "pelage_patch_plan");
+  std::vector<PelageRoot> roots(n);
+  for (size_t k = 0; k < n; ++k) roots[k] = stamped[order[k]];
+  const PelageGuidesDesc rest_guides = creature::guides_desc(guide_roots, rest_points, kCvs);
+  PelageBindParams bp = pelage_bind_params_defaults();
+  bp.thread_count = 0;
+  const std::vector<PelageStrandBinding> bindings = creature::bind(rest, rest_guides, roots.data(), n, bp);
+  PelageGroomMaps maps = pelage_groom_maps_defaults();
+  maps.root_width.constant = 0.0016f, maps.tip_width.constant = 0.0003f;
+  maps.kink_amplitude.constant = 0.03f, maps.clump.constant = 0.25f, maps.bend.constant = 0.1f;
+  const std::vector<PelageStrandGroom> grooms = creature::groom(rest, maps, roots.data(), n);
+
+  PelageExpandParams ep = pelage_expand_params_defaults();
+  ep.points_per_strand = kCvs;
+  const creature::Frame rest_frame(rest, rest_guides, ep);
+  const PelageStrands strands{roots.data(), bindings.data(), grooms.data(), n};
+  const PelageGroomFileDesc desc{rest_frame.get(), guide_roots.data(), strands, patches.data(), patch_count};
+  size_t bytes = 0;
+  pelage_groom_file_write(&desc, nullptr, 0, &bytes);  // CAPACITY_EXCEEDED: the size
+  std::vector<unsigned char> file(bytes);
+  check(pelage_groom_file_write(&desc, file.data(), file.size(), &bytes), "pelage_groom_file_write");
+  write_file(path, file.data(), bytes);
+}
+
+// What every job reads first: the groom file's guide set (the neutral pose
+// the caches are coded against) and its strands as a groom.
+struct Asset {
+  PelageGroomFileInfo info{};
+  std::vector<PelageRoot> guide_roots, roots;
+  std::vector<float> guide_points;
+  std::vector<PelageStrandBinding> bindings;
+  std::vector<PelageStrandGroom> grooms;
+  std::unique_ptr<creature::Groom> groom;
+
+  explicit Asset(const std::string& path) {
+    const std::vector<unsigned char> file = read_file(path);
+    check(pelage_groom_file_info(file.data(), file.size(), &info), "pelage_groom_file_info");
+    guide_roots.resize(info.guide_count);
+    guide_points.resize(info.guide_count * info.points_per_guide * 3);
+    roots.resize(info.strand_count), bindings.resize(info.strand_count), grooms.resize(info.strand_count);
+    std::vector<PelagePatch> patches(info.patch_count);
+    const PelageGroomFileBuffers out{guide_roots.data(), guide_points.data(), info.guide_count,
+                                     roots.data(),       bindings.data(),     grooms.data(),
+                                     info.strand_count,  patches.data(),      info.patch_count};
+    check(pelage_groom_file_read(file.data(), file.size(), &out), "pelage_groom_file_read");
+    groom = std::make_unique<creature::Groom>(roots.data(), bindings.data(), grooms.data(), info.strand_count);
+  }
+  PelageGuideSet set() const {
+    return {guide_roots.data(), guide_points.data(), info.guide_count, info.points_per_guide, info.id};
+  }
+};
+
+using FramePtr = std::unique_ptr<PelageFrameTy, void (*)(PelageFrame)>;
+
+// --- The simulation pass ----------------------------------------------------
+
+void simulate(const std::string& obj, const std::string& dir, int frames, uint32_t hairs) {
+  creature::Stopwatch clock;
+  const creature::Mesh rest = creature::load_obj(obj);
+  PelageStampParams sp = pelage_stamp_params_defaults();
+  sp.target_count = kGuides, sp.seed = 1;
+  const std::vector<PelageRoot> guide_roots = creature::stamp(rest, sp);
+  const std::vector<float> rest_points = creature::combed_guides(rest, guide_roots, kCvs, kGuideLength);
+  write_groom_file(rest, guide_roots, rest_points, hairs, dir + "/creature.pgroom");
+  const Asset asset(dir + "/creature.pgroom");
+  const PelageGuideSet set = asset.set();
+  std::printf("sim: groom file, %zu hairs on %zu guides: %.2f s\n", asset.roots.size(), guide_roots.size(),
+              clock.seconds());
+
+  const PelageMeshDesc rest_desc = rest.desc();
+  const PelageGuidesDesc rest_guides = creature::guides_desc(guide_roots, rest_points, kCvs);
+  PelageSimParams params = pelage_sim_params_defaults();
+  params.link_radius = 0.05f;
+  size_t bytes = 0;
+  check(pelage_sim_query(&rest_desc, guide_roots.size(), &params, &bytes), "pelage_sim_query");
+  std::vector<unsigned char> memory(bytes);
+  PelageSim raw = nullptr;
+  check(pelage_sim_new(&rest_desc, &rest_guides, &params, memory.data(), bytes, &raw), "pelage_sim_new");
+  const std::unique_ptr<PelageSimTy, void (*)(PelageSim)> sim(raw, pelage_sim_free);
+  PelageColliders colliders{};
+  colliders.body = 1;
+  PelageExpandParams ep = pelage_expand_params_defaults();
+  ep.points_per_strand = kCvs;
+
+  size_t most = 0;
+  check(pelage_guide_cache_max_size(set.guide_count, kCvs, kSamples, 0, &most), "pelage_guide_cache_max_size");
+  std::vector<unsigned char> cache(most);
+  std::vector<float> simulated(rest_points.size());
+  for (int f = 0; f < frames; ++f) {
+    clock = {};
+    std::vector<creature::Mesh> meshes;
+    std::vector<std::unique_ptr<creature::Frame>> samples;
+    for (int k = 0; k < kSamples; ++k) {
+      meshes.push_back(posed(rest, (float(f) + float(k) / kSamples) / kFps));
+      auto frame = std::make_unique<creature::Frame>(meshes[k], rest_guides, ep);
+      check(pelage_sim_step(sim.get(), frame->get(), &colliders, nullptr, 0, 1.0f / (kFps * kSamples), 0),
+            "pelage_sim_step");
+      check(pelage_sim_read(sim.get(), simulated.data(), 12, simulated.size() / 3), "pelage_sim_read");
+      const PelageGuidesDesc guides = creature::guides_desc(guide_roots, simulated, kCvs);
+      check(pelage_frame_set_guides(frame->get(), &guides, 0), "pelage_frame_set_guides");
+      samples.push_back(std::move(frame));
+    }
+    const PelageFrame frames_at[kSamples] = {samples[0]->get(), samples[1]->get()};
+    size_t written = 0;
+    check(pelage_guide_cache_write(&set, frames_at, kSamples, 0, cache.data(), cache.size(), &written),
+          "pelage_guide_cache_write");
+    write_file(frame_path(dir, f, ".pguide"), cache.data(), written);
+    write_meshes(frame_path(dir, f, ".mesh"), meshes);
+    // TODO(trim API): the frame's trim records (pelage_trim_find on
+    // samples[0] against the shirt and the body) go to frame_NNNN.trim here.
+    std::printf("sim: frame %d: %d steps, cache %.1f KB: %.2f s\n", f, kSamples, double(written) / 1e3,
+                clock.seconds());
+  }
+}
+
+// --- The shot pass ------------------------------------------------------------
+
+void reduce(const std::string& dir, int frames) {
+  // TODO(trim API): read every frame's trim records, keep the shortest
+  // length per hair (pelage_trim_shortest) and write them with
+  // pelage_trim_lengths_write. Until then the file only orders the jobs.
+  for (int f = 0; f < frames; ++f) read_file(frame_path(dir, f, ".pguide"));
+  write_file(dir + "/shot.trim", nullptr, 0);
+  std::printf("reduce: %d frames\n", frames);
+}
+
+// --- The render tasks ---------------------------------------------------------
+
+// Round Catmull-Rom curves or triangles moving between the shutter samples:
+// one vertex buffer per sample (Embree's time steps).
+void attach_moving(RTCDevice device, RTCScene scene, RTCGeometryType type, const std::vector<float>* vertices,
+                   RTCFormat format, size_t stride, const std::vector<uint32_t>& indices, RTCFormat index_format,
+                   size_t index_stride) {
+  RTCGeometry g = rtcNewGeometry(device, type);
+  rtcSetGeometryTimeStepCount(g, kSamples);
+  for (int k = 0; k < kSamples; ++k) {
+    // copied: Embree reads vertices with 16-byte loads past a float3 buffer's end
+    void* p = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, unsigned(k), format, stride,
+                                      4 * vertices[k].size() / stride);
+    if (p) std::memcpy(p, vertices[k].data(), 4 * vertices[k].size());
+  }
+  void* t = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, index_format, index_stride,
+                                    4 * indices.size() / index_stride);
+  if (t) std::memcpy(t, indices.data(), 4 * indices.size());
+  rtcCommitGeometry(g);
+  rtcAttachGeometry(scene, g);
+  rtcReleaseGeometry(g);
+}
+
+// One ray per pixel at a time in the shutter hashed from the pixel, headlight
+// shading: every pixel is a function of the scene alone, not of the threads.
+std::vector<uint8_t> shade(RTCScene scene) {
+  const V3 eye{1.6f, 0.8f, 3.6f}, forward = normalize(V3{0.0f, 0.05f, 0.0f} - eye);
+  const V3 right = normalize(cross(forward, V3{0.0f, 1.0f, 0.0f})), up = cross(right, forward);
+  const float fov_tan = 0.42f;
+  std::vector<uint8_t> rgb(3 * size_t(kImageSize) * kImageSize);
+  tbb::parallel_for(0, kImageSize, [&](int y) {
+    for (int x = 0; x < kImageSize; ++x) {
+      const float sx = (2.0f * (float(x) + 0.5f) / kImageSize - 1.0f) * fov_tan;
+      const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / kImageSize) * fov_tan;
+      const V3 dir = normalize(forward + sx * right + sy * up);
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      RTCRayHit rh{};
+      rh.ray.org_x = eye.x, rh.ray.org_y = eye.y, rh.ray.org_z = eye.z;
+      rh.ray.dir_x = dir.x, rh.ray.dir_y = dir.y, rh.ray.dir_z = dir.z;
+      rh.ray.tfar = 1e30f, rh.ray.mask = ~0u, rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.ray.time = float((uint32_t(x) * 73856093u ^ uint32_t(y) * 19349663u) % 1024u) / 1023.0f;
+      rtcIntersect1(scene, &ctx, &rh);
+      V3 c{0.12f, 0.13f, 0.16f};
+      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+        const float l = 0.2f + 0.8f * std::fabs(dot(normalize(V3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}), dir));
+        c = rh.hit.geomID == 0 ? l * V3{0.55f, 0.5f, 0.48f} : l * V3{0.45f, 0.3f, 0.18f};  // skin, fur
+      }
+      uint8_t* px = &rgb[3 * (size_t(y) * kImageSize + size_t(x))];
+      px[0] = uint8_t(255.0f * std::min(c.x, 1.0f)), px[1] = uint8_t(255.0f * std::min(c.y, 1.0f));
+      px[2] = uint8_t(255.0f * std::min(c.z, 1.0f));
+    }
+  });
+  return rgb;
+}
+
+void render_frame(const Asset& asset, creature::Device& device, const std::string& dir, int f) {
+  creature::Stopwatch clock;
+  const std::vector<creature::Mesh> meshes = read_meshes(frame_path(dir, f, ".mesh"));
+  const std::vector<unsigned char> cache = read_file(frame_path(dir, f, ".pguide"));
+  const PelageGuideSet set = asset.set();
+  PelageExpandParams ep = pelage_expand_params_defaults();
+  ep.points_per_strand = asset.info.points_per_guide;
+  ep.thread_count = 0;
+  const creature::Expander expander(ep);
+  const size_t n = asset.roots.size(), per = expander.points_per_curve();
+  std::vector<float> points[kSamples];
+  for (int k = 0; k < kSamples; ++k) {
+    const PelageMeshDesc desc = meshes[k].desc();
+    PelageFrame raw = nullptr;
+    check(pelage_frame_new(&desc, set.guide_count, set.points_per_guide, &raw), "pelage_frame_new");
+    const FramePtr frame(raw, pelage_frame_free);
+    check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), frame.get(), 0),
+          "pelage_guide_cache_read");
+    points[k].resize(4 * per * n);
+    // TODO(trim API): pelage_groom_expand_trimmed with the shot pass's lengths.
+    const PelageCurves curves{points[k].data(), 16, per * n, nullptr, nullptr};
+    check(pelage_groom_expand(asset.groom->get(), frame.get(), 0, n, &ep, &curves), "pelage_groom_expand");
+  }
+  const double expand_s = clock.seconds();
+  RTCScene scene = rtcNewScene(device.device);
+  std::vector<float> skin[kSamples];
+  for (int k = 0; k < kSamples; ++k) skin[k] = meshes[k].positions;
+  attach_moving(device.device, scene, RTC_GEOMETRY_TYPE_TRIANGLE, skin, RTC_FORMAT_FLOAT3, 12, meshes[0].indices,
+                RTC_FORMAT_UINT3, 12);
+  attach_moving(device.device, scene, RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE, points, RTC_FORMAT_FLOAT4, 16,
+                creature::segment_indices(n, per), RTC_FORMAT_UINT, 4);
+  rtcCommitScene(scene);
+  device.check("scene");
+  const double build_s = clock.seconds() - expand_s;
+  const std::vector<uint8_t> rgb = shade(scene);
+  rtcReleaseScene(scene);
+  device.check("render");
+  creature::write_png_rgb(frame_path(dir, f, ".png"), kImageSize, kImageSize, rgb);
+  std::printf("render: frame %d: %zu hairs x %d samples expanded %.2f s, BVH %.2f s, rendered %.2f s\n", f, n,
+              kSamples, expand_s, build_s, clock.seconds() - expand_s - build_s);
+}
+
+void render(const std::string& dir, int first, int count) {
+  const Asset asset(dir + "/creature.pgroom");
+  read_file(dir + "/shot.trim");  // TODO(trim API): the lengths, for every frame
+  creature::Device device;
+  for (int f = first; f < first + count; ++f) render_frame(asset, device, dir, f);
+}
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: shot sim <creature.obj> <dir> <frames> [hairs]\n"
+               "       shot reduce <dir> <frames>\n"
+               "       shot render <dir> <first frame> <count>\n"
+               "       shot local <creature.obj> <dir> <frames> [hairs]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const std::vector<std::string> a(argv + 1, argv + argc);
+  const auto number = [&](size_t i) { return std::stoi(a.at(i)); };
+  const auto hairs = [&](size_t i) { return a.size() > i ? uint32_t(std::stoul(a[i])) : 200000u; };
+  if (a.size() >= 4 && (a[0] == "sim" || a[0] == "local")) {
+    simulate(a[1], a[2], number(3), hairs(4));
+    if (a[0] == "local") {
+      reduce(a[2], number(3));
+      render(a[2], 0, number(3));
+    }
+  } else if (a.size() == 3 && a[0] == "reduce") {
+    reduce(a[1], number(2));
+  } else if (a.size() == 4 && a[0] == "render") {
+    render(a[1], number(2), number(3));
+  } else {
+    return usage();
+  }
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "shot: %s\n", e.what());
+  return 1;
+}
