@@ -18,6 +18,7 @@ fi
 shot=$(realpath "$1") obj=$(realpath "$2") frames=$4 hairs=$5 chunk=${6:-1}
 mkdir -p "$3/logs"
 dir=$(realpath "$3")
+rm -f "$dir"/frame_*.png "$dir"/logs/*.log  # only this run's frames count
 opts=(--parsable --kill-on-invalid-dep=yes --chdir="$dir" --cpus-per-task="${CPUS_PER_TASK:-1}")
 if [ -n "${PARTITION:-}" ]; then opts+=(--partition="$PARTITION"); fi
 
