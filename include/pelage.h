@@ -29,6 +29,10 @@
 // Most guides a strand can use.
 #define PELAGE_MAX_NEIGHBOURS 8
 
+// The stored length of an untrimmed strand (lengths are fractions of a
+// strand's length in 1/65535).
+#define PELAGE_TRIM_WHOLE 65535
+
 // Result of every pelage call. Values are stable: a retired code is never reused.
 typedef enum PelageStatus {
   // Success; outputs were written.
@@ -259,6 +263,12 @@ typedef struct PelageExpandParams {
   uint32_t end_points;
   // Length of orphan strands, 0..1e9 (use PelageBindInfo.mean_guide_length).
   float orphan_length;
+  // Factor on every strand's radii, in (0, 1e6] (default 1). A shadow or
+  // distance LOD that expands the first k of n strands by rank (a
+  // cutoff in every patch: `pelage_groom_lod_counts`) passes n / k, so
+  // the fur covers as much: coverage `1 - exp(-n w l / A)` of n strands
+  // of width w and length l over an area A depends on n w alone.
+  float width_scale;
   // Threads the call splits the strands over: 0 = all cores, 1 = the
   // calling thread only; at most max(cores, 64). The output is bitwise
   // identical for any value.
@@ -643,6 +653,29 @@ typedef struct PelageStampInfo {
   uint32_t filled;
 } PelageStampInfo;
 
+// Where one guide first meets the cloth or a collider in one frame.
+typedef struct PelageTrimRecord {
+  // The guide.
+  uint32_t guide;
+  // The first control point past the meet (1 .. points per guide - 1).
+  uint32_t cv;
+  // The guide's curve parameter at the meet, 0..1: (cv - 1 + t) /
+  // (points - 1) for the meet at t of the segment ending at cv. A
+  // guide's points are evenly spaced along it, so this is the fraction
+  // of its length.
+  float length;
+} PelageTrimRecord;
+
+// The counts of a trim records file.
+typedef struct PelageTrimRecordsInfo {
+  // Guides of the frame the records were found on.
+  size_t guide_count;
+  // Points per guide of that frame.
+  uint32_t points_per_guide;
+  // Records in the file.
+  size_t record_count;
+} PelageTrimRecordsInfo;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -699,7 +732,8 @@ enum PelageStatus pelage_bind_query(const struct PelageMeshDesc *rest_mesh, size
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, void *arena, size_t arena_bytes, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);
 
-// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread,
+// Defaults: 16 points per strand, pinned ends, orphan_length 0.1,
+// width_scale 1, 1 thread,
 // no progress callback.
 //
 // Thread safety: may be called from any thread at any time.
@@ -865,6 +899,19 @@ enum PelageStatus pelage_groom_strand_count(PelageGroom groom, size_t *strand_co
 // with distinct outputs.
 enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageExpandParams *params, const struct PelageCurves *curves);
 
+// `pelage_groom_expand`, each strand cut at its stored length in
+// `lengths` (one per strand of the whole groom, indexed from strand 0, as
+// `pelage_trim_shortest` or `pelage_trim_lengths_read` give them;
+// PELAGE_TRIM_WHOLE for none): its points are respread over the kept part
+// of the curve, so the point count stays. A cut strand stays inside its
+// patch's box.
+//
+// Returns the statuses of `pelage_groom_expand`; NULL_PARAMETER and
+// MISALIGNED also for `lengths`.
+//
+// Thread safety: as `pelage_groom_expand`.
+enum PelageStatus pelage_groom_expand_trimmed(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const uint16_t *lengths, const struct PelageExpandParams *params, const struct PelageCurves *curves);
+
 // The most bytes `pelage_guide_cache_write` writes for `sample_count`
 // shutter samples of `guide_count` guides of `points_per_guide` points
 // (a quantized frame typically takes a tenth of it).
@@ -946,6 +993,19 @@ enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const str
 // Thread safety: may be called from any thread; the frame may be read by
 // other calls meanwhile.
 enum PelageStatus pelage_patch_boxes(PelageFrame frame, const struct PelageStrands *strands, const struct PelageExpandParams *params, const struct PelagePatch *patches, size_t patch_count, float *boxes);
+
+// The shadow or distance LOD that keeps `groom`'s strands of rank below
+// `cutoff` (for example half the strand count): writes to `counts[i]` how
+// many of patch `i`'s strands it keeps, always its first ones, since
+// `pelage_patch_plan` sorts each patch by rank (the groom's strands must
+// be in that plan's order). Expand those with `width_scale` = strand
+// count / kept strands in PelageExpandParams so the fur covers as much.
+//
+// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
+// strands), MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread while `groom` is alive.
+enum PelageStatus pelage_groom_lod_counts(PelageGroom groom, const struct PelagePatch *patches, size_t patch_count, uint32_t cutoff, uint32_t *counts);
 
 // Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 // positions into `positions` (float3, `position_stride` bytes apart) and, if
@@ -1137,6 +1197,109 @@ enum PelageStatus pelage_stamp_query(const struct PelageMeshDesc *mesh, const st
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct PelageStampParams *params, void *arena, size_t arena_bytes, struct PelageRoot *roots, size_t roots_capacity, size_t *root_count, struct PelageStampInfo *info);
+
+// Finds where each posed guide of `frame` first meets `cloth` (a triangle
+// mesh such as a shirt, deformed to this frame; NULL: none) or enters one
+// of `colliders` (NULL: none; the body, when set, is the frame's mesh),
+// walking from the root. A collider's surface is placed to 1/4096 of a
+// segment, on the outside. Writes one record per guide that meets
+// something, in guide order, to `records` (capacity `capacity`; the
+// frame's guide count always suffices) and their number to
+// `*record_count`. Split over `thread_count` threads (0: all cores); the
+// records do not depend on it. On failure nothing is written.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
+// collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
+// OUT_OF_DOMAIN, CAPACITY_EXCEEDED (`capacity`), MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread; the frame may be read by
+// other calls meanwhile.
+enum PelageStatus pelage_trim_find(PelageFrame frame, const struct PelageMeshDesc *cloth, const struct PelageColliders *colliders, uint32_t thread_count, struct PelageTrimRecord *records, size_t capacity, size_t *record_count);
+
+// The shot pass, one frame at a time: each of `groom`'s strands' stored
+// lengths in `lengths` (`length_count` = the groom's strand count) becomes
+// the shorter of itself and the strand's length under `records` (found on
+// a frame of `guide_count` guides of `points_per_guide` points). A strand
+// reaches the cloth where its guides, weighted, do (a weighted harmonic
+// mean of their meets; a guide that meets nothing counts as meeting at
+// its tip, so a strand of untrimmed guides stays whole). Start a shot with
+// every length PELAGE_TRIM_WHOLE; frames may come in any order. On
+// failure `lengths` is unchanged.
+//
+// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
+// groom's guides past `guide_count`), NON_FINITE, OUT_OF_DOMAIN (a length
+// outside 0..1), INVALID_ARGUMENT (`length_count`), MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread while `groom` is alive,
+// with distinct `lengths`.
+enum PelageStatus pelage_trim_shortest(PelageGroom groom, const struct PelageTrimRecord *records, size_t record_count, size_t guide_count, uint32_t points_per_guide, uint16_t *lengths, size_t length_count);
+
+// The size in bytes of a trim records file of `record_count` records.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (overflow), PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_trim_records_size(size_t record_count, size_t *bytes);
+
+// Writes a frame's trim records (found on a frame of `guide_count` guides
+// of `points_per_guide` points) as a trim records file into `out`
+// (`capacity` bytes; `pelage_trim_records_size`); the bytes written go to
+// `*written`. On failure `out` is untouched.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts), OUT_OF_RANGE,
+// NON_FINITE, OUT_OF_DOMAIN (a record), CAPACITY_EXCEEDED, MISALIGNED,
+// PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_trim_records_write(const struct PelageTrimRecord *records, size_t record_count, size_t guide_count, uint32_t points_per_guide, void *out, size_t capacity, size_t *written);
+
+// Reads the header of a trim records file (`size` bytes) into `*info`,
+// checking its framing (magic, version, length, checksum).
+//
+// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_trim_records_info(const void *file, size_t size, struct PelageTrimRecordsInfo *info);
+
+// Decodes a trim records file (`size` bytes) into `records` (capacity
+// `capacity`) and its counts into `*info`. Every record is checked first:
+// on failure nothing is written.
+//
+// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_trim_records_read(const void *file, size_t size, struct PelageTrimRecord *records, size_t capacity, struct PelageTrimRecordsInfo *info);
+
+// The size in bytes of a trim lengths file of `strand_count` strands (2
+// bytes per strand and a 40-byte header).
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (overflow), PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_trim_lengths_size(size_t strand_count, size_t *bytes);
+
+// Writes a shot's stored lengths (one per strand of the groom, from
+// `pelage_trim_shortest`) as a trim lengths file into `out` (`capacity`
+// bytes; `pelage_trim_lengths_size`); the bytes written go to `*written`.
+// On failure `out` is untouched.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, CAPACITY_EXCEEDED,
+// MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_trim_lengths_write(const uint16_t *lengths, size_t strand_count, void *out, size_t capacity, size_t *written);
+
+// Decodes a trim lengths file (`size` bytes) into `lengths` (capacity
+// `capacity`; NULL with 0 to learn the count) and its strand count into
+// `*strand_count`. On failure nothing is written to `lengths`; with too
+// small a capacity, `*strand_count` still gets the count.
+//
+// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread at any time.
+enum PelageStatus pelage_trim_lengths_read(const void *file, size_t size, uint16_t *lengths, size_t capacity, size_t *strand_count);
 
 #ifdef __cplusplus
 }  // extern "C"

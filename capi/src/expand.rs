@@ -38,6 +38,12 @@ pub struct PelageExpandParams {
     pub end_points: u32,
     /// Length of orphan strands, 0..1e9 (use PelageBindInfo.mean_guide_length).
     pub orphan_length: f32,
+    /// Factor on every strand's radii, in (0, 1e6] (default 1). A shadow or
+    /// distance LOD that expands the first k of n strands by rank (a
+    /// cutoff in every patch: `pelage_groom_lod_counts`) passes n / k, so
+    /// the fur covers as much: coverage `1 - exp(-n w l / A)` of n strands
+    /// of width w and length l over an area A depends on n w alone.
+    pub width_scale: f32,
     /// Threads the call splits the strands over: 0 = all cores, 1 = the
     /// calling thread only; at most max(cores, 64). The output is bitwise
     /// identical for any value.
@@ -50,7 +56,8 @@ pub struct PelageExpandParams {
     pub progress_user_data: *mut c_void,
 }
 
-/// Defaults: 16 points per strand, pinned ends, orphan_length 0.1, 1 thread,
+/// Defaults: 16 points per strand, pinned ends, orphan_length 0.1,
+/// width_scale 1, 1 thread,
 /// no progress callback.
 ///
 /// Thread safety: may be called from any thread at any time.
@@ -60,6 +67,7 @@ pub extern "C" fn pelage_expand_params_defaults() -> PelageExpandParams {
         points_per_strand: 16,
         end_points: PelageEndPoints::Pinned as u32,
         orphan_length: 0.1,
+        width_scale: 1.0,
         thread_count: 1,
         progress: None,
         progress_user_data: std::ptr::null_mut(),
@@ -83,6 +91,7 @@ pub(crate) fn core_params(p: &PelageExpandParams) -> Result<ExpandParams, Failur
         points_per_strand: p.points_per_strand as usize,
         end_points,
         orphan_length: p.orphan_length,
+        width_scale: p.width_scale,
     };
     params.check()?;
     Ok(params)
@@ -189,7 +198,7 @@ pub extern "C" fn pelage_expand(
             let (start, b) = part?;
             bounds = bounds.merge(b, start);
         }
-        run(frame.posed(), all, &bounds, p, req(curves, "curves")?)
+        run(frame.posed(), all, &bounds, None, p, req(curves, "curves")?)
     }
 }
 
@@ -200,6 +209,7 @@ pub(crate) fn run(
     frame: &PosedFrame,
     all: Strands,
     bounds: &StrandBounds,
+    trim: Option<&[u16]>,
     p: &PelageExpandParams,
     out: &PelageCurves,
 ) -> Result<(), Failure> {
@@ -226,7 +236,10 @@ pub(crate) fn run(
     let optional = |p: *mut u32| if p.is_null() { 0 } else { strand_count };
     let counts = slice_mut(out.curve_counts, optional(out.curve_counts), "curve_counts")?;
     let ids = slice_mut(out.curve_ids, optional(out.curve_ids), "curve_ids")?;
-    let job = ExpandJob::new(frame, all, bounds, &core, points.len(), point_stride)?;
+    let mut job = ExpandJob::new(frame, all, bounds, &core, points.len(), point_stride)?;
+    if let Some(lengths) = trim {
+        job = job.trimmed(lengths)?;
+    }
     let progress = Progress::new(p.progress, p.progress_user_data);
     split_with_progress(
         strand_count,

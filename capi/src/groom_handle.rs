@@ -1,7 +1,7 @@
 //! The groom handle: a groom's render strands, checked once and kept for
 //! expanding every frame.
 
-use crate::buffers::{req, req_mut};
+use crate::buffers::{req, req_mut, slice};
 use crate::expand::run;
 use crate::frame::frame_ref;
 use crate::status::Failure;
@@ -24,15 +24,15 @@ pub struct PelageGroomTy {
 pub type PelageGroom = *mut PelageGroomTy;
 
 /// What a [`PelageGroom`] points to.
-struct Groom {
+pub(crate) struct Groom {
     roots: Vec<Root>,
     bindings: Vec<StrandBinding>,
     grooms: Vec<StrandGroom>,
-    bounds: StrandBounds,
+    pub(crate) bounds: StrandBounds,
 }
 
 impl Groom {
-    fn strands(&self) -> Strands<'_> {
+    pub(crate) fn strands(&self) -> Strands<'_> {
         Strands {
             roots: &self.roots,
             bindings: &self.bindings,
@@ -44,7 +44,7 @@ impl Groom {
 /// The groom behind a handle, or NULL_PARAMETER. A non-NULL handle must
 /// come from `pelage_groom_new` and not be freed yet (the header's
 /// contract), so it points to a live `Groom`.
-fn groom_ref<'a>(groom: PelageGroom) -> Result<&'a Groom, Failure> {
+pub(crate) fn groom_ref<'a>(groom: PelageGroom) -> Result<&'a Groom, Failure> {
     req(groom.cast::<Groom>().cast_const(), "groom")
 }
 
@@ -146,6 +146,40 @@ pub extern "C" fn pelage_groom_expand(
             Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
         })?;
         let p = req(params, "params")?;
-        run(frame.posed(), groom.strands().range(range), &groom.bounds, p, req(curves, "curves")?)
+        run(frame.posed(), groom.strands().range(range), &groom.bounds, None, p, req(curves, "curves")?)
+    }
+}
+
+/// `pelage_groom_expand`, each strand cut at its stored length in
+/// `lengths` (one per strand of the whole groom, indexed from strand 0, as
+/// `pelage_trim_shortest` or `pelage_trim_lengths_read` give them;
+/// PELAGE_TRIM_WHOLE for none): its points are respread over the kept part
+/// of the curve, so the point count stays. A cut strand stays inside its
+/// patch's box.
+///
+/// Returns the statuses of `pelage_groom_expand`; NULL_PARAMETER and
+/// MISALIGNED also for `lengths`.
+///
+/// Thread safety: as `pelage_groom_expand`.
+#[no_mangle]
+pub extern "C" fn pelage_groom_expand_trimmed(
+    groom: PelageGroom,
+    frame: PelageFrame,
+    first: usize,
+    count: usize,
+    lengths: *const u16,
+    params: *const PelageExpandParams,
+    curves: *const PelageCurves,
+) -> PelageStatus {
+    ffi_boundary! {
+        let groom = groom_ref(groom)?;
+        let frame = frame_ref(frame)?;
+        let total = groom.roots.len();
+        let range = first..first.checked_add(count).filter(|&end| end <= total).ok_or_else(|| {
+            Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
+        })?;
+        let lengths = &slice(lengths, total, "lengths")?[range.clone()];
+        let p = req(params, "params")?;
+        run(frame.posed(), groom.strands().range(range), &groom.bounds, Some(lengths), p, req(curves, "curves")?)
     }
 }

@@ -25,6 +25,7 @@ mod settle;
 mod sim;
 mod stamp;
 mod threads;
+mod trim;
 
 pub use bind::{
     pelage_bind, pelage_bind_params_defaults, pelage_bind_query, PelageBindInfo, PelageBindParams,
@@ -45,8 +46,8 @@ pub use groom_file::{
     PelageGroomFileBuffers, PelageGroomFileDesc, PelageGroomFileInfo, PelagePatch,
 };
 pub use groom_handle::{
-    pelage_groom_expand, pelage_groom_free, pelage_groom_new, pelage_groom_strand_count,
-    PelageGroom, PelageGroomTy,
+    pelage_groom_expand, pelage_groom_expand_trimmed, pelage_groom_free, pelage_groom_new,
+    pelage_groom_strand_count, PelageGroom, PelageGroomTy,
 };
 pub use guide_cache::{
     pelage_guide_cache_info, pelage_guide_cache_max_size, pelage_guide_cache_read,
@@ -55,7 +56,7 @@ pub use guide_cache::{
 pub use guides::PelageGuidesDesc;
 pub use map::{PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
-pub use patch::{pelage_patch_boxes, pelage_patch_plan};
+pub use patch::{pelage_groom_lod_counts, pelage_patch_boxes, pelage_patch_plan};
 pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};
@@ -70,6 +71,12 @@ pub use stamp::{
     PelageStampInfo, PelageStampParams,
 };
 pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
+pub use trim::{
+    pelage_trim_find, pelage_trim_lengths_read, pelage_trim_lengths_size,
+    pelage_trim_lengths_write, pelage_trim_records_info, pelage_trim_records_read,
+    pelage_trim_records_size, pelage_trim_records_write, pelage_trim_shortest, PelageTrimRecord,
+    PelageTrimRecordsInfo, PELAGE_TRIM_WHOLE,
+};
 
 /// Major version of the library this header belongs to.
 pub const PELAGE_VERSION_MAJOR: u32 = 0;

@@ -5,9 +5,10 @@ use crate::buffers::{req, req_mut, slice, slice_mut};
 use crate::expand::{core_params, PelageExpandParams, PelageStrands};
 use crate::frame::frame_ref;
 use crate::groom_file::PelagePatch;
+use crate::groom_handle::groom_ref;
 use crate::status::Failure;
 use crate::threads::split_over_threads;
-use crate::{PelageMeshDesc, PelageRoot, PelageStatus};
+use crate::{PelageGroom, PelageMeshDesc, PelageRoot, PelageStatus};
 use pelage_core::interp::patch::{self, Patch};
 
 /// Orders `root_count` strands rooted at `roots` on the rest `mesh` into
@@ -90,6 +91,41 @@ pub extern "C" fn pelage_patch_boxes(
                 out.copy_from_slice(&[b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z]);
             }
         })?;
+        Ok(())
+    }
+}
+
+/// The shadow or distance LOD that keeps `groom`'s strands of rank below
+/// `cutoff` (for example half the strand count): writes to `counts[i]` how
+/// many of patch `i`'s strands it keeps, always its first ones, since
+/// `pelage_patch_plan` sorts each patch by rank (the groom's strands must
+/// be in that plan's order). Expand those with `width_scale` = strand
+/// count / kept strands in PelageExpandParams so the fur covers as much.
+///
+/// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
+/// strands), MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread while `groom` is alive.
+#[no_mangle]
+pub extern "C" fn pelage_groom_lod_counts(
+    groom: PelageGroom,
+    patches: *const PelagePatch,
+    patch_count: usize,
+    cutoff: u32,
+    counts: *mut u32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let roots = groom_ref(groom)?.strands().roots;
+        let patches: &[Patch] = bytemuck::cast_slice(slice(patches, patch_count, "patches")?);
+        for (i, p) in patches.iter().enumerate() {
+            if p.first as usize + p.count as usize > roots.len() {
+                return Err(pelage_core::Error::OutOfRange { what: "patches", index: i, value: p.first as usize + p.count as usize, bound: roots.len() }.into());
+            }
+        }
+        let counts = slice_mut(counts, patch_count, "counts")?;
+        for (c, &p) in counts.iter_mut().zip(patches) {
+            *c = patch::lod_count(roots, p, cutoff);
+        }
         Ok(())
     }
 }

@@ -12,7 +12,7 @@ use pelage_core::dynamics::links::LinkParams;
 use pelage_core::dynamics::sim::{Sim, SimParams, Step};
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::{Body, BodyPlan, Rim};
-use pelage_core::Arena;
+use pelage_core::{Arena, Mesh};
 use std::ffi::c_void;
 
 /// The opaque object a `PelageSim` points to.
@@ -311,6 +311,75 @@ pub struct PelageColliders {
     pub distance_user_data: *mut c_void,
 }
 
+/// A host's colliders, checked for NULL arrays (the shapes' values are
+/// checked by `Colliders::check`).
+pub(crate) struct HostColliders<'a> {
+    spheres: &'a [Sphere],
+    capsules: &'a [Capsule],
+    planes: &'a [Plane],
+    field: Option<HostField>,
+    /// The body collides.
+    pub(crate) body: bool,
+}
+
+impl<'a> HostColliders<'a> {
+    /// The colliders `colliders` points to; none for NULL.
+    pub(crate) fn read(colliders: *const PelageColliders) -> Result<Self, Failure> {
+        let host = match colliders.is_null() {
+            true => None,
+            false => Some(req(colliders, "colliders")?),
+        };
+        Ok(HostColliders {
+            spheres: bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| {
+                slice(c.spheres, c.sphere_count, "colliders.spheres")
+            })?),
+            capsules: bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| {
+                slice(c.capsules, c.capsule_count, "colliders.capsules")
+            })?),
+            planes: bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| {
+                slice(c.planes, c.plane_count, "colliders.planes")
+            })?),
+            field: host.and_then(|c| {
+                c.distance.map(|callback| HostField {
+                    callback,
+                    user_data: c.distance_user_data,
+                })
+            }),
+            body: host.is_some_and(|c| c.body != 0),
+        })
+    }
+
+    /// The core's colliders, with `body` (built when `self.body` is set).
+    pub(crate) fn colliders<'r>(&'r self, body: Option<&'r Body<'r>>) -> Colliders<'r> {
+        Colliders {
+            spheres: self.spheres,
+            capsules: self.capsules,
+            planes: self.planes,
+            body,
+            field: self.field.as_ref().map(|f| f as &dyn SignedDistance),
+        }
+    }
+}
+
+/// The solid of `mesh`, its rim and grid built in the two arenas (grown
+/// as needed, kept for the next call).
+pub(crate) fn body_of<'a>(
+    mesh: &Mesh,
+    rim_arena: &mut Vec<u8>,
+    body_arena: &'a mut Vec<u8>,
+) -> Result<Body<'a>, Failure> {
+    let rim_bytes = Rim::required_bytes(mesh);
+    if rim_arena.len() < rim_bytes {
+        rim_arena.resize(rim_bytes, 0);
+    }
+    let rim = Rim::new(mesh, &mut Arena::new(rim_arena))?;
+    let plan = BodyPlan::of(mesh, &rim)?;
+    if body_arena.len() < plan.bytes() {
+        body_arena.resize(plan.bytes(), 0);
+    }
+    Ok(Body::build(&plan, mesh, &rim, &mut Arena::new(body_arena))?)
+}
+
 /// The host's distance callback as a core field.
 struct HostField {
     callback: unsafe extern "C" fn(*mut c_void, *const f32, usize, *mut f32),
@@ -361,36 +430,12 @@ pub extern "C" fn pelage_sim_step(
     ffi_boundary! {
         let sim = sim_mut(sim)?;
         let frame = frame_ref(frame)?;
-        let host = match colliders.is_null() {
-            true => None,
-            false => Some(req(colliders, "colliders")?),
+        let host = HostColliders::read(colliders)?;
+        let body = match host.body {
+            true => Some(body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena)?),
+            false => None,
         };
-        let spheres: &[Sphere] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.spheres, c.sphere_count, "colliders.spheres"))?);
-        let capsules: &[Capsule] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.capsules, c.capsule_count, "colliders.capsules"))?);
-        let planes: &[Plane] = bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| slice(c.planes, c.plane_count, "colliders.planes"))?);
-        let field = host.and_then(|c| c.distance.map(|callback| HostField { callback, user_data: c.distance_user_data }));
-        let mesh = frame.posed().mesh();
-        let body = if host.is_some_and(|c| c.body != 0) {
-            let rim_bytes = Rim::required_bytes(mesh);
-            if sim.rim_arena.len() < rim_bytes {
-                sim.rim_arena.resize(rim_bytes, 0);
-            }
-            let rim = Rim::new(mesh, &mut Arena::new(&mut sim.rim_arena))?;
-            let plan = BodyPlan::of(mesh, &rim)?;
-            if sim.body_arena.len() < plan.bytes() {
-                sim.body_arena.resize(plan.bytes(), 0);
-            }
-            Some(Body::build(&plan, mesh, &rim, &mut Arena::new(&mut sim.body_arena))?)
-        } else {
-            None
-        };
-        let colliders = Colliders {
-            spheres,
-            capsules,
-            planes,
-            body: body.as_ref(),
-            field: field.as_ref().map(|f| f as &dyn SignedDistance),
-        };
+        let colliders = host.colliders(body.as_ref());
         let external = match external_points.is_null() {
             true => None,
             false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),

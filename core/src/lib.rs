@@ -16,6 +16,8 @@
 //!   ([`interp::posed::PosedFrame`]), the strand kernel
 //!   ([`interp::strand`]), strand records and their checks
 //!   ([`interp::strands`]) and the expansion driver ([`interp::expand`]).
+//! - [`trim`]: trimming at a cloth (paper 3.3): per-frame records, the
+//!   shot pass, the cut.
 //! - [`dynamics`]: guide simulation (paper 3): tip spring, CCD IK,
 //!   Catmull-Rom output, tip links, colliders and push-out, the state.
 //! - Shared data and memory: [`arena`], [`error`], [`guides`], [`root`],
@@ -44,6 +46,7 @@ pub mod strided;
 pub mod surface;
 #[cfg(test)]
 mod testmesh;
+pub mod trim;
 
 pub use arena::{Arena, ArenaLayout};
 pub use error::Error;

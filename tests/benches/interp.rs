@@ -256,6 +256,7 @@ fn stages(
         points_per_strand: ep.points_per_strand as usize,
         end_points: EndPoints::Pinned,
         orphan_length: ep.orphan_length,
+        width_scale: 1.0,
     };
     let mut layout = ArenaLayout::new();
     PosedFrame::layout(&mut layout, mesh.positions.len(), guides.len(), CVS);

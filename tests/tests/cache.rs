@@ -150,6 +150,7 @@ fn no_expanded_point_leaves_its_patch_box() {
         points_per_strand: POINTS,
         end_points: EndPoints::Pinned,
         orphan_length: 0.04,
+        width_scale: 1.0,
     };
     let per = params.output_points();
     let mut out = vec![[0.0f32; 4]; hairs.len() * per];

@@ -313,6 +313,7 @@ fn avx2_kernel_gives_the_baseline_bits() {
                 points_per_strand: points,
                 end_points,
                 orphan_length: 0.05,
+                width_scale: 1.0,
             };
             for stride in [16, 20] {
                 let bytes = strands.len() * params.output_points() * stride;

@@ -6,16 +6,19 @@
 //! - [`guide_cache`]: one frame's posed guides (each shutter sample), coded
 //!   against their neutral pose in their root frames, decoded straight into
 //!   a [`PosedFrame`](crate::interp::posed::PosedFrame).
+//! - [`trim_file`]: a frame's trim records, and a shot's shortest length
+//!   per strand (paper 3.3).
 //! - `container` (internal): the framing both share (magic, version, counts, a
 //!   CRC-32), and bounds-checked reading.
 //!
-//! Both are little-endian and documented byte by byte in `docs/FORMAT.md`.
+//! All are little-endian and documented byte by byte in `docs/FORMAT.md`.
 //! Decoding never trusts the bytes: every count, index, width and float is
 //! checked before it is used, and a failed decode writes nothing.
 
 pub(crate) mod container;
 pub mod groom_file;
 pub mod guide_cache;
+pub mod trim_file;
 
 #[cfg(test)]
 pub(crate) mod fixture {

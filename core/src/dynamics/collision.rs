@@ -119,7 +119,7 @@ fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
 
 /// The shapes of `Colliders` that a strand of `reach` rooted at `root` can
 /// touch, and the body and field (which are asked per point).
-struct Near<'c, 'r> {
+pub(crate) struct Near<'c, 'r> {
     all: &'c Colliders<'r>,
     spheres: [u32; MAX_NEAR],
     capsules: [u32; MAX_NEAR],
@@ -132,7 +132,7 @@ struct Near<'c, 'r> {
 const MAX_NEAR: usize = 64;
 
 impl<'c, 'r> Near<'c, 'r> {
-    fn new(all: &'c Colliders<'r>, root: Vec3, reach: f32) -> Self {
+    pub(crate) fn new(all: &'c Colliders<'r>, root: Vec3, reach: f32) -> Self {
         let mut near = Near {
             all,
             spheres: [0; MAX_NEAR],
@@ -178,56 +178,51 @@ impl<'c, 'r> Near<'c, 'r> {
     }
 
     /// True when nothing can touch the strand.
-    fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.counts == [0; 3] && self.all.body.is_none() && self.all.field.is_none()
+    }
+
+    /// True when `p` is inside a sphere, a capsule, a half-space or the body.
+    fn in_shape(&self, p: Vec3) -> bool {
+        let all = self.all;
+        self.shapes(0, &self.spheres, all.spheres.len()).any(|i| {
+            let s = &all.spheres[i];
+            p.distance(Vec3::from(s.centre)) < s.radius
+        }) || self.shapes(1, &self.capsules, all.capsules.len()).any(|i| {
+            let c = &all.capsules[i];
+            segment_distance(p, c.a.into(), c.b.into()) < c.radius
+        }) || self.shapes(2, &self.planes, all.planes.len()).any(|i| {
+            let s = &all.planes[i];
+            Vec3::from(s.normal).dot(p) < s.offset
+        }) || all.body.is_some_and(|b| b.contains(p))
+    }
+
+    /// True when `p` is inside a collider (a NaN distance from the host's
+    /// field counts as inside: never trusted as clear).
+    pub(crate) fn inside(&self, p: Vec3) -> bool {
+        self.in_shape(p) || !self.field_clear(&[p])
+    }
+
+    /// True when the host's field (if any) puts every point of `points`
+    /// (at most [`MAX_POINTS`]) outside.
+    fn field_clear(&self, points: &[Vec3]) -> bool {
+        let Some(field) = self.all.field else {
+            return true;
+        };
+        let mut d = [0.0f32; MAX_POINTS];
+        let mut xyz = [[0.0f32; 3]; MAX_POINTS];
+        let n = points.len().min(MAX_POINTS);
+        for (o, p) in xyz.iter_mut().zip(&points[..n]) {
+            *o = p.to_array();
+        }
+        let d = &mut d[..n];
+        field.distances(&xyz[..n], d);
+        d.iter().all(|&x| x >= 0.0)
     }
 
     /// True when no point of `points` is inside a shape.
     fn clear(&self, points: &[Vec3]) -> bool {
-        let all = self.all;
-        let (spheres, capsules, planes) = (
-            self.shapes(0, &self.spheres, all.spheres.len()),
-            self.shapes(1, &self.capsules, all.capsules.len()),
-            self.shapes(2, &self.planes, all.planes.len()),
-        );
-        for &p in points {
-            for i in spheres.clone() {
-                let s = &all.spheres[i];
-                if p.distance(Vec3::from(s.centre)) < s.radius {
-                    return false;
-                }
-            }
-            for i in capsules.clone() {
-                let c = &all.capsules[i];
-                if segment_distance(p, c.a.into(), c.b.into()) < c.radius {
-                    return false;
-                }
-            }
-            for i in planes.clone() {
-                let s = &all.planes[i];
-                if Vec3::from(s.normal).dot(p) < s.offset {
-                    return false;
-                }
-            }
-            if all.body.is_some_and(|b| b.contains(p)) {
-                return false;
-            }
-        }
-        if let Some(field) = all.field {
-            let mut d = [0.0f32; MAX_POINTS];
-            let mut xyz = [[0.0f32; 3]; MAX_POINTS];
-            let n = points.len().min(MAX_POINTS);
-            for (o, p) in xyz.iter_mut().zip(&points[..n]) {
-                *o = p.to_array();
-            }
-            let d = &mut d[..n];
-            field.distances(&xyz[..n], d);
-            // NaN from a host field counts as inside: never trusted as clear
-            if !d.iter().all(|&x| x >= 0.0) {
-                return false;
-            }
-        }
-        true
+        !points.iter().any(|&p| self.in_shape(p)) && self.field_clear(points)
     }
 }
 

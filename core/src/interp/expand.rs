@@ -10,10 +10,11 @@
 //! without a further check or failure, on any threads.
 
 use crate::interp::posed::PosedFrame;
-use crate::interp::strand::{strand_n, ExpandParams, Lanes, MAX_STRAND_POINTS};
+use crate::interp::strand::{strand_n, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
 use crate::interp::strands::{StrandBounds, Strands};
 use crate::surface::frame::FaceBasis;
 use crate::surface::frame::{self, Frame, FRAME_LANES};
+use crate::trim::{self, length::cut};
 use crate::Error;
 use core::ops::Range;
 
@@ -27,6 +28,7 @@ pub struct ExpandJob<'r, 'a> {
     strands: Strands<'r>,
     params: ExpandParams,
     stride: usize,
+    trim: Option<&'r [u16]>,
 }
 
 impl<'r, 'a> ExpandJob<'r, 'a> {
@@ -55,6 +57,22 @@ impl<'r, 'a> ExpandJob<'r, 'a> {
             strands,
             params: *params,
             stride,
+            trim: None,
+        })
+    }
+
+    /// The same job, each strand cut at its stored length in `lengths`
+    /// (one per strand, [`trim::WHOLE`] for none; see [`trim::length`]).
+    pub fn trimmed(self, lengths: &'r [u16]) -> Result<Self, Error> {
+        if lengths.len() < self.strands.len() {
+            return Err(Error::OutputTooSmall {
+                needed: self.strands.len(),
+                available: lengths.len(),
+            });
+        }
+        Ok(ExpandJob {
+            trim: Some(lengths),
+            ..self
         })
     }
 
@@ -144,15 +162,16 @@ fn check_output(
 /// the AVX2 entry compiles every per-strand step for AVX2.
 #[inline(always)]
 fn expand_kernel(job: &ExpandJob, range: Range<usize>, out: &mut [u8]) {
-    let strands = &job.strands.range(range);
+    let strands = &job.strands.range(range.clone());
+    let trim = job.trim.map(|t| &t[range]);
     let (frame, params, stride) = (job.frame, &job.params, job.stride);
     // the common counts get loops of known length (see `strand`), chosen
     // once per call rather than per strand
     match params.points_per_strand {
-        8 => fill_all::<8>(frame, strands, params, out, stride),
-        16 => fill_all::<16>(frame, strands, params, out, stride),
-        32 => fill_all::<32>(frame, strands, params, out, stride),
-        _ => fill_all::<0>(frame, strands, params, out, stride),
+        8 => fill_all::<8>(frame, strands, trim, params, out, stride),
+        16 => fill_all::<16>(frame, strands, trim, params, out, stride),
+        32 => fill_all::<32>(frame, strands, trim, params, out, stride),
+        _ => fill_all::<0>(frame, strands, trim, params, out, stride),
     }
 }
 
@@ -161,6 +180,7 @@ fn expand_kernel(job: &ExpandJob, range: Range<usize>, out: &mut [u8]) {
 fn fill_all<const N: usize>(
     guides: &PosedFrame,
     strands: &Strands,
+    trim: Option<&[u16]>,
     params: &ExpandParams,
     out: &mut [u8],
     stride: usize,
@@ -168,6 +188,7 @@ fn fill_all<const N: usize>(
     let per = params.output_points();
     let mut filler = Filler {
         strands,
+        trim,
         guides,
         params,
         lanes: Lanes::new(params.points_per_strand),
@@ -197,6 +218,8 @@ fn fill_all<const N: usize>(
 /// What [`expand_kernel`] carries from strand to strand.
 struct Filler<'r, 'a> {
     strands: &'r Strands<'r>,
+    /// Stored lengths of the strands, when trimmed.
+    trim: Option<&'r [u16]>,
     guides: &'r PosedFrame<'a>,
     params: &'r ExpandParams,
     lanes: Lanes,
@@ -232,6 +255,17 @@ impl Filler<'_, '_> {
             &mut self.lanes,
             curve,
         );
+        if let Some(&length) = self.trim.map(|t| &t[s]) {
+            if length != trim::WHOLE {
+                let pinned = self.params.end_points == EndPoints::Pinned;
+                let n = self.params.points_per_strand;
+                cut(&mut curve[pinned as usize..pinned as usize + n], length);
+                if pinned {
+                    curve[0] = curve[1];
+                    curve[n + 1] = curve[n];
+                }
+            }
+        }
     }
 }
 
@@ -377,6 +411,7 @@ mod tests {
             points_per_strand: n,
             end_points: EndPoints::Raw,
             orphan_length: 0.1,
+            width_scale: 1.0,
         }
     }
 

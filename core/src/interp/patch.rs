@@ -179,6 +179,19 @@ pub fn guide_reach(frame: &PosedFrame, reach: &mut [f32]) {
     }
 }
 
+/// How many of `patch`'s strands are in the LOD that keeps the strands of
+/// rank below `cutoff`: its first ones, since [`plan`] sorts each patch by
+/// rank (`roots` in the plan's order). Expanding that many of every patch,
+/// with [`lod_width_scale`](crate::interp::strand::lod_width_scale), draws
+/// an even subset of the fur that covers as much.
+///
+/// # Panics
+/// When `patch` is not within `roots`.
+pub fn lod_count(roots: &[Root], patch: Patch, cutoff: u32) -> u32 {
+    let range = patch.first as usize..patch.first as usize + patch.count as usize;
+    roots[range].partition_point(|r| r.rank < cutoff) as u32
+}
+
 /// The box of strands `first .. first + count` of `strands` (checked by
 /// [`check`]) on `frame`, with `reach` from [`guide_reach`] on the same
 /// frame: every point [`expand`](crate::interp::expand) writes for them,
@@ -221,7 +234,7 @@ pub fn patch_box(
             let centre = (frame.world_point(c, 0) - o).length() + 2.0 * reach[c];
             shaped.max((1.0 - g.clump).abs() * shaped + g.clump.abs() * centre)
         };
-        let radius = g.root_radius.abs().max(g.tip_radius.abs());
+        let radius = g.root_radius.abs().max(g.tip_radius.abs()) * params.width_scale;
         // a Catmull-Rom curve through the points (and its radius) reaches
         // at most 1.25 times as far (the basis' absolute weights sum to at
         // most 1.25); rounding in the kernel stays far below the slack
@@ -299,6 +312,7 @@ mod tests {
             points_per_strand: POINTS,
             end_points: EndPoints::Pinned,
             orphan_length: 0.2,
+            width_scale: 1.0,
         };
         let patches: Vec<Patch> = (0..scene.roots.len() as u32)
             .step_by(16)

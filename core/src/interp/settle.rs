@@ -286,6 +286,7 @@ mod tests {
             points_per_strand: CVS,
             end_points: EndPoints::Pinned,
             orphan_length: 0.1,
+            width_scale: 1.0,
         };
         let mut layout = ArenaLayout::new();
         PosedFrame::layout(&mut layout, m.p.len(), guide_roots.len(), CVS);

@@ -15,6 +15,10 @@ use glam::Vec3;
 /// Most control points per strand.
 pub const MAX_STRAND_POINTS: usize = 64;
 
+/// Largest [`ExpandParams::width_scale`]: with groom radii within
+/// [`crate::interp::strands::MAX_GROOM_VALUE`], radii stay finite.
+pub const MAX_WIDTH_SCALE: f32 = 1e6;
+
 /// How curve ends are written for a Catmull-Rom consumer.
 #[repr(u32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,6 +42,26 @@ pub struct ExpandParams {
     pub end_points: EndPoints,
     /// Length of orphan strands (no eligible guide), grown along the normal.
     pub orphan_length: f32,
+    /// Factor on every strand's radii (1: as groomed). A shadow or
+    /// distance LOD that keeps k of n strands passes n / k
+    /// ([`lod_width_scale`]), so the fur covers as much.
+    pub width_scale: f32,
+}
+
+/// The width factor that keeps the fur's projected coverage when only
+/// `kept` of `total` strands are drawn (a rank prefix, an even subset).
+///
+/// Strands of width `w` and length `l` scattered evenly over an area `A`
+/// cover, seen from any direction, the fraction `1 - exp(-n w l / A)` of it
+/// (a Boolean model of independent strands): the coverage depends on `n w`
+/// alone, so `kept` strands at width `w total / kept` cover as much as all
+/// of them. Overlaps are part of the model, so the factor holds for dense
+/// fur too, where the sum of projected areas would not.
+pub fn lod_width_scale(kept: usize, total: usize) -> f32 {
+    if kept == 0 {
+        return 1.0;
+    }
+    (total as f64 / kept as f64) as f32
 }
 
 impl ExpandParams {
@@ -55,6 +79,9 @@ impl ExpandParams {
         }
         if !(self.orphan_length >= 0.0 && self.orphan_length <= MAX_COORDINATE) {
             return Err(Error::InvalidArgument("orphan_length must be in 0..=1e9"));
+        }
+        if !(self.width_scale > 0.0 && self.width_scale <= MAX_WIDTH_SCALE) {
+            return Err(Error::InvalidArgument("width_scale must be in (0, 1e6]"));
         }
         Ok(())
     }
@@ -181,7 +208,11 @@ pub(crate) fn strand_n<const N: usize>(
         groom.clump
     };
     let kink = groom.kink_amplitude * length;
-    let (r0, dr) = (groom.root_radius, groom.tip_radius - groom.root_radius);
+    let w = params.width_scale;
+    let (r0, dr) = (
+        groom.root_radius * w,
+        (groom.tip_radius - groom.root_radius) * w,
+    );
     let look = Look {
         shape,
         clump,

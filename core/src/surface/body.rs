@@ -562,16 +562,47 @@ impl<'a> Body<'a> {
     }
 
     /// True when the segment from `a` to `b` meets a triangle of the body.
-    /// Walks the grid cells the segment passes through, in order, from
-    /// where it enters the grid to where it leaves it.
     pub fn blocks(&self, a: Vec3, b: Vec3) -> bool {
+        let mut hit = false;
+        self.walk(a, b, |refs, _| {
+            hit = refs
+                .iter()
+                .any(|&t| meet(&self.triangles[t as usize], a, b - a).is_some());
+            hit
+        });
+        hit
+    }
+
+    /// Where the segment from `a` to `b` first meets a triangle of the body
+    /// (of its own triangles; the caps over its holes are not met): the
+    /// parameter `t` in `[0, 1]` of the point `a + t (b - a)`, or `None`.
+    pub fn first_meet(&self, a: Vec3, b: Vec3) -> Option<f32> {
+        let mut first: Option<f32> = None;
+        self.walk(a, b, |refs, leave| {
+            for &t in refs {
+                if let Some(at) = meet(&self.triangles[t as usize], a, b - a) {
+                    first = Some(first.map_or(at, |f| f.min(at)));
+                }
+            }
+            // a triangle listed in a later cell meets the segment later
+            // than this cell's stretch, so a meet within it is the first
+            first.is_some_and(|f| f <= leave)
+        });
+        first
+    }
+
+    /// Walks the grid cells the segment from `a` to `b` passes through, in
+    /// order, from where it enters the grid to where it leaves it, handing
+    /// `visit` each cell's triangles and the segment parameter at which it
+    /// leaves the cell, until `visit` returns true.
+    fn walk(&self, a: Vec3, b: Vec3, mut visit: impl FnMut(&[u32], f32) -> bool) {
         let shape = &self.shape;
         let (from, to) = (
             (a - shape.origin) * shape.inv_cell,
             (b - shape.origin) * shape.inv_cell,
         );
         if !(from.is_finite() && to.is_finite()) {
-            return false;
+            return;
         }
         let d = to - from;
         let dims = shape.dims.map(|n| n as i32);
@@ -583,7 +614,7 @@ impl<'a> Body<'a> {
         for k in 0..3 {
             if d[k] == 0.0 {
                 if !(0.0..dims[k] as f32).contains(&from[k]) {
-                    return false;
+                    return;
                 }
                 continue;
             }
@@ -592,7 +623,7 @@ impl<'a> Body<'a> {
             (step[k], delta[k]) = (if d[k] > 0.0 { 1 } else { -1 }, 1.0 / libm::fabsf(d[k]));
         }
         if t0 > t1 {
-            return false;
+            return;
         }
         let start = from + d * t0;
         let mut cell = [0, 1, 2].map(|k| floor_i32(start[k]).clamp(0, dims[k] - 1));
@@ -604,12 +635,6 @@ impl<'a> Body<'a> {
         for _ in 0..dims.iter().sum::<i32>() {
             let c = shape.index(cell[0] as usize, cell[1] as usize, cell[2] as usize);
             let refs = &self.refs[self.start[c] as usize..self.start[c + 1] as usize];
-            if refs
-                .iter()
-                .any(|&t| meets(&self.triangles[t as usize], a, b - a))
-            {
-                return true;
-            }
             let k = if next[0] <= next[1] && next[0] <= next[2] {
                 0
             } else if next[1] <= next[2] {
@@ -617,33 +642,36 @@ impl<'a> Body<'a> {
             } else {
                 2
             };
+            if visit(refs, next[k].min(t1)) {
+                return;
+            }
             cell[k] += step[k];
             if next[k] > t1 || !(0..dims[k]).contains(&cell[k]) {
-                return false;
+                return;
             }
             next[k] += delta[k];
         }
-        false
     }
 }
 
-/// Whether the segment `a + t * d`, `t` in `[0, 1]`, meets triangle `t`
-/// (Moller-Trumbore; a segment in the triangle's plane does not).
+/// Where the segment `a + t * d`, `t` in `[0, 1]`, meets triangle `t`: that
+/// `t`, or `None` (Moller-Trumbore; a segment in the triangle's plane does
+/// not meet it).
 #[inline]
-fn meets(t: &Stored, a: Vec3, d: Vec3) -> bool {
+fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
     let [p, q, r, ..] = t.map(Vec3::from);
     let (e1, e2) = (q - p, r - p);
     let h = d.cross(e2);
     let det = e1.dot(h);
     if det == 0.0 {
-        return false;
+        return None;
     }
     let s = (a - p) / det;
     let u = s.dot(h);
     let w = s.cross(e1);
     let v = d.dot(w);
     let along = e2.dot(w);
-    u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)).then_some(along)
 }
 
 /// A triangle as stored: its three corners, then the low and the high

@@ -1,0 +1,321 @@
+//! Trimming in C (paper 3.3): a frame's trim records, the shot pass over a
+//! groom's strands, and the two small files.
+
+use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, slice_mut};
+use crate::frame::frame_ref;
+use crate::groom_handle::groom_ref;
+use crate::sim::{body_of, HostColliders};
+use crate::status::Failure;
+use crate::threads::split_over_threads;
+use crate::{PelageColliders, PelageFrame, PelageGroom, PelageMeshDesc, PelageStatus};
+use pelage_core::cache::trim_file::{self, RecordsInfo};
+use pelage_core::surface::body::Body;
+use pelage_core::trim::length::{guide_lengths, shortest};
+use pelage_core::trim::meet::meet;
+use pelage_core::trim::TrimRecord;
+use pelage_core::Arena;
+
+/// Where one guide first meets the cloth or a collider in one frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PelageTrimRecord {
+    /// The guide.
+    pub guide: u32,
+    /// The first control point past the meet (1 .. points per guide - 1).
+    pub cv: u32,
+    /// The guide's curve parameter at the meet, 0..1: (cv - 1 + t) /
+    /// (points - 1) for the meet at t of the segment ending at cv. A
+    /// guide's points are evenly spaced along it, so this is the fraction
+    /// of its length.
+    pub length: f32,
+}
+
+same_layout!(PelageTrimRecord, TrimRecord, guide, cv, length);
+
+/// The counts of a trim records file.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PelageTrimRecordsInfo {
+    /// Guides of the frame the records were found on.
+    pub guide_count: usize,
+    /// Points per guide of that frame.
+    pub points_per_guide: u32,
+    /// Records in the file.
+    pub record_count: usize,
+}
+
+/// The stored length of an untrimmed strand (lengths are fractions of a
+/// strand's length in 1/65535).
+pub const PELAGE_TRIM_WHOLE: u16 = 65535;
+const _: () = assert!(PELAGE_TRIM_WHOLE == pelage_core::trim::WHOLE);
+
+/// Finds where each posed guide of `frame` first meets `cloth` (a triangle
+/// mesh such as a shirt, deformed to this frame; NULL: none) or enters one
+/// of `colliders` (NULL: none; the body, when set, is the frame's mesh),
+/// walking from the root. A collider's surface is placed to 1/4096 of a
+/// segment, on the outside. Writes one record per guide that meets
+/// something, in guide order, to `records` (capacity `capacity`; the
+/// frame's guide count always suffices) and their number to
+/// `*record_count`. Split over `thread_count` threads (0: all cores); the
+/// records do not depend on it. On failure nothing is written.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
+/// collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
+/// OUT_OF_DOMAIN, CAPACITY_EXCEEDED (`capacity`), MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread; the frame may be read by
+/// other calls meanwhile.
+#[no_mangle]
+pub extern "C" fn pelage_trim_find(
+    frame: PelageFrame,
+    cloth: *const PelageMeshDesc,
+    colliders: *const PelageColliders,
+    thread_count: u32,
+    records: *mut PelageTrimRecord,
+    capacity: usize,
+    record_count: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let count = req_mut(record_count, "record_count")?;
+        let frame = frame_ref(frame)?.posed();
+        if !frame.is_posed() {
+            return Err(Failure::new(PelageStatus::InvalidArgument, "the frame has no guides (pelage_frame_set_guides)"));
+        }
+        let cloth_mesh = match cloth.is_null() {
+            true => None,
+            false => Some(req(cloth, "cloth")?.view()?),
+        };
+        let mut cloth_memory = vec![];
+        let cloth_body = match &cloth_mesh {
+            Some(mesh) => {
+                cloth_memory.resize(Body::required_bytes(mesh)?, 0);
+                Some(Body::new(mesh, &mut Arena::new(&mut cloth_memory))?)
+            }
+            None => None,
+        };
+        let host = HostColliders::read(colliders)?;
+        let (mut rim_memory, mut body_memory) = (vec![], vec![]);
+        let body = match host.body {
+            true => Some(body_of(frame.mesh(), &mut rim_memory, &mut body_memory)?),
+            false => None,
+        };
+        let colliders = host.colliders(body.as_ref());
+        colliders.check()?;
+        let guides = frame.guide_count();
+        let found = split_over_threads(guides, thread_count, &mut [0u8; 0], 0, |range, _| {
+            range.filter_map(|g| meet(frame, g, cloth_body.as_ref(), &colliders)).collect::<Vec<_>>()
+        })?;
+        let total: usize = found.iter().map(Vec::len).sum();
+        let out: &mut [TrimRecord] = bytemuck::cast_slice_mut(slice_mut(records, capacity, "records")?);
+        if total > out.len() {
+            return Err(Failure::new(PelageStatus::CapacityExceeded, format!("records: {total} found, capacity {}", out.len())));
+        }
+        for (slot, record) in out.iter_mut().zip(found.into_iter().flatten()) {
+            *slot = record;
+        }
+        *count = total;
+        Ok(())
+    }
+}
+
+/// The shot pass, one frame at a time: each of `groom`'s strands' stored
+/// lengths in `lengths` (`length_count` = the groom's strand count) becomes
+/// the shorter of itself and the strand's length under `records` (found on
+/// a frame of `guide_count` guides of `points_per_guide` points). A strand
+/// reaches the cloth where its guides, weighted, do (a weighted harmonic
+/// mean of their meets; a guide that meets nothing counts as meeting at
+/// its tip, so a strand of untrimmed guides stays whole). Start a shot with
+/// every length PELAGE_TRIM_WHOLE; frames may come in any order. On
+/// failure `lengths` is unchanged.
+///
+/// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
+/// groom's guides past `guide_count`), NON_FINITE, OUT_OF_DOMAIN (a length
+/// outside 0..1), INVALID_ARGUMENT (`length_count`), MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread while `groom` is alive,
+/// with distinct `lengths`.
+#[no_mangle]
+pub extern "C" fn pelage_trim_shortest(
+    groom: PelageGroom,
+    records: *const PelageTrimRecord,
+    record_count: usize,
+    guide_count: usize,
+    points_per_guide: u32,
+    lengths: *mut u16,
+    length_count: usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let groom = groom_ref(groom)?;
+        let records: &[TrimRecord] = bytemuck::cast_slice(slice(records, record_count, "records")?);
+        let strands = groom.strands();
+        if length_count != strands.len() {
+            return Err(Failure::new(PelageStatus::InvalidArgument, format!("length_count {length_count} differs from the groom's {} strands", strands.len())));
+        }
+        groom.bounds.fits(usize::MAX, guide_count)?;
+        let lengths = slice_mut(lengths, length_count, "lengths")?;
+        let mut per_guide = vec![0.0f32; guide_count];
+        guide_lengths(records, points_per_guide as usize, &mut per_guide)?;
+        shortest(&strands, &per_guide, lengths);
+        Ok(())
+    }
+}
+
+/// The size in bytes of a trim records file of `record_count` records.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (overflow), PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_trim_records_size(record_count: usize, bytes: *mut usize) -> PelageStatus {
+    ffi_boundary! {
+        *req_mut(bytes, "bytes")? = trim_file::records_bytes(record_count)
+            .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "record_count overflows"))?;
+        Ok(())
+    }
+}
+
+/// Writes a frame's trim records (found on a frame of `guide_count` guides
+/// of `points_per_guide` points) as a trim records file into `out`
+/// (`capacity` bytes; `pelage_trim_records_size`); the bytes written go to
+/// `*written`. On failure `out` is untouched.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts), OUT_OF_RANGE,
+/// NON_FINITE, OUT_OF_DOMAIN (a record), CAPACITY_EXCEEDED, MISALIGNED,
+/// PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_trim_records_write(
+    records: *const PelageTrimRecord,
+    record_count: usize,
+    guide_count: usize,
+    points_per_guide: u32,
+    out: *mut std::ffi::c_void,
+    capacity: usize,
+    written: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let written = req_mut(written, "written")?;
+        let records: &[TrimRecord] = bytemuck::cast_slice(slice(records, record_count, "records")?);
+        let info = RecordsInfo { guides: guide_count, points: points_per_guide as usize, records: record_count };
+        *written = trim_file::encode_records(records, info, bytes_mut(out, capacity, "out")?)?;
+        Ok(())
+    }
+}
+
+/// Reads the header of a trim records file (`size` bytes) into `*info`,
+/// checking its framing (magic, version, length, checksum).
+///
+/// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH, PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_trim_records_info(
+    file: *const std::ffi::c_void,
+    size: usize,
+    info: *mut PelageTrimRecordsInfo,
+) -> PelageStatus {
+    ffi_boundary! {
+        let info = req_mut(info, "info")?;
+        *info = c_info(trim_file::records_info(bytes(file, size, "file")?)?);
+        Ok(())
+    }
+}
+
+/// Decodes a trim records file (`size` bytes) into `records` (capacity
+/// `capacity`) and its counts into `*info`. Every record is checked first:
+/// on failure nothing is written.
+///
+/// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+/// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_trim_records_read(
+    file: *const std::ffi::c_void,
+    size: usize,
+    records: *mut PelageTrimRecord,
+    capacity: usize,
+    info: *mut PelageTrimRecordsInfo,
+) -> PelageStatus {
+    ffi_boundary! {
+        let info = req_mut(info, "info")?;
+        let out: &mut [TrimRecord] = bytemuck::cast_slice_mut(slice_mut(records, capacity, "records")?);
+        *info = c_info(trim_file::decode_records(bytes(file, size, "file")?, out)?);
+        Ok(())
+    }
+}
+
+fn c_info(info: RecordsInfo) -> PelageTrimRecordsInfo {
+    PelageTrimRecordsInfo {
+        guide_count: info.guides,
+        points_per_guide: info.points as u32,
+        record_count: info.records,
+    }
+}
+
+/// The size in bytes of a trim lengths file of `strand_count` strands (2
+/// bytes per strand and a 40-byte header).
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (overflow), PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_trim_lengths_size(strand_count: usize, bytes: *mut usize) -> PelageStatus {
+    ffi_boundary! {
+        *req_mut(bytes, "bytes")? = trim_file::lengths_bytes(strand_count)
+            .ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "strand_count overflows"))?;
+        Ok(())
+    }
+}
+
+/// Writes a shot's stored lengths (one per strand of the groom, from
+/// `pelage_trim_shortest`) as a trim lengths file into `out` (`capacity`
+/// bytes; `pelage_trim_lengths_size`); the bytes written go to `*written`.
+/// On failure `out` is untouched.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, CAPACITY_EXCEEDED,
+/// MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_trim_lengths_write(
+    lengths: *const u16,
+    strand_count: usize,
+    out: *mut std::ffi::c_void,
+    capacity: usize,
+    written: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let written = req_mut(written, "written")?;
+        let lengths = slice(lengths, strand_count, "lengths")?;
+        *written = trim_file::encode_lengths(lengths, bytes_mut(out, capacity, "out")?)?;
+        Ok(())
+    }
+}
+
+/// Decodes a trim lengths file (`size` bytes) into `lengths` (capacity
+/// `capacity`; NULL with 0 to learn the count) and its strand count into
+/// `*strand_count`. On failure nothing is written to `lengths`; with too
+/// small a capacity, `*strand_count` still gets the count.
+///
+/// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+/// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread at any time.
+#[no_mangle]
+pub extern "C" fn pelage_trim_lengths_read(
+    file: *const std::ffi::c_void,
+    size: usize,
+    lengths: *mut u16,
+    capacity: usize,
+    strand_count: *mut usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let count = req_mut(strand_count, "strand_count")?;
+        let file = bytes(file, size, "file")?;
+        *count = trim_file::lengths_count(file)?;
+        trim_file::decode_lengths(file, slice_mut(lengths, capacity, "lengths")?)?;
+        Ok(())
+    }
+}

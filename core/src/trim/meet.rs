@@ -1,0 +1,284 @@
+//! Where each posed guide first meets the cloth or a collider.
+
+use crate::dynamics::collision::{Colliders, Near};
+use crate::interp::posed::PosedFrame;
+use crate::surface::body::Body;
+use crate::Error;
+use bytemuck::{Pod, Zeroable};
+use core::ops::Range;
+use glam::Vec3;
+
+/// Where one guide first meets the cloth or a collider in one frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TrimRecord {
+    /// The guide.
+    pub guide: u32,
+    /// The first control point past the meet (1 .. points per guide).
+    pub cv: u32,
+    /// The guide's curve parameter at the meet, in `[0, 1]`:
+    /// `(cv - 1 + t) / (points - 1)` for the meet at `t` of the segment
+    /// ending at `cv`.
+    pub length: f32,
+}
+
+impl TrimRecord {
+    /// Checks a record against a frame of `guides` guides of `points`
+    /// points each; `index` names it in the error.
+    pub fn check(&self, index: usize, guides: usize, points: usize) -> Result<(), Error> {
+        if self.guide as usize >= guides {
+            return Err(Error::OutOfRange {
+                what: "trim records' guide",
+                index,
+                value: self.guide as usize,
+                bound: guides,
+            });
+        }
+        if !(1..points).contains(&(self.cv as usize)) {
+            return Err(Error::OutOfRange {
+                what: "trim records' cv",
+                index,
+                value: self.cv as usize,
+                bound: points,
+            });
+        }
+        if !self.length.is_finite() {
+            return Err(Error::NonFinite {
+                what: "trim records' length",
+                index,
+            });
+        }
+        if !(0.0..=1.0).contains(&self.length) {
+            return Err(Error::OutOfDomain {
+                what: "trim records' length (0..=1)",
+                index,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Halvings that place a collider's surface on a guide segment: to 1/4096
+/// of the segment.
+const BISECTIONS: u32 = 12;
+
+/// Where guide `g` of `frame` first meets `cloth` (its triangles: the
+/// body's inside test plays no part) or enters one of `colliders`, walking
+/// from the root: the record, or `None` when it meets nothing. A point
+/// inside a collider is placed on the segment by bisection, at the last
+/// tried parameter still outside, so the cut never leaves a point inside.
+pub fn meet(
+    frame: &PosedFrame,
+    g: usize,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+) -> Option<TrimRecord> {
+    let n = frame.points();
+    let at = |j: usize| frame.world_point(g, j);
+    let reach: f32 = (1..n).map(|j| at(j).distance(at(j - 1))).sum();
+    let near = Near::new(colliders, at(0), reach);
+    let colliding = !near.is_empty();
+    for j in 1..n {
+        let (a, b) = (at(j - 1), at(j));
+        let mut t = cloth.and_then(|c| c.first_meet(a, b));
+        if colliding && near.inside(b) {
+            t = Some(t.map_or(entry(&near, a, b), |t| t.min(entry(&near, a, b))));
+        }
+        if let Some(t) = t {
+            return Some(TrimRecord {
+                guide: g as u32,
+                cv: j as u32,
+                length: ((j - 1) as f32 + t) / (n - 1) as f32,
+            });
+        }
+    }
+    None
+}
+
+/// The segment parameter at which the segment `a`-`b`, whose end `b` is
+/// inside, enters the colliders: the largest tried parameter outside.
+fn entry(near: &Near, a: Vec3, b: Vec3) -> f32 {
+    let (mut out, mut inside) = (0.0f32, 1.0f32);
+    for _ in 0..BISECTIONS {
+        let mid = 0.5 * (out + inside);
+        if near.inside(a.lerp(b, mid)) {
+            inside = mid;
+        } else {
+            out = mid;
+        }
+    }
+    out
+}
+
+/// Finds the records of guides `guides` of `frame` (see [`meet`]) and
+/// writes them, in guide order, to the start of `out`, which holds at least
+/// one record per guide of the range. Returns how many were written.
+///
+/// # Panics
+/// When `guides` is not within the frame's guides or `out` is too short.
+pub fn find(
+    frame: &PosedFrame,
+    guides: Range<usize>,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+    out: &mut [TrimRecord],
+) -> usize {
+    let mut written = 0;
+    for g in guides {
+        if let Some(record) = meet(frame, g, cloth, colliders) {
+            out[written] = record;
+            written += 1;
+        }
+    }
+    written
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::arena::{Arena, ArenaLayout};
+    use crate::dynamics::collision::{Plane, Sphere};
+    use crate::guides::{CvLayout, Guides};
+    use crate::interp::bind::{bind, BindParams, StrandBinding};
+    use crate::interp::expand::ExpandJob;
+    use crate::interp::groom::StrandGroom;
+    use crate::interp::strand::{EndPoints, ExpandParams};
+    use crate::interp::strands::{StrandBounds, Strands};
+    use crate::testmesh::{graded_plane, roots, straight_guides, TestMesh};
+    use crate::trim::length::{guide_lengths, shortest};
+    use crate::trim::WHOLE;
+    use crate::Strided;
+
+    const POINTS: usize = 8;
+    const CLOTH: f32 = 0.1;
+
+    /// A flat cloth at height `CLOTH` over the unit square and beyond.
+    fn cloth() -> TestMesh {
+        TestMesh {
+            p: vec![
+                [-1.0, -1.0, CLOTH],
+                [2.0, -1.0, CLOTH],
+                [2.0, 2.0, CLOTH],
+                [-1.0, 2.0, CLOTH],
+            ],
+            t: vec![[0, 1, 2], [0, 2, 3]],
+            uv: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            n: vec![],
+        }
+    }
+
+    #[test]
+    fn guides_meet_a_cloth_and_colliders_where_they_cross_them() {
+        let skin = graded_plane(8, 1.0);
+        let guide_roots = roots(skin.mesh(), 40, 5);
+        let points = straight_guides(&skin.mesh(), &guide_roots, POINTS, 0.3);
+        let guides = Guides {
+            roots: &guide_roots,
+            points: Strided::from_slice(&points),
+            layout: CvLayout::Fixed(POINTS),
+        };
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, skin.p.len(), guide_roots.len(), POINTS);
+        let mut memory = vec![0u8; layout.bytes()];
+        let frame =
+            PosedFrame::with_guides(skin.mesh(), &guides, POINTS, &mut Arena::new(&mut memory))
+                .unwrap();
+        let cloth = cloth();
+        let mut body_memory = vec![0u8; Body::required_bytes(&cloth.mesh()).unwrap()];
+        let body = Body::new(&cloth.mesh(), &mut Arena::new(&mut body_memory)).unwrap();
+        let g = guide_roots.len();
+        let mut records = vec![TrimRecord::default(); g];
+
+        // the cloth: every guide rises straight through it
+        let none = Colliders::default();
+        assert_eq!(find(&frame, 0..g, Some(&body), &none, &mut records), g);
+        for r in &records {
+            let tip = frame.world_point(r.guide as usize, POINTS - 1).z;
+            assert!((r.length * tip - CLOTH).abs() < 1e-5, "{r:?} tip {tip}");
+            let past = r.length * (POINTS - 1) as f32;
+            assert_eq!(r.cv, libm::floorf(past) as u32 + 1, "{r:?}");
+        }
+
+        // the half-space above the cloth: the same meets, from outside
+        let above = [Plane {
+            normal: [0.0, 0.0, -1.0],
+            offset: -CLOTH,
+        }];
+        let colliders = Colliders {
+            planes: &above,
+            ..Colliders::default()
+        };
+        let mut entered = vec![TrimRecord::default(); g];
+        assert_eq!(find(&frame, 0..g, None, &colliders, &mut entered), g);
+        for (a, b) in records.iter().zip(&entered) {
+            let segment = 1.0 / (POINTS - 1) as f32;
+            assert!(b.length <= a.length + 1e-6, "{a:?} {b:?}");
+            assert!(a.length - b.length < segment / 2048.0, "{a:?} {b:?}");
+        }
+
+        // out of reach: nothing
+        let far = [Sphere {
+            centre: [0.5, 0.5, 5.0],
+            radius: 1.0,
+        }];
+        let colliders = Colliders {
+            spheres: &far,
+            ..Colliders::default()
+        };
+        assert_eq!(find(&frame, 0..g, None, &colliders, &mut entered), 0);
+
+        // render hairs cut by the shot pass end at the cloth, not before
+        let hairs = roots(skin.mesh(), 600, 9);
+        let mut bind_memory =
+            vec![0u8; crate::interp::bind::required_bytes(&skin.mesh(), g).unwrap()];
+        let mut bindings = vec![StrandBinding::default(); hairs.len()];
+        bind(
+            &skin.mesh(),
+            &guides,
+            &hairs,
+            &BindParams::default(),
+            &mut Arena::new(&mut bind_memory),
+            &mut bindings,
+        )
+        .unwrap();
+        let grooms = vec![
+            StrandGroom {
+                length: 1.0,
+                root_radius: 0.001,
+                tip_radius: 0.001,
+                ..StrandGroom::default()
+            };
+            hairs.len()
+        ];
+        let strands = Strands {
+            roots: &hairs,
+            bindings: &bindings,
+            grooms: &grooms,
+        };
+        let mut per_guide = vec![0.0f32; g];
+        guide_lengths(&records, POINTS, &mut per_guide).unwrap();
+        let mut lengths = vec![WHOLE; hairs.len()];
+        shortest(&strands, &per_guide, &mut lengths);
+        let params = ExpandParams {
+            points_per_strand: POINTS,
+            end_points: EndPoints::Pinned,
+            orphan_length: 0.3,
+            width_scale: 1.0,
+        };
+        let per = params.output_points();
+        let mut curves = vec![[0.0f32; 4]; hairs.len() * per];
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut curves);
+        let bounds = StrandBounds::new(&strands).unwrap();
+        let job = ExpandJob::new(&frame, strands, &bounds, &params, bytes.len(), 16)
+            .unwrap()
+            .trimmed(&lengths)
+            .unwrap();
+        job.run(0..hairs.len(), bytes);
+        for (i, curve) in curves.chunks(per).enumerate() {
+            let top = curve.iter().map(|p| p[2]).fold(f32::MIN, f32::max);
+            assert!(top <= CLOTH + 1e-5, "hair {i} reaches {top}");
+            assert!(top >= CLOTH - 1e-3, "hair {i} stops at {top}");
+            assert_eq!(curve[per - 1], curve[per - 2], "pinned tip");
+        }
+    }
+}
