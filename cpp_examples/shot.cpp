@@ -1,22 +1,19 @@
 // A shot on a render farm (paper 3.3, 4), one subcommand per kind of job:
 //
-//   shot sim <creature.obj> <dir> <frames> [hairs]
-//       The simulation pass, sequential over frames: the groom file (once per
-//       asset), then per frame the guides simulated over the shutter, written
-//       as the frame's guide cache (two shutter samples), and the frame's
-//       deformed mesh at both samples.
-//   shot reduce <dir> <frames>
-//       The shot pass: every frame's trim records into one file.
-//   shot render <dir> <first> <count>
-//       Frames first .. first + count - 1, each from its own files alone (and
-//       the groom file and the shot pass's file): all the fur expanded into
-//       one motion-blurred Embree scene, <dir>/frame_NNNN.png.
-//   shot local <creature.obj> <dir> <frames> [hairs]
-//       The three in one process, to compare with the farm's frames.
+//   shot sim <creature.obj> <dir> <frames> [hairs]      the simulation pass, frame after frame:
+//       the groom file (once per asset), then per frame the guides simulated
+//       over the shutter (frame_NNNN.pguide, two samples), the deformed mesh
+//       (frame_NNNN.mesh) and where the guides meet the shirt (trim records)
+//   shot reduce <dir> <frames>                          the shot pass: every frame's trim
+//       records into one length per hair (shot.ptriml)
+//   shot render <dir> <first> <count>                   frames first .. first + count - 1,
+//       each from its own files (and the groom file and shot.ptriml) alone,
+//       all the fur expanded into one motion-blurred Embree scene: frame_NNNN.png
+//   shot local <creature.obj> <dir> <frames> [hairs]    the three in one process
 //
-// farm/shot.sh submits sim, reduce and a job array of renders to Slurm.
-// Every image must have the same bits however the frames are split into
-// tasks and whatever the thread count: the farm_slurm test compares them.
+// farm/shot.sh submits sim, reduce and a job array of renders to Slurm. The
+// frames must have the same bits however they are split into tasks and at
+// any thread count: the farm_slurm test compares them with `shot local`.
 #include <embree3/rtcore.h>
 #include <pelage.h>
 #include <tbb/parallel_for.h>
@@ -40,6 +37,8 @@ namespace {
 
 const uint32_t kGuides = 4000, kCvs = 16, kPatchSize = 1000;
 const float kGuideLength = 0.05f, kFps = 24.0f;
+// The shirt sits closer to the skin than the hairs reach, so they cross it.
+const float kShirtGap = 0.6f * kGuideLength;
 // Shutter samples: the frame's time and half a frame later (a 180 degree
 // shutter), each one simulation step.
 const int kSamples = 2;
@@ -57,22 +56,21 @@ void write_file(const std::string& path, const unsigned char* data, size_t size)
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
-std::string frame_path(const std::string& dir, int frame, const char* suffix) {
-  char name[32];
-  std::snprintf(name, sizeof name, "/frame_%04d%s", frame, suffix);
-  return dir + name;
+std::string frame_path(const std::string& dir, int frame, const std::string& suffix) {
+  char name[16];
+  std::snprintf(name, sizeof name, "/frame_%04d", frame);
+  return dir + name + suffix;
 }
 
 // The creature at time t (seconds): the upper body sways along x, a function
-// of time alone, as an animation cache would give it. Normals follow the
-// shear x += s(y) by its inverse transpose.
+// of time alone, as an animation cache would give it. Normals (the shirt and
+// the root frames use them) follow the shear x += s(y) by its inverse transpose.
 creature::Mesh posed(const creature::Mesh& rest, float t) {
   const float a = 0.12f * std::sin(6.2831853f * 1.5f * t);
   creature::Mesh m = rest;
   for (size_t v = 0; v < m.vertex_count(); ++v) {
     const float y = std::max(m.positions[3 * v + 1], 0.0f);
     m.positions[3 * v] += a * y * y;
-    if (m.normals.empty()) continue;
     float* n = &m.normals[3 * v];
     n[1] -= 2.0f * a * y * n[0];
     const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -82,46 +80,40 @@ creature::Mesh posed(const creature::Mesh& rest, float t) {
 }
 
 // A frame's deformed mesh at each shutter sample, the renderer's animation
-// cache: vertex, triangle and normal counts (uint32), the triangles, then
-// each sample's positions and normals (float32, little-endian like every
-// machine we render on).
+// cache: vertex and triangle counts (uint32), the triangles, then each
+// sample's positions and normals (float32, little-endian like every machine
+// we render on).
 void write_meshes(const std::string& path, const std::vector<creature::Mesh>& samples) {
-  const creature::Mesh& m = samples[0];
-  const uint32_t counts[3] = {uint32_t(m.vertex_count()), uint32_t(m.triangle_count()),
-                              uint32_t(m.normals.size() / 3)};
+  const uint32_t counts[2] = {uint32_t(samples[0].vertex_count()), uint32_t(samples[0].triangle_count())};
   std::ofstream out(path, std::ios::binary);
-  const auto put = [&](const void* data, size_t bytes) {
-    out.write(static_cast<const char*>(data), std::streamsize(bytes));
+  const auto put = [&](const auto& v) {
+    out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(4 * v.size()));
   };
-  put(counts, sizeof counts);
-  put(m.indices.data(), 4 * m.indices.size());
-  for (const creature::Mesh& s : samples) {
-    put(s.positions.data(), 4 * s.positions.size());
-    put(s.normals.data(), 4 * s.normals.size());
-  }
+  out.write(reinterpret_cast<const char*>(counts), sizeof counts);
+  put(samples[0].indices);
+  for (const creature::Mesh& m : samples) put(m.positions), put(m.normals);
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 std::vector<creature::Mesh> read_meshes(const std::string& path) {
   const std::vector<unsigned char> bytes = read_file(path);
-  uint32_t counts[3] = {};
+  uint32_t counts[2] = {};
   if (bytes.size() >= sizeof counts) std::memcpy(counts, bytes.data(), sizeof counts);
-  const size_t v = counts[0], t = counts[1], normals = counts[2];
-  if ((normals != 0 && normals != v) || bytes.size() != sizeof counts + 12 * t + kSamples * 12 * (v + normals)) {
+  if (bytes.size() != sizeof counts + 12 * size_t(counts[1]) + kSamples * 24 * size_t(counts[0])) {
     throw std::runtime_error(path + ": not a mesh file of " + std::to_string(kSamples) + " samples");
   }
   size_t at = sizeof counts;
-  const auto take = [&](auto& out, size_t count) {
-    out.resize(count);
-    std::memcpy(out.data(), &bytes[at], 4 * count);
+  const auto take = [&](auto& v, size_t count) {
+    v.resize(count);
+    std::memcpy(v.data(), &bytes[at], 4 * count);
     at += 4 * count;
   };
   std::vector<creature::Mesh> samples(kSamples);
-  take(samples[0].indices, 3 * t);
-  for (creature::Mesh& s : samples) {
-    s.indices = samples[0].indices;
-    take(s.positions, 3 * v);
-    take(s.normals, 3 * normals);
+  take(samples[0].indices, 3 * size_t(counts[1]));
+  for (creature::Mesh& m : samples) {
+    m.indices = samples[0].indices;
+    take(m.positions, 3 * size_t(counts[0]));
+    take(m.normals, 3 * size_t(counts[0]));
   }
   return samples;
 }
@@ -168,24 +160,25 @@ void write_groom_file(const creature::Mesh& rest, const std::vector<PelageRoot>&
 // the caches are coded against) and its strands as a groom.
 struct Asset {
   PelageGroomFileInfo info{};
-  std::vector<PelageRoot> guide_roots, roots;
+  std::vector<PelageRoot> guide_roots;
   std::vector<float> guide_points;
-  std::vector<PelageStrandBinding> bindings;
-  std::vector<PelageStrandGroom> grooms;
   std::unique_ptr<creature::Groom> groom;
 
   explicit Asset(const std::string& path) {
     const std::vector<unsigned char> file = read_file(path);
     check(pelage_groom_file_info(file.data(), file.size(), &info), "pelage_groom_file_info");
+    const size_t n = info.strand_count;
     guide_roots.resize(info.guide_count);
     guide_points.resize(info.guide_count * info.points_per_guide * 3);
-    roots.resize(info.strand_count), bindings.resize(info.strand_count), grooms.resize(info.strand_count);
+    std::vector<PelageRoot> roots(n);
+    std::vector<PelageStrandBinding> bindings(n);
+    std::vector<PelageStrandGroom> grooms(n);
     std::vector<PelagePatch> patches(info.patch_count);
-    const PelageGroomFileBuffers out{guide_roots.data(), guide_points.data(), info.guide_count,
-                                     roots.data(),       bindings.data(),     grooms.data(),
-                                     info.strand_count,  patches.data(),      info.patch_count};
+    const PelageGroomFileBuffers out{guide_roots.data(), guide_points.data(), info.guide_count, roots.data(),
+                                     bindings.data(),    grooms.data(),       n,                patches.data(),
+                                     info.patch_count};
     check(pelage_groom_file_read(file.data(), file.size(), &out), "pelage_groom_file_read");
-    groom = std::make_unique<creature::Groom>(roots.data(), bindings.data(), grooms.data(), info.strand_count);
+    groom = std::make_unique<creature::Groom>(roots.data(), bindings.data(), grooms.data(), n);
   }
   PelageGuideSet set() const {
     return {guide_roots.data(), guide_points.data(), info.guide_count, info.points_per_guide, info.id};
@@ -196,9 +189,52 @@ using FramePtr = std::unique_ptr<PelageFrameTy, void (*)(PelageFrame)>;
 
 // --- The simulation pass ----------------------------------------------------
 
+// The shirt on the deformed body: its torso pushed kShirtGap out along the
+// skin's normals, so it moves with the body.
+creature::Mesh shirt(const creature::Mesh& body) {
+  creature::Mesh cloth;
+  cloth.positions = body.positions;
+  for (size_t i = 0; i < cloth.positions.size(); ++i) cloth.positions[i] += kShirtGap * body.normals[i];
+  const auto torso = [&](uint32_t v) {
+    const float y = body.positions[3 * v + 1];
+    return y > -0.25f && y < 0.2f;
+  };
+  for (size_t t = 0; t < body.indices.size(); t += 3) {
+    if (std::all_of(&body.indices[t], &body.indices[t + 3], torso)) {
+      cloth.indices.insert(cloth.indices.end(), &body.indices[t], &body.indices[t + 3]);
+    }
+  }
+  return cloth;
+}
+
+// Where each posed guide of `frame` first meets the shirt or the body, as
+// a trim records file for the shot pass. Returns the guides that meet one.
+size_t write_trim_records(const std::string& path, PelageFrame frame, const creature::Mesh& body,
+                          const PelageColliders& colliders, size_t guides) {
+  const creature::Mesh cloth = shirt(body);
+  const PelageMeshDesc cloth_desc = cloth.desc();
+  std::vector<PelageTrimRecord> records(guides);
+  size_t count = 0, bytes = 0;
+  check(pelage_trim_find(frame, &cloth_desc, &colliders, 0, records.data(), records.size(), &count),
+        "pelage_trim_find");
+  check(pelage_trim_records_size(count, &bytes), "pelage_trim_records_size");
+  std::vector<unsigned char> file(bytes);
+  check(pelage_trim_records_write(records.data(), count, guides, kCvs, file.data(), bytes, &bytes),
+        "pelage_trim_records_write");
+  write_file(path, file.data(), bytes);
+  return count;
+}
+
+// Trim records per shutter sample: the shot pass keeps each hair's
+// shortest length over both, so the shirt holds over the whole shutter.
+std::string records_path(const std::string& dir, int frame, int sample) {
+  return frame_path(dir, frame, "_s" + std::to_string(sample) + ".ptrimr");
+}
+
 void simulate(const std::string& obj, const std::string& dir, int frames, uint32_t hairs) {
   creature::Stopwatch clock;
   const creature::Mesh rest = creature::load_obj(obj);
+  if (rest.normals.empty()) throw std::runtime_error(obj + ": the shot needs vertex normals");
   PelageStampParams sp = pelage_stamp_params_defaults();
   sp.target_count = kGuides, sp.seed = 1;
   const std::vector<PelageRoot> guide_roots = creature::stamp(rest, sp);
@@ -206,7 +242,7 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   write_groom_file(rest, guide_roots, rest_points, hairs, dir + "/creature.pgroom");
   const Asset asset(dir + "/creature.pgroom");
   const PelageGuideSet set = asset.set();
-  std::printf("sim: groom file, %zu hairs on %zu guides: %.2f s\n", asset.roots.size(), guide_roots.size(),
+  std::printf("sim: groom file, %zu hairs on %zu guides: %.2f s\n", asset.info.strand_count, guide_roots.size(),
               clock.seconds());
 
   const PelageMeshDesc rest_desc = rest.desc();
@@ -224,46 +260,61 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   PelageExpandParams ep = pelage_expand_params_defaults();
   ep.points_per_strand = kCvs;
 
-  size_t most = 0;
-  check(pelage_guide_cache_max_size(set.guide_count, kCvs, kSamples, 0, &most), "pelage_guide_cache_max_size");
-  std::vector<unsigned char> cache(most);
+  check(pelage_guide_cache_max_size(set.guide_count, kCvs, kSamples, 0, &bytes), "pelage_guide_cache_max_size");
+  std::vector<unsigned char> cache(bytes);
   std::vector<float> simulated(rest_points.size());
   for (int f = 0; f < frames; ++f) {
     clock = {};
     std::vector<creature::Mesh> meshes;
     std::vector<std::unique_ptr<creature::Frame>> samples;
+    size_t met = 0;
     for (int k = 0; k < kSamples; ++k) {
       meshes.push_back(posed(rest, (float(f) + float(k) / kSamples) / kFps));
-      auto frame = std::make_unique<creature::Frame>(meshes[k], rest_guides, ep);
-      check(pelage_sim_step(sim.get(), frame->get(), &colliders, nullptr, 0, 1.0f / (kFps * kSamples), 0),
+      samples.push_back(std::make_unique<creature::Frame>(meshes[k], rest_guides, ep));
+      const PelageFrame frame = samples[k]->get();
+      check(pelage_sim_step(sim.get(), frame, &colliders, nullptr, 0, 1.0f / (kFps * kSamples), 0),
             "pelage_sim_step");
       check(pelage_sim_read(sim.get(), simulated.data(), 12, simulated.size() / 3), "pelage_sim_read");
       const PelageGuidesDesc guides = creature::guides_desc(guide_roots, simulated, kCvs);
-      check(pelage_frame_set_guides(frame->get(), &guides, 0), "pelage_frame_set_guides");
-      samples.push_back(std::move(frame));
+      check(pelage_frame_set_guides(frame, &guides, 0), "pelage_frame_set_guides");
+      met = std::max(met, write_trim_records(records_path(dir, f, k), frame, meshes[k], colliders, set.guide_count));
     }
-    const PelageFrame frames_at[kSamples] = {samples[0]->get(), samples[1]->get()};
-    size_t written = 0;
-    check(pelage_guide_cache_write(&set, frames_at, kSamples, 0, cache.data(), cache.size(), &written),
+    const PelageFrame at[kSamples] = {samples[0]->get(), samples[1]->get()};
+    check(pelage_guide_cache_write(&set, at, kSamples, 0, cache.data(), cache.size(), &bytes),
           "pelage_guide_cache_write");
-    write_file(frame_path(dir, f, ".pguide"), cache.data(), written);
+    write_file(frame_path(dir, f, ".pguide"), cache.data(), bytes);
     write_meshes(frame_path(dir, f, ".mesh"), meshes);
-    // TODO(trim API): the frame's trim records (pelage_trim_find on
-    // samples[0] against the shirt and the body) go to frame_NNNN.trim here.
-    std::printf("sim: frame %d: %d steps, cache %.1f KB: %.2f s\n", f, kSamples, double(written) / 1e3,
-                clock.seconds());
+    std::printf("sim: frame %d: cache %.1f KB, up to %zu guides meet the shirt or the body: %.2f s\n", f,
+                double(bytes) / 1e3, met, clock.seconds());
   }
 }
 
 // --- The shot pass ------------------------------------------------------------
 
 void reduce(const std::string& dir, int frames) {
-  // TODO(trim API): read every frame's trim records, keep the shortest
-  // length per hair (pelage_trim_shortest) and write them with
-  // pelage_trim_lengths_write. Until then the file only orders the jobs.
-  for (int f = 0; f < frames; ++f) read_file(frame_path(dir, f, ".pguide"));
-  write_file(dir + "/shot.trim", nullptr, 0);
-  std::printf("reduce: %d frames\n", frames);
+  const Asset asset(dir + "/creature.pgroom");
+  std::vector<uint16_t> lengths(asset.info.strand_count, PELAGE_TRIM_WHOLE);
+  for (int f = 0; f < frames; ++f) {
+    for (int k = 0; k < kSamples; ++k) {
+      const std::vector<unsigned char> file = read_file(records_path(dir, f, k));
+      PelageTrimRecordsInfo info{};
+      check(pelage_trim_records_info(file.data(), file.size(), &info), "pelage_trim_records_info");
+      std::vector<PelageTrimRecord> records(info.record_count);
+      check(pelage_trim_records_read(file.data(), file.size(), records.data(), records.size(), &info),
+            "pelage_trim_records_read");
+      check(pelage_trim_shortest(asset.groom->get(), records.data(), records.size(), info.guide_count,
+                                 info.points_per_guide, lengths.data(), lengths.size()),
+            "pelage_trim_shortest");
+    }
+  }
+  size_t bytes = 0;
+  check(pelage_trim_lengths_size(lengths.size(), &bytes), "pelage_trim_lengths_size");
+  std::vector<unsigned char> file(bytes);
+  check(pelage_trim_lengths_write(lengths.data(), lengths.size(), file.data(), bytes, &bytes),
+        "pelage_trim_lengths_write");
+  write_file(dir + "/shot.ptriml", file.data(), bytes);
+  const auto cut = std::count_if(lengths.begin(), lengths.end(), [](uint16_t l) { return l < PELAGE_TRIM_WHOLE; });
+  std::printf("reduce: %d frames: %td of %zu hairs trimmed, %zu bytes\n", frames, cut, lengths.size(), bytes);
 }
 
 // --- The render tasks ---------------------------------------------------------
@@ -322,7 +373,8 @@ std::vector<uint8_t> shade(RTCScene scene) {
   return rgb;
 }
 
-void render_frame(const Asset& asset, creature::Device& device, const std::string& dir, int f) {
+void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, creature::Device& device,
+                  const std::string& dir, int f) {
   creature::Stopwatch clock;
   const std::vector<creature::Mesh> meshes = read_meshes(frame_path(dir, f, ".mesh"));
   const std::vector<unsigned char> cache = read_file(frame_path(dir, f, ".pguide"));
@@ -331,7 +383,7 @@ void render_frame(const Asset& asset, creature::Device& device, const std::strin
   ep.points_per_strand = asset.info.points_per_guide;
   ep.thread_count = 0;
   const creature::Expander expander(ep);
-  const size_t n = asset.roots.size(), per = expander.points_per_curve();
+  const size_t n = asset.info.strand_count, per = expander.points_per_curve();
   std::vector<float> points[kSamples];
   for (int k = 0; k < kSamples; ++k) {
     const PelageMeshDesc desc = meshes[k].desc();
@@ -341,9 +393,9 @@ void render_frame(const Asset& asset, creature::Device& device, const std::strin
     check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), frame.get(), 0),
           "pelage_guide_cache_read");
     points[k].resize(4 * per * n);
-    // TODO(trim API): pelage_groom_expand_trimmed with the shot pass's lengths.
     const PelageCurves curves{points[k].data(), 16, per * n, nullptr, nullptr};
-    check(pelage_groom_expand(asset.groom->get(), frame.get(), 0, n, &ep, &curves), "pelage_groom_expand");
+    check(pelage_groom_expand_trimmed(asset.groom->get(), frame.get(), 0, n, lengths.data(), &ep, &curves),
+          "pelage_groom_expand_trimmed");
   }
   const double expand_s = clock.seconds();
   RTCScene scene = rtcNewScene(device.device);
@@ -366,18 +418,14 @@ void render_frame(const Asset& asset, creature::Device& device, const std::strin
 
 void render(const std::string& dir, int first, int count) {
   const Asset asset(dir + "/creature.pgroom");
-  read_file(dir + "/shot.trim");  // TODO(trim API): the lengths, for every frame
+  const std::vector<unsigned char> file = read_file(dir + "/shot.ptriml");
+  std::vector<uint16_t> lengths(asset.info.strand_count);
+  size_t strands = 0;
+  check(pelage_trim_lengths_read(file.data(), file.size(), lengths.data(), lengths.size(), &strands),
+        "pelage_trim_lengths_read");
+  if (strands != lengths.size()) throw std::runtime_error("shot.ptriml: the lengths of another groom");
   creature::Device device;
-  for (int f = first; f < first + count; ++f) render_frame(asset, device, dir, f);
-}
-
-int usage() {
-  std::fprintf(stderr,
-               "usage: shot sim <creature.obj> <dir> <frames> [hairs]\n"
-               "       shot reduce <dir> <frames>\n"
-               "       shot render <dir> <first frame> <count>\n"
-               "       shot local <creature.obj> <dir> <frames> [hairs]\n");
-  return 2;
+  for (int f = first; f < first + count; ++f) render_frame(asset, lengths, device, dir, f);
 }
 
 }  // namespace
@@ -397,7 +445,10 @@ int main(int argc, char** argv) try {
   } else if (a.size() == 4 && a[0] == "render") {
     render(a[1], number(2), number(3));
   } else {
-    return usage();
+    std::fprintf(stderr, "usage: shot sim|local <creature.obj> <dir> <frames> [hairs]\n"
+                         "       shot reduce <dir> <frames>\n"
+                         "       shot render <dir> <first frame> <count>\n");
+    return 2;
   }
   return 0;
 } catch (const std::exception& e) {

@@ -25,8 +25,9 @@ mkdir -p "$work/local"
 taskset -c 0 "$shot" local "$obj" "$work/local" "$frames" "$hairs"
 echo "farm_slurm: one process on one core: done at $SECONDS s"
 
+for chunk in 1 2; do cmp "$work/local/shot.ptriml" "$work/chunk$chunk/shot.ptriml"; done
 for ((f = 0; f < frames; f++)); do
   png=$(printf 'frame_%04d.png' "$f")
   for chunk in 1 2; do cmp "$work/local/$png" "$work/chunk$chunk/$png"; done
 done
-echo "farm_slurm: $frames frames bitwise equal: one process, Slurm at 1 and 2 frames per task"
+echo "farm_slurm: the trim lengths and $frames frames bitwise equal: one process, Slurm at 1 and 2 frames per task"
