@@ -342,6 +342,7 @@ void attach_moving(RTCDevice device, RTCScene scene, RTCGeometryType type, const
 
 // One ray per pixel at a time in the shutter hashed from the pixel, headlight
 // shading: every pixel is a function of the scene alone, not of the threads.
+// Skin grey, the shirt blue (a hair through it would show), fur brown.
 std::vector<uint8_t> shade(RTCScene scene) {
   const V3 eye{1.6f, 0.8f, 3.6f}, forward = normalize(V3{0.0f, 0.05f, 0.0f} - eye);
   const V3 right = normalize(cross(forward, V3{0.0f, 1.0f, 0.0f})), up = cross(right, forward);
@@ -363,7 +364,8 @@ std::vector<uint8_t> shade(RTCScene scene) {
       V3 c{0.12f, 0.13f, 0.16f};
       if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
         const float l = 0.2f + 0.8f * std::fabs(dot(normalize(V3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}), dir));
-        c = rh.hit.geomID == 0 ? l * V3{0.55f, 0.5f, 0.48f} : l * V3{0.45f, 0.3f, 0.18f};  // skin, fur
+        const V3 albedo[3] = {{0.55f, 0.5f, 0.48f}, {0.25f, 0.35f, 0.6f}, {0.45f, 0.3f, 0.18f}};
+        c = l * albedo[std::min(rh.hit.geomID, 2u)];
       }
       uint8_t* px = &rgb[3 * (size_t(y) * kImageSize + size_t(x))];
       px[0] = uint8_t(255.0f * std::min(c.x, 1.0f)), px[1] = uint8_t(255.0f * std::min(c.y, 1.0f));
@@ -399,10 +401,12 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
   }
   const double expand_s = clock.seconds();
   RTCScene scene = rtcNewScene(device.device);
-  std::vector<float> skin[kSamples];
-  for (int k = 0; k < kSamples; ++k) skin[k] = meshes[k].positions;
+  std::vector<float> skin[kSamples], cloth[kSamples];
+  for (int k = 0; k < kSamples; ++k) skin[k] = meshes[k].positions, cloth[k] = shirt(meshes[k]).positions;
   attach_moving(device.device, scene, RTC_GEOMETRY_TYPE_TRIANGLE, skin, RTC_FORMAT_FLOAT3, 12, meshes[0].indices,
                 RTC_FORMAT_UINT3, 12);
+  attach_moving(device.device, scene, RTC_GEOMETRY_TYPE_TRIANGLE, cloth, RTC_FORMAT_FLOAT3, 12,
+                shirt(meshes[0]).indices, RTC_FORMAT_UINT3, 12);
   attach_moving(device.device, scene, RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE, points, RTC_FORMAT_FLOAT4, 16,
                 creature::segment_indices(n, per), RTC_FORMAT_UINT, 4);
   rtcCommitScene(scene);
