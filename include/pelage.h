@@ -344,6 +344,65 @@ typedef struct PelageCurves {
   uint32_t *curve_ids;
 } PelageCurves;
 
+// A solid sphere collider.
+typedef struct PelageSphere {
+  // Centre.
+  float centre[3];
+  // Radius (>= 0).
+  float radius;
+} PelageSphere;
+
+// A solid capsule collider: the points within `radius` of the segment a-b.
+typedef struct PelageCapsule {
+  // One end of the axis.
+  float a[3];
+  // The other end.
+  float b[3];
+  // Radius (>= 0).
+  float radius;
+} PelageCapsule;
+
+// A solid half-space collider: the points p with dot(normal, p) < offset
+// (normal not zero, used as given).
+typedef struct PelagePlane {
+  // Outward normal.
+  float normal[3];
+  // dot(normal, p) on the surface.
+  float offset;
+} PelagePlane;
+
+// A host's signed distance field (negative inside): writes the distance
+// of each of `count` points (x, y, z floats, packed) to `distances`.
+// Called from the threads a step runs on, possibly at once: it must be
+// safe to call concurrently.
+typedef void (*PelageDistanceFn)(void *user_data, const float *points, size_t count, float *distances);
+
+// What the guides collide with in one step; every array may be NULL with
+// a count of 0.
+typedef struct PelageColliders {
+  // Spheres.
+  const struct PelageSphere *spheres;
+  // Number of spheres.
+  size_t sphere_count;
+  // Capsules.
+  const struct PelageCapsule *capsules;
+  // Number of capsules.
+  size_t capsule_count;
+  // Half-spaces.
+  const struct PelagePlane *planes;
+  // Number of half-spaces.
+  size_t plane_count;
+  // Nonzero: collide with the body itself, the frame's (deformed) mesh
+  // as a solid: inside where its generalized winding number is above 0.5
+  // (open meshes and intersecting shells work; its grid is built each
+  // step).
+  uint32_t body;
+  // A signed distance field, or NULL.
+  PelageDistanceFn distance;
+  // Passed unchanged to `distance`.
+  void *distance_user_data;
+} PelageColliders;
+
 // A scalar value over the mesh surface: a constant, a texture, or per-vertex values.
 typedef struct PelageMap {
   // Storage kind: a PelageMapKind value (a plain integer so that a bad
@@ -449,6 +508,22 @@ typedef struct PelageGroomFileBuffers {
 // `pelage_groom_new`, released by `pelage_groom_free`; immutable between.
 typedef struct PelageGroomTy *PelageGroom;
 
+// Per-strand changes `pelage_groom_expand_edited` applies after expanding
+// a strand, each indexed over the whole groom (from strand 0); NULL: none.
+typedef struct PelageStrandEdits {
+  // Stored lengths (as `pelage_trim_shortest` or `pelage_trim_lengths_read`
+  // give them; PELAGE_TRIM_WHOLE for none): each strand is cut there,
+  // its points respread over the kept part, so the point count stays.
+  const uint16_t *lengths;
+  // Nonzero for the strands to push out of the frame's colliders
+  // (`pelage_frame_set_colliders`), after the cut: each is rotated about
+  // its root, toward its normal, by the smallest tried angle that frees
+  // every point (paper 3.3: render hairs in user regions, which
+  // interpolation can leave inside a collider although every guide is
+  // clear). Build it from a map over the body (`pelage_roots_evaluate`).
+  const uint8_t *push_mask;
+} PelageStrandEdits;
+
 // The guides of a groom file, as `pelage_groom_file_read` gives them:
 // what a guide cache is coded against.
 typedef struct PelageGuideSet {
@@ -543,65 +618,6 @@ typedef struct PelageSimParams {
 // `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
 // bytes; released by `pelage_sim_free`.
 typedef struct PelageSimTy *PelageSim;
-
-// A solid sphere collider.
-typedef struct PelageSphere {
-  // Centre.
-  float centre[3];
-  // Radius (>= 0).
-  float radius;
-} PelageSphere;
-
-// A solid capsule collider: the points within `radius` of the segment a-b.
-typedef struct PelageCapsule {
-  // One end of the axis.
-  float a[3];
-  // The other end.
-  float b[3];
-  // Radius (>= 0).
-  float radius;
-} PelageCapsule;
-
-// A solid half-space collider: the points p with dot(normal, p) < offset
-// (normal not zero, used as given).
-typedef struct PelagePlane {
-  // Outward normal.
-  float normal[3];
-  // dot(normal, p) on the surface.
-  float offset;
-} PelagePlane;
-
-// A host's signed distance field (negative inside): writes the distance
-// of each of `count` points (x, y, z floats, packed) to `distances`.
-// Called from the threads a step runs on, possibly at once: it must be
-// safe to call concurrently.
-typedef void (*PelageDistanceFn)(void *user_data, const float *points, size_t count, float *distances);
-
-// What the guides collide with in one step; every array may be NULL with
-// a count of 0.
-typedef struct PelageColliders {
-  // Spheres.
-  const struct PelageSphere *spheres;
-  // Number of spheres.
-  size_t sphere_count;
-  // Capsules.
-  const struct PelageCapsule *capsules;
-  // Number of capsules.
-  size_t capsule_count;
-  // Half-spaces.
-  const struct PelagePlane *planes;
-  // Number of half-spaces.
-  size_t plane_count;
-  // Nonzero: collide with the body itself, the frame's (deformed) mesh
-  // as a solid: inside where its generalized winding number is above 0.5
-  // (open meshes and intersecting shells work; its grid is built each
-  // step).
-  uint32_t body;
-  // A signed distance field, or NULL.
-  PelageDistanceFn distance;
-  // Passed unchanged to `distance`.
-  void *distance_user_data;
-} PelageColliders;
 
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
@@ -802,6 +818,19 @@ enum PelageStatus pelage_frame_new(const struct PelageMeshDesc *mesh, size_t gui
 // Thread safety: no other call may use `frame` during this one.
 enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct PelageGuidesDesc *guides, uint32_t thread_count);
 
+// Sets the colliders that render strands selected by a push mask
+// (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
+// frame: `colliders` is copied (its body, when set, is this frame's mesh,
+// built once here); NULL clears them. A distance callback is kept: it and
+// its user data must stay valid while the frame expands with them.
+// On failure the frame keeps the colliders it had.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
+// this frame's mesh too large), MISALIGNED, PANIC.
+//
+// Thread safety: no other call may use `frame` during this one.
+enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders);
+
 // Releases a frame. NULL is accepted and does nothing.
 //
 // Thread safety: no other call may use `frame` during or after this one.
@@ -899,18 +928,17 @@ enum PelageStatus pelage_groom_strand_count(PelageGroom groom, size_t *strand_co
 // with distinct outputs.
 enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageExpandParams *params, const struct PelageCurves *curves);
 
-// `pelage_groom_expand`, each strand cut at its stored length in
-// `lengths` (one per strand of the whole groom, indexed from strand 0, as
-// `pelage_trim_shortest` or `pelage_trim_lengths_read` give them;
-// PELAGE_TRIM_WHOLE for none): its points are respread over the kept part
-// of the curve, so the point count stays. A cut strand stays inside its
-// patch's box.
+// `pelage_groom_expand` with per-strand `edits` (NULL: none): the cut at
+// each strand's stored length, then the push-out of the strands a mask
+// selects. A cut or pushed strand stays inside its patch's box. Strands
+// without an edit are the same bits as `pelage_groom_expand`'s.
 //
 // Returns the statuses of `pelage_groom_expand`; NULL_PARAMETER and
-// MISALIGNED also for `lengths`.
+// MISALIGNED also for the edits' arrays, INVALID_ARGUMENT for a push mask
+// on a frame without colliders.
 //
 // Thread safety: as `pelage_groom_expand`.
-enum PelageStatus pelage_groom_expand_trimmed(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const uint16_t *lengths, const struct PelageExpandParams *params, const struct PelageCurves *curves);
+enum PelageStatus pelage_groom_expand_edited(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageStrandEdits *edits, const struct PelageExpandParams *params, const struct PelageCurves *curves);
 
 // The most bytes `pelage_guide_cache_write` writes for `sample_count`
 // shutter samples of `guide_count` guides of `points_per_guide` points

@@ -8,6 +8,7 @@ use crate::threads::{split_over_threads, split_with_progress, Progress};
 use crate::{
     PelageFrame, PelageProgressFn, PelageRoot, PelageStatus, PelageStrandBinding, PelageStrandGroom,
 };
+use pelage_core::dynamics::collision::Colliders;
 use pelage_core::interp::expand::ExpandJob;
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::interp::strand::{EndPoints, ExpandParams};
@@ -198,18 +199,25 @@ pub extern "C" fn pelage_expand(
             let (start, b) = part?;
             bounds = bounds.merge(b, start);
         }
-        run(frame.posed(), all, &bounds, None, p, req(curves, "curves")?)
+        run(frame.posed(), all, &bounds, Edits::default(), p, req(curves, "curves")?)
     }
 }
 
 /// Expands `all` into `out` with records whose `bounds` were found by
 /// `StrandBounds::new`: checks that they fit the frame, the parameters and
 /// the output, then writes every range over threads.
+/// Per-strand edits of one expansion (see `PelageStrandEdits`), over its strands.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Edits<'a> {
+    pub(crate) lengths: Option<&'a [u16]>,
+    pub(crate) push: Option<(&'a [u8], &'a Colliders<'a>)>,
+}
+
 pub(crate) fn run(
     frame: &PosedFrame,
     all: Strands,
     bounds: &StrandBounds,
-    trim: Option<&[u16]>,
+    edits: Edits,
     p: &PelageExpandParams,
     out: &PelageCurves,
 ) -> Result<(), Failure> {
@@ -237,8 +245,11 @@ pub(crate) fn run(
     let counts = slice_mut(out.curve_counts, optional(out.curve_counts), "curve_counts")?;
     let ids = slice_mut(out.curve_ids, optional(out.curve_ids), "curve_ids")?;
     let mut job = ExpandJob::new(frame, all, bounds, &core, points.len(), point_stride)?;
-    if let Some(lengths) = trim {
+    if let Some(lengths) = edits.lengths {
         job = job.trimmed(lengths)?;
+    }
+    if let Some((mask, colliders)) = edits.push {
+        job = job.pushed(mask, colliders)?;
     }
     let progress = Progress::new(p.progress, p.progress_user_data);
     split_with_progress(

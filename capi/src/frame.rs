@@ -2,12 +2,15 @@
 //! once and read by any number of expansions.
 
 use crate::buffers::{req, req_mut};
+use crate::sim::{body_in, HostColliders, HostField};
 use crate::status::Failure;
 use crate::threads::{check_over_threads, split_in_chunks, split_over_threads, CHUNK};
-use crate::{PelageGuidesDesc, PelageMeshDesc, PelageStatus};
+use crate::{PelageColliders, PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::cache::groom_file::Groom;
 use pelage_core::cache::guide_cache::{GuideCache, BLOCK};
+use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance, Sphere};
+use pelage_core::surface::body::Body;
 
 // a chunk of guides is a block of the cache
 const _: () = assert!(CHUNK == BLOCK);
@@ -58,6 +61,8 @@ impl<T> Drop for Buffer<T> {
 
 /// What a [`PelageFrame`] points to.
 pub(crate) struct Frame {
+    /// The colliders render strands are pushed out of, if set.
+    push: Option<FrameColliders>,
     /// Borrows the buffers below; declared first, so dropped first.
     posed: PosedFrame<'static>,
     _positions: Buffer<[f32; 3]>,
@@ -67,7 +72,30 @@ pub(crate) struct Frame {
     _arena: Buffer<u8>,
 }
 
+/// A frame's colliders for pushing render strands out
+/// (`pelage_frame_set_colliders`): the shapes copied, the body built once.
+struct FrameColliders {
+    /// Borrows `_body_memory`; declared first, so dropped first.
+    body: Option<Body<'static>>,
+    spheres: Vec<Sphere>,
+    capsules: Vec<Capsule>,
+    planes: Vec<Plane>,
+    field: Option<HostField>,
+    _body_memory: Option<Buffer<u8>>,
+}
+
 impl Frame {
+    /// The colliders set by `pelage_frame_set_colliders`, if any.
+    pub(crate) fn push_colliders(&self) -> Option<Colliders<'_>> {
+        self.push.as_ref().map(|c| Colliders {
+            spheres: &c.spheres,
+            capsules: &c.capsules,
+            planes: &c.planes,
+            body: c.body.as_ref(),
+            field: c.field.as_ref().map(|f| f as &dyn SignedDistance),
+        })
+    }
+
     /// The posed frame, for no longer than this handle lives.
     pub(crate) fn posed(&self) -> &PosedFrame<'_> {
         &self.posed
@@ -182,6 +210,7 @@ pub extern "C" fn pelage_frame_new(
         // SAFETY: as above.
         let posed = PosedFrame::new(mesh, guide_count, points, &mut Arena::new(unsafe { arena.borrow() }))?;
         let frame = Box::new(Frame {
+            push: None,
             posed,
             _positions: positions,
             _triangles: triangles,
@@ -222,6 +251,52 @@ pub extern "C" fn pelage_frame_set_guides(
             filler.fill(range.start, part)
         })?;
         posing.finish();
+        Ok(())
+    }
+}
+
+/// Sets the colliders that render strands selected by a push mask
+/// (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
+/// frame: `colliders` is copied (its body, when set, is this frame's mesh,
+/// built once here); NULL clears them. A distance callback is kept: it and
+/// its user data must stay valid while the frame expands with them.
+/// On failure the frame keeps the colliders it had.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
+/// this frame's mesh too large), MISALIGNED, PANIC.
+///
+/// Thread safety: no other call may use `frame` during this one.
+#[no_mangle]
+pub extern "C" fn pelage_frame_set_colliders(
+    frame: PelageFrame,
+    colliders: *const PelageColliders,
+) -> PelageStatus {
+    ffi_boundary! {
+        let frame = frame_mut(frame)?;
+        if colliders.is_null() {
+            frame.push = None;
+            return Ok(());
+        }
+        let host = HostColliders::read(colliders)?;
+        let shapes = Colliders { spheres: host.spheres, capsules: host.capsules, planes: host.planes, body: None, field: None };
+        shapes.check()?;
+        let (mut body_memory, mut body) = (None, None);
+        if host.body {
+            let memory: &mut Option<Buffer<u8>> = &mut body_memory;
+            // SAFETY: the buffer is borrowed once, by the body made here,
+            // which FrameColliders drops before it.
+            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), |bytes| unsafe {
+                memory.insert(Buffer::new(vec![0u8; bytes])).borrow()
+            })?);
+        }
+        frame.push = Some(FrameColliders {
+            body,
+            spheres: host.spheres.to_vec(),
+            capsules: host.capsules.to_vec(),
+            planes: host.planes.to_vec(),
+            field: host.field,
+            _body_memory: body_memory,
+        });
         Ok(())
     }
 }

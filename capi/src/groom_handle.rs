@@ -2,7 +2,7 @@
 //! expanding every frame.
 
 use crate::buffers::{req, req_mut, slice};
-use crate::expand::run;
+use crate::expand::{run, Edits};
 use crate::frame::frame_ref;
 use crate::status::Failure;
 use crate::{PelageCurves, PelageExpandParams, PelageFrame, PelageStatus, PelageStrands};
@@ -146,28 +146,45 @@ pub extern "C" fn pelage_groom_expand(
             Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
         })?;
         let p = req(params, "params")?;
-        run(frame.posed(), groom.strands().range(range), &groom.bounds, None, p, req(curves, "curves")?)
+        run(frame.posed(), groom.strands().range(range), &groom.bounds, Edits::default(), p, req(curves, "curves")?)
     }
 }
 
-/// `pelage_groom_expand`, each strand cut at its stored length in
-/// `lengths` (one per strand of the whole groom, indexed from strand 0, as
-/// `pelage_trim_shortest` or `pelage_trim_lengths_read` give them;
-/// PELAGE_TRIM_WHOLE for none): its points are respread over the kept part
-/// of the curve, so the point count stays. A cut strand stays inside its
-/// patch's box.
+/// Per-strand changes `pelage_groom_expand_edited` applies after expanding
+/// a strand, each indexed over the whole groom (from strand 0); NULL: none.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageStrandEdits {
+    /// Stored lengths (as `pelage_trim_shortest` or `pelage_trim_lengths_read`
+    /// give them; PELAGE_TRIM_WHOLE for none): each strand is cut there,
+    /// its points respread over the kept part, so the point count stays.
+    pub lengths: *const u16,
+    /// Nonzero for the strands to push out of the frame's colliders
+    /// (`pelage_frame_set_colliders`), after the cut: each is rotated about
+    /// its root, toward its normal, by the smallest tried angle that frees
+    /// every point (paper 3.3: render hairs in user regions, which
+    /// interpolation can leave inside a collider although every guide is
+    /// clear). Build it from a map over the body (`pelage_roots_evaluate`).
+    pub push_mask: *const u8,
+}
+
+/// `pelage_groom_expand` with per-strand `edits` (NULL: none): the cut at
+/// each strand's stored length, then the push-out of the strands a mask
+/// selects. A cut or pushed strand stays inside its patch's box. Strands
+/// without an edit are the same bits as `pelage_groom_expand`'s.
 ///
 /// Returns the statuses of `pelage_groom_expand`; NULL_PARAMETER and
-/// MISALIGNED also for `lengths`.
+/// MISALIGNED also for the edits' arrays, INVALID_ARGUMENT for a push mask
+/// on a frame without colliders.
 ///
 /// Thread safety: as `pelage_groom_expand`.
 #[no_mangle]
-pub extern "C" fn pelage_groom_expand_trimmed(
+pub extern "C" fn pelage_groom_expand_edited(
     groom: PelageGroom,
     frame: PelageFrame,
     first: usize,
     count: usize,
-    lengths: *const u16,
+    edits: *const PelageStrandEdits,
     params: *const PelageExpandParams,
     curves: *const PelageCurves,
 ) -> PelageStatus {
@@ -178,8 +195,21 @@ pub extern "C" fn pelage_groom_expand_trimmed(
         let range = first..first.checked_add(count).filter(|&end| end <= total).ok_or_else(|| {
             Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
         })?;
-        let lengths = &slice(lengths, total, "lengths")?[range.clone()];
+        let colliders = frame.push_colliders();
+        let mut edits_of = Edits::default();
+        if !edits.is_null() {
+            let e = req(edits, "edits")?;
+            if !e.lengths.is_null() {
+                edits_of.lengths = Some(&slice(e.lengths, total, "edits.lengths")?[range.clone()]);
+            }
+            if !e.push_mask.is_null() {
+                let colliders = colliders.as_ref().ok_or_else(|| {
+                    Failure::new(PelageStatus::InvalidArgument, "a push mask on a frame without colliders (pelage_frame_set_colliders)")
+                })?;
+                edits_of.push = Some((&slice(e.push_mask, total, "edits.push_mask")?[range.clone()], colliders));
+            }
+        }
         let p = req(params, "params")?;
-        run(frame.posed(), groom.strands().range(range), &groom.bounds, Some(lengths), p, req(curves, "curves")?)
+        run(frame.posed(), groom.strands().range(range), &groom.bounds, edits_of, p, req(curves, "curves")?)
     }
 }

@@ -36,7 +36,8 @@ pub use expand::{
     pelage_expand_query, PelageCurves, PelageEndPoints, PelageExpandParams, PelageStrands,
 };
 pub use frame::{
-    pelage_frame_free, pelage_frame_new, pelage_frame_set_guides, PelageFrame, PelageFrameTy,
+    pelage_frame_free, pelage_frame_new, pelage_frame_set_colliders, pelage_frame_set_guides,
+    PelageFrame, PelageFrameTy,
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,
@@ -46,8 +47,8 @@ pub use groom_file::{
     PelageGroomFileBuffers, PelageGroomFileDesc, PelageGroomFileInfo, PelagePatch,
 };
 pub use groom_handle::{
-    pelage_groom_expand, pelage_groom_expand_trimmed, pelage_groom_free, pelage_groom_new,
-    pelage_groom_strand_count, PelageGroom, PelageGroomTy,
+    pelage_groom_expand, pelage_groom_expand_edited, pelage_groom_free, pelage_groom_new,
+    pelage_groom_strand_count, PelageGroom, PelageGroomTy, PelageStrandEdits,
 };
 pub use guide_cache::{
     pelage_guide_cache_info, pelage_guide_cache_max_size, pelage_guide_cache_read,

@@ -314,10 +314,10 @@ pub struct PelageColliders {
 /// A host's colliders, checked for NULL arrays (the shapes' values are
 /// checked by `Colliders::check`).
 pub(crate) struct HostColliders<'a> {
-    spheres: &'a [Sphere],
-    capsules: &'a [Capsule],
-    planes: &'a [Plane],
-    field: Option<HostField>,
+    pub(crate) spheres: &'a [Sphere],
+    pub(crate) capsules: &'a [Capsule],
+    pub(crate) planes: &'a [Plane],
+    pub(crate) field: Option<HostField>,
     /// The body collides.
     pub(crate) body: bool,
 }
@@ -368,20 +368,38 @@ pub(crate) fn body_of<'a>(
     rim_arena: &mut Vec<u8>,
     body_arena: &'a mut Vec<u8>,
 ) -> Result<Body<'a>, Failure> {
+    body_in(mesh, rim_arena, |bytes| {
+        if body_arena.len() < bytes {
+            body_arena.resize(bytes, 0);
+        }
+        body_arena
+    })
+}
+
+/// The solid of `mesh`, its rim built in `rim_arena` (grown as needed), its
+/// grid in the memory `memory` gives for the bytes it needs.
+pub(crate) fn body_in<'a>(
+    mesh: &Mesh,
+    rim_arena: &mut Vec<u8>,
+    memory: impl FnOnce(usize) -> &'a mut [u8],
+) -> Result<Body<'a>, Failure> {
     let rim_bytes = Rim::required_bytes(mesh);
     if rim_arena.len() < rim_bytes {
         rim_arena.resize(rim_bytes, 0);
     }
     let rim = Rim::new(mesh, &mut Arena::new(rim_arena))?;
     let plan = BodyPlan::of(mesh, &rim)?;
-    if body_arena.len() < plan.bytes() {
-        body_arena.resize(plan.bytes(), 0);
-    }
-    Ok(Body::build(&plan, mesh, &rim, &mut Arena::new(body_arena))?)
+    Ok(Body::build(
+        &plan,
+        mesh,
+        &rim,
+        &mut Arena::new(memory(plan.bytes())),
+    )?)
 }
 
 /// The host's distance callback as a core field.
-struct HostField {
+#[derive(Clone, Copy)]
+pub(crate) struct HostField {
     callback: unsafe extern "C" fn(*mut c_void, *const f32, usize, *mut f32),
     user_data: *mut c_void,
 }

@@ -301,16 +301,19 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
         .unwrap();
         let mut cut = vec![[0.0f32; 4]; n * per];
         ok(
-            pelage_groom_expand_trimmed(
+            pelage_groom_expand_edited(
                 groom,
                 handle.0,
                 0,
                 n,
-                lengths.as_ptr(),
+                &PelageStrandEdits {
+                    lengths: lengths.as_ptr(),
+                    push_mask: std::ptr::null(),
+                },
                 &params,
                 &curves_desc(&mut cut, None),
             ),
-            "pelage_groom_expand_trimmed",
+            "pelage_groom_expand_edited",
         );
         let mut whole = vec![[0.0f32; 4]; n * per];
         ok(

@@ -314,6 +314,30 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
     }
 }
 
+/// [`push_out`] for an expanded render strand (paper 3.3: render hairs in
+/// user regions): `points` are its world points with their radii, the
+/// first its root on `frame`'s origin. Its points are turned about the root
+/// as a guide's are; the radii stay. Unchanged (the same bits) when clear.
+pub fn push_out_curve(colliders: &Colliders, frame: &Frame, points: &mut [[f32; 4]]) -> PushOut {
+    let n = points.len().min(MAX_POINTS);
+    let mut local = [Vec3::ZERO; MAX_POINTS];
+    let mut reach = 0.0f32;
+    for (j, p) in points[..n].iter().enumerate() {
+        local[j] = frame.to_local(Vec3::new(p[0], p[1], p[2]));
+        if j > 0 {
+            reach += local[j].distance(local[j - 1]);
+        }
+    }
+    let done = push_out(colliders, frame, &mut local[..n], reach);
+    if done != PushOut::Clear {
+        for (p, l) in points[..n].iter_mut().zip(&local[..n]) {
+            let w = frame.to_world(*l);
+            (p[0], p[1], p[2]) = (w.x, w.y, w.z);
+        }
+    }
+    done
+}
+
 /// What [`push_out`] did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PushOut {

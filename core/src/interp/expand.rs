@@ -9,6 +9,7 @@
 //! records or their bounds, the output), then runs any ranges of strands
 //! without a further check or failure, on any threads.
 
+use crate::dynamics::collision::{push_out_curve, Colliders};
 use crate::interp::posed::PosedFrame;
 use crate::interp::strand::{strand_n, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
 use crate::interp::strands::{StrandBounds, Strands};
@@ -29,6 +30,14 @@ pub struct ExpandJob<'r, 'a> {
     params: ExpandParams,
     stride: usize,
     trim: Option<&'r [u16]>,
+    push: Option<Push<'r>>,
+}
+
+/// The strands a user mask selects, and the colliders they are pushed out of.
+#[derive(Clone, Copy)]
+struct Push<'r> {
+    mask: &'r [u8],
+    colliders: &'r Colliders<'r>,
 }
 
 impl<'r, 'a> ExpandJob<'r, 'a> {
@@ -58,6 +67,26 @@ impl<'r, 'a> ExpandJob<'r, 'a> {
             params: *params,
             stride,
             trim: None,
+            push: None,
+        })
+    }
+
+    /// The same job, each strand that `mask` selects (one byte per strand,
+    /// nonzero: selected) pushed out of `colliders` after it is expanded
+    /// (and cut): rotated about its root as guides are (paper 3.3: render
+    /// hairs in user regions, which interpolation can leave inside a
+    /// collider even when every guide is clear).
+    pub fn pushed(self, mask: &'r [u8], colliders: &'r Colliders<'r>) -> Result<Self, Error> {
+        if mask.len() < self.strands.len() {
+            return Err(Error::OutputTooSmall {
+                needed: self.strands.len(),
+                available: mask.len(),
+            });
+        }
+        colliders.check()?;
+        Ok(ExpandJob {
+            push: Some(Push { mask, colliders }),
+            ..self
         })
     }
 
@@ -163,15 +192,19 @@ fn check_output(
 #[inline(always)]
 fn expand_kernel(job: &ExpandJob, range: Range<usize>, out: &mut [u8]) {
     let strands = &job.strands.range(range.clone());
-    let trim = job.trim.map(|t| &t[range]);
+    let trim = job.trim.map(|t| &t[range.clone()]);
+    let push = job.push.map(|p| Push {
+        mask: &p.mask[range],
+        ..p
+    });
     let (frame, params, stride) = (job.frame, &job.params, job.stride);
     // the common counts get loops of known length (see `strand`), chosen
     // once per call rather than per strand
     match params.points_per_strand {
-        8 => fill_all::<8>(frame, strands, trim, params, out, stride),
-        16 => fill_all::<16>(frame, strands, trim, params, out, stride),
-        32 => fill_all::<32>(frame, strands, trim, params, out, stride),
-        _ => fill_all::<0>(frame, strands, trim, params, out, stride),
+        8 => fill_all::<8>(frame, strands, (trim, push), params, out, stride),
+        16 => fill_all::<16>(frame, strands, (trim, push), params, out, stride),
+        32 => fill_all::<32>(frame, strands, (trim, push), params, out, stride),
+        _ => fill_all::<0>(frame, strands, (trim, push), params, out, stride),
     }
 }
 
@@ -180,7 +213,7 @@ fn expand_kernel(job: &ExpandJob, range: Range<usize>, out: &mut [u8]) {
 fn fill_all<const N: usize>(
     guides: &PosedFrame,
     strands: &Strands,
-    trim: Option<&[u16]>,
+    (trim, push): (Option<&[u16]>, Option<Push>),
     params: &ExpandParams,
     out: &mut [u8],
     stride: usize,
@@ -189,6 +222,7 @@ fn fill_all<const N: usize>(
     let mut filler = Filler {
         strands,
         trim,
+        push,
         guides,
         params,
         lanes: Lanes::new(params.points_per_strand),
@@ -220,6 +254,8 @@ struct Filler<'r, 'a> {
     strands: &'r Strands<'r>,
     /// Stored lengths of the strands, when trimmed.
     trim: Option<&'r [u16]>,
+    /// The strands to push out, and the colliders.
+    push: Option<Push<'r>>,
     guides: &'r PosedFrame<'a>,
     params: &'r ExpandParams,
     lanes: Lanes,
@@ -255,16 +291,21 @@ impl Filler<'_, '_> {
             &mut self.lanes,
             curve,
         );
-        if let Some(&length) = self.trim.map(|t| &t[s]) {
-            if length != trim::WHOLE {
-                let pinned = self.params.end_points == EndPoints::Pinned;
-                let n = self.params.points_per_strand;
-                cut(&mut curve[pinned as usize..pinned as usize + n], length);
-                if pinned {
-                    curve[0] = curve[1];
-                    curve[n + 1] = curve[n];
-                }
-            }
+        let length = self.trim.map_or(trim::WHOLE, |t| t[s]);
+        let push = self.push.filter(|p| p.mask[s] != 0);
+        if length == trim::WHOLE && push.is_none() {
+            return;
+        }
+        let pinned = self.params.end_points == EndPoints::Pinned;
+        let n = self.params.points_per_strand;
+        let points = &mut curve[pinned as usize..pinned as usize + n];
+        cut(points, length);
+        if let Some(p) = push {
+            push_out_curve(p.colliders, &self.frames[slot], points);
+        }
+        if pinned {
+            curve[0] = curve[1];
+            curve[n + 1] = curve[n];
         }
     }
 }
