@@ -386,6 +386,7 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
   ep.thread_count = 0;
   const creature::Expander expander(ep);
   const size_t n = asset.info.strand_count, per = expander.points_per_curve();
+  const PelageStrandEdits edits{lengths.data(), nullptr};
   std::vector<float> points[kSamples];
   for (int k = 0; k < kSamples; ++k) {
     const PelageMeshDesc desc = meshes[k].desc();
@@ -396,8 +397,8 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
           "pelage_guide_cache_read");
     points[k].resize(4 * per * n);
     const PelageCurves curves{points[k].data(), 16, per * n, nullptr, nullptr};
-    check(pelage_groom_expand_trimmed(asset.groom->get(), frame.get(), 0, n, lengths.data(), &ep, &curves),
-          "pelage_groom_expand_trimmed");
+    check(pelage_groom_expand_edited(asset.groom->get(), frame.get(), 0, n, &edits, &ep, &curves),
+          "pelage_groom_expand_edited");
   }
   const double expand_s = clock.seconds();
   RTCScene scene = rtcNewScene(device.device);
