@@ -401,6 +401,8 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
           "pelage_groom_expand_edited");
   }
   const double expand_s = clock.seconds();
+  // medium build quality: Embree builds the same BVH at any thread count
+  // (not at RTC_BUILD_QUALITY_HIGH; RenderKit/embree#20)
   RTCScene scene = rtcNewScene(device.device);
   std::vector<float> skin[kSamples], cloth[kSamples];
   for (int k = 0; k < kSamples; ++k) skin[k] = meshes[k].positions, cloth[k] = shirt(meshes[k]).positions;
