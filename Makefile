@@ -3,17 +3,30 @@
 
 BUILD ?= build
 JOBS ?= 2
-APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev libopenvdb-dev libboost-dev valgrind binutils python3-venv
+APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev libopenvdb-dev libboost-dev valgrind binutils python3-venv slurm-wlm munge
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
 FUZZ_SECONDS ?= 60
 
-.PHONY: demo test deps rust-test rust-lint rust-miri rust-fuzz cmake-test header-check bench
+.PHONY: demo farm-demo test deps rust-test rust-lint rust-miri rust-fuzz cmake-test header-check bench
 
 demo: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
 	cmake --build $(BUILD) -j$(JOBS) --target demo
 	cd $(BUILD) && ./cpp_examples/demo
+
+# A short shot through Slurm: a one-node cluster on this machine (farm/cluster.sh),
+# the simulation, the shot pass and a job array of render tasks (farm/shot.sh);
+# the frames land in $(BUILD)/farm_demo/frame_NNNN.png.
+FARM_FRAMES ?= 8
+FARM_HAIRS ?= 200000
+FARM_CHUNK ?= 2
+farm-demo: deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BUILD) -j$(JOBS) --target shot
+	farm/cluster.sh
+	farm/shot.sh $(BUILD)/cpp_examples/shot $(BUILD)/assets/creature.obj $(BUILD)/farm_demo \
+	  $(FARM_FRAMES) $(FARM_HAIRS) $(FARM_CHUNK)
 
 test: deps rust-lint rust-test rust-miri rust-fuzz cmake-test header-check
 
