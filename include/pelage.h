@@ -21,7 +21,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 6
+#define PELAGE_VERSION_MINOR 7
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
@@ -373,12 +373,14 @@ typedef struct PelagePlane {
 
 // A host's signed distance field (negative inside): writes the distance
 // of each of `count` points (x, y, z floats, packed) to `distances`.
-// Called from the threads a step runs on, possibly at once: it must be
-// safe to call concurrently.
+// Called from the threads of the call that uses it (`pelage_sim_step`,
+// `pelage_trim_find`, `pelage_trim_shortest_hairs`, and every thread that
+// expands with a push mask on a frame holding it), possibly at once: it
+// must be safe to call concurrently.
 typedef void (*PelageDistanceFn)(void *user_data, const float *points, size_t count, float *distances);
 
-// What the guides collide with in one step; every array may be NULL with
-// a count of 0.
+// What guides (a step, trimming) or pushed render strands collide with;
+// every array may be NULL with a count of 0.
 typedef struct PelageColliders {
   // Spheres.
   const struct PelageSphere *spheres;
@@ -520,7 +522,7 @@ typedef struct PelageStrandEdits {
   // its root, toward its normal, by the smallest tried angle that frees
   // every point (paper 3.3: render hairs in user regions, which
   // interpolation can leave inside a collider although every guide is
-  // clear). Build it from a map over the body (`pelage_roots_evaluate`).
+  // clear). Build it from a map over the body (`pelage_map_mask`).
   const uint8_t *push_mask;
 } PelageStrandEdits;
 
@@ -822,7 +824,8 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
 // frame: `colliders` is copied (its body, when set, is this frame's mesh,
 // built once here); NULL clears them. A distance callback is kept: it and
-// its user data must stay valid while the frame expands with them.
+// its user data must stay valid until the colliders are replaced or the
+// frame is freed.
 // On failure the frame keeps the colliders it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
@@ -933,9 +936,9 @@ enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size
 // selects. A cut or pushed strand stays inside its patch's box. Strands
 // without an edit are the same bits as `pelage_groom_expand`'s.
 //
-// Returns the statuses of `pelage_groom_expand`; NULL_PARAMETER and
-// MISALIGNED also for the edits' arrays, INVALID_ARGUMENT for a push mask
-// on a frame without colliders.
+// Returns the statuses of `pelage_groom_expand`; MISALIGNED also for
+// `edits.lengths` (2-byte aligned), INVALID_ARGUMENT for a push mask on a
+// frame without colliders.
 //
 // Thread safety: as `pelage_groom_expand`.
 enum PelageStatus pelage_groom_expand_edited(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageStrandEdits *edits, const struct PelageExpandParams *params, const struct PelageCurves *curves);
@@ -998,8 +1001,8 @@ enum PelageStatus pelage_guide_cache_read(const void *data, size_t length, const
 // checked before anything is written.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (the map, a root outside
-// its triangle, a stride), NON_FINITE, OUT_OF_RANGE (a face),
-// MISALIGNED, PANIC.
+// its triangle, a stride), NON_FINITE (also `threshold`), OUT_OF_RANGE (a
+// face), MISALIGNED, PANIC.
 //
 // Thread safety: reentrant; concurrent calls may share inputs but not outputs.
 enum PelageStatus pelage_map_mask(const struct PelageMeshDesc *mesh, const struct PelageMap *map, const struct PelageRoot *roots, size_t root_count, float threshold, uint8_t *mask);
@@ -1043,7 +1046,8 @@ enum PelageStatus pelage_patch_boxes(PelageFrame frame, const struct PelageStran
 // count / kept strands in PelageExpandParams so the fur covers as much.
 //
 // Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
-// strands), MISALIGNED, PANIC.
+// strands), INVALID_ARGUMENT (a patch not sorted by rank), MISALIGNED,
+// PANIC.
 //
 // Thread safety: may be called from any thread while `groom` is alive.
 enum PelageStatus pelage_groom_lod_counts(PelageGroom groom, const struct PelagePatch *patches, size_t patch_count, uint32_t cutoff, uint32_t *counts);
@@ -1247,11 +1251,12 @@ enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct P
 // something, in guide order, to `records` (capacity `capacity`; the
 // frame's guide count always suffices) and their number to
 // `*record_count`. Split over `thread_count` threads (0: all cores); the
-// records do not depend on it. On failure nothing is written.
+// records do not depend on it. On failure nothing else is written.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
 // collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
-// OUT_OF_DOMAIN, CAPACITY_EXCEEDED (`capacity`), MISALIGNED, PANIC.
+// CAPACITY_EXCEEDED (`capacity`; `*record_count` gets the count
+// needed), MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread; the frame may be read by
 // other calls meanwhile.
@@ -1268,12 +1273,34 @@ enum PelageStatus pelage_trim_find(PelageFrame frame, const struct PelageMeshDes
 // failure `lengths` is unchanged.
 //
 // Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
-// groom's guides past `guide_count`), NON_FINITE, OUT_OF_DOMAIN (a length
-// outside 0..1), INVALID_ARGUMENT (`length_count`), MISALIGNED, PANIC.
+// groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
+// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
+// MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread while `groom` is alive,
 // with distinct `lengths`.
 enum PelageStatus pelage_trim_shortest(PelageGroom groom, const struct PelageTrimRecord *records, size_t record_count, size_t guide_count, uint32_t points_per_guide, uint16_t *lengths, size_t length_count);
+
+// The shot pass on the hairs themselves, one frame at a time: each of
+// `groom`'s strands is expanded on `frame` with `params` (its
+// `thread_count` splits the strands; the lengths do not depend on it),
+// and its stored length in `lengths` (`length_count` = the groom's strand
+// count) becomes the shorter of itself and where the strand's own curve
+// first meets `cloth` (NULL: none) or enters one of `colliders` (NULL:
+// none; the body is the frame's mesh). Exact where
+// `pelage_trim_shortest` estimates from the guides' records, so no cut
+// hair crosses the cloth on any frame of the shot, at the cost of an
+// expansion and a walk of every segment through the cloth per frame.
+// Store the result with `pelage_trim_lengths_write` as the shot's (or one
+// frame's, to reduce later) lengths. On failure `lengths` is unchanged.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
+// without guides or posed for another point count, a collider, the
+// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, PANIC.
+//
+// Thread safety: may be called from any thread while `groom` is alive,
+// with distinct `lengths`; the frame may be read by other calls meanwhile.
+enum PelageStatus pelage_trim_shortest_hairs(PelageGroom groom, PelageFrame frame, const struct PelageMeshDesc *cloth, const struct PelageColliders *colliders, const struct PelageExpandParams *params, uint16_t *lengths, size_t length_count);
 
 // The size in bytes of a trim records file of `record_count` records.
 //
@@ -1288,8 +1315,7 @@ enum PelageStatus pelage_trim_records_size(size_t record_count, size_t *bytes);
 // `*written`. On failure `out` is untouched.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts), OUT_OF_RANGE,
-// NON_FINITE, OUT_OF_DOMAIN (a record), CAPACITY_EXCEEDED, MISALIGNED,
-// PANIC.
+// NON_FINITE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_trim_records_write(const struct PelageTrimRecord *records, size_t record_count, size_t guide_count, uint32_t points_per_guide, void *out, size_t capacity, size_t *written);
@@ -1297,7 +1323,7 @@ enum PelageStatus pelage_trim_records_write(const struct PelageTrimRecord *recor
 // Reads the header of a trim records file (`size` bytes) into `*info`,
 // checking its framing (magic, version, length, checksum).
 //
-// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH, PANIC.
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_trim_records_info(const void *file, size_t size, struct PelageTrimRecordsInfo *info);
@@ -1306,7 +1332,7 @@ enum PelageStatus pelage_trim_records_info(const void *file, size_t size, struct
 // `capacity`) and its counts into `*info`. Every record is checked first:
 // on failure nothing is written.
 //
-// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 // CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
@@ -1336,7 +1362,7 @@ enum PelageStatus pelage_trim_lengths_write(const uint16_t *lengths, size_t stra
 // `*strand_count`. On failure nothing is written to `lengths`; with too
 // small a capacity, `*strand_count` still gets the count.
 //
-// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 // CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread at any time.

@@ -203,9 +203,6 @@ pub extern "C" fn pelage_expand(
     }
 }
 
-/// Expands `all` into `out` with records whose `bounds` were found by
-/// `StrandBounds::new`: checks that they fit the frame, the parameters and
-/// the output, then writes every range over threads.
 /// Per-strand edits of one expansion (see `PelageStrandEdits`), over its strands.
 #[derive(Clone, Copy, Default)]
 pub(crate) struct Edits<'a> {
@@ -213,6 +210,9 @@ pub(crate) struct Edits<'a> {
     pub(crate) push: Option<(&'a [u8], &'a Colliders<'a>)>,
 }
 
+/// Expands `all` into `out` with records whose `bounds` were found by
+/// `StrandBounds::new`, with `edits`: checks that they fit the frame, the
+/// parameters and the output, then writes every range over threads.
 pub(crate) fn run(
     frame: &PosedFrame,
     all: Strands,

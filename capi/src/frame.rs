@@ -61,9 +61,10 @@ impl<T> Drop for Buffer<T> {
 
 /// What a [`PelageFrame`] points to.
 pub(crate) struct Frame {
-    /// The colliders render strands are pushed out of, if set.
+    /// The colliders render strands are pushed out of, if set (their body
+    /// borrows only their own memory).
     push: Option<FrameColliders>,
-    /// Borrows the buffers below; declared first, so dropped first.
+    /// Borrows the buffers below; declared before them, so dropped first.
     posed: PosedFrame<'static>,
     _positions: Buffer<[f32; 3]>,
     _triangles: Buffer<[u32; 3]>,
@@ -259,7 +260,8 @@ pub extern "C" fn pelage_frame_set_guides(
 /// (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
 /// frame: `colliders` is copied (its body, when set, is this frame's mesh,
 /// built once here); NULL clears them. A distance callback is kept: it and
-/// its user data must stay valid while the frame expands with them.
+/// its user data must stay valid until the colliders are replaced or the
+/// frame is freed.
 /// On failure the frame keeps the colliders it had.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of

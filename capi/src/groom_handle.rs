@@ -164,7 +164,7 @@ pub struct PelageStrandEdits {
     /// its root, toward its normal, by the smallest tried angle that frees
     /// every point (paper 3.3: render hairs in user regions, which
     /// interpolation can leave inside a collider although every guide is
-    /// clear). Build it from a map over the body (`pelage_roots_evaluate`).
+    /// clear). Build it from a map over the body (`pelage_map_mask`).
     pub push_mask: *const u8,
 }
 
@@ -173,9 +173,9 @@ pub struct PelageStrandEdits {
 /// selects. A cut or pushed strand stays inside its patch's box. Strands
 /// without an edit are the same bits as `pelage_groom_expand`'s.
 ///
-/// Returns the statuses of `pelage_groom_expand`; NULL_PARAMETER and
-/// MISALIGNED also for the edits' arrays, INVALID_ARGUMENT for a push mask
-/// on a frame without colliders.
+/// Returns the statuses of `pelage_groom_expand`; MISALIGNED also for
+/// `edits.lengths` (2-byte aligned), INVALID_ARGUMENT for a push mask on a
+/// frame without colliders.
 ///
 /// Thread safety: as `pelage_groom_expand`.
 #[no_mangle]

@@ -75,14 +75,14 @@ pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
 pub use trim::{
     pelage_trim_find, pelage_trim_lengths_read, pelage_trim_lengths_size,
     pelage_trim_lengths_write, pelage_trim_records_info, pelage_trim_records_read,
-    pelage_trim_records_size, pelage_trim_records_write, pelage_trim_shortest, PelageTrimRecord,
-    PelageTrimRecordsInfo, PELAGE_TRIM_WHOLE,
+    pelage_trim_records_size, pelage_trim_records_write, pelage_trim_shortest,
+    pelage_trim_shortest_hairs, PelageTrimRecord, PelageTrimRecordsInfo, PELAGE_TRIM_WHOLE,
 };
 
 /// Major version of the library this header belongs to.
 pub const PELAGE_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const PELAGE_VERSION_MINOR: u32 = 6;
+pub const PELAGE_VERSION_MINOR: u32 = 7;
 /// Patch version.
 pub const PELAGE_VERSION_PATCH: u32 = 0;
 

@@ -134,8 +134,8 @@ impl PelageMap {
 /// checked before anything is written.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (the map, a root outside
-/// its triangle, a stride), NON_FINITE, OUT_OF_RANGE (a face),
-/// MISALIGNED, PANIC.
+/// its triangle, a stride), NON_FINITE (also `threshold`), OUT_OF_RANGE (a
+/// face), MISALIGNED, PANIC.
 ///
 /// Thread safety: reentrant; concurrent calls may share inputs but not outputs.
 #[no_mangle]
@@ -148,6 +148,9 @@ pub extern "C" fn pelage_map_mask(
     mask: *mut u8,
 ) -> PelageStatus {
     ffi_boundary! {
+        if !threshold.is_finite() {
+            return Err(Failure::new(PelageStatus::NonFinite, "threshold is not finite"));
+        }
         let mesh = req(mesh, "mesh")?.view()?;
         mesh.validate()?;
         let values = req(map, "map")?.view(mesh.positions.len(), "map")?;

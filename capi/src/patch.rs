@@ -103,7 +103,8 @@ pub extern "C" fn pelage_patch_boxes(
 /// count / kept strands in PelageExpandParams so the fur covers as much.
 ///
 /// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
-/// strands), MISALIGNED, PANIC.
+/// strands), INVALID_ARGUMENT (a patch not sorted by rank), MISALIGNED,
+/// PANIC.
 ///
 /// Thread safety: may be called from any thread while `groom` is alive.
 #[no_mangle]
@@ -120,6 +121,10 @@ pub extern "C" fn pelage_groom_lod_counts(
         for (i, p) in patches.iter().enumerate() {
             if p.first as usize + p.count as usize > roots.len() {
                 return Err(pelage_core::Error::OutOfRange { what: "patches", index: i, value: p.first as usize + p.count as usize, bound: roots.len() }.into());
+            }
+            let range = p.first as usize..p.first as usize + p.count as usize;
+            if !roots[range].is_sorted_by_key(|r| r.rank) {
+                return Err(Failure::new(PelageStatus::InvalidArgument, format!("patch {i} is not sorted by rank (strands not in pelage_patch_plan's order)")));
             }
         }
         let counts = slice_mut(counts, patch_count, "counts")?;

@@ -272,8 +272,10 @@ same_layout!(PelagePlane, Plane, normal, offset);
 
 /// A host's signed distance field (negative inside): writes the distance
 /// of each of `count` points (x, y, z floats, packed) to `distances`.
-/// Called from the threads a step runs on, possibly at once: it must be
-/// safe to call concurrently.
+/// Called from the threads of the call that uses it (`pelage_sim_step`,
+/// `pelage_trim_find`, `pelage_trim_shortest_hairs`, and every thread that
+/// expands with a push mask on a frame holding it), possibly at once: it
+/// must be safe to call concurrently.
 pub type PelageDistanceFn = Option<
     unsafe extern "C" fn(
         user_data: *mut c_void,
@@ -283,8 +285,8 @@ pub type PelageDistanceFn = Option<
     ),
 >;
 
-/// What the guides collide with in one step; every array may be NULL with
-/// a count of 0.
+/// What guides (a step, trimming) or pushed render strands collide with;
+/// every array may be NULL with a count of 0.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct PelageColliders {

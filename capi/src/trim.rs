@@ -2,6 +2,7 @@
 //! groom's strands, and the two small files.
 
 use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, slice_mut};
+use crate::expand::{core_params, PelageExpandParams};
 use crate::frame::frame_ref;
 use crate::groom_handle::groom_ref;
 use crate::sim::{body_of, HostColliders};
@@ -9,11 +10,12 @@ use crate::status::Failure;
 use crate::threads::split_over_threads;
 use crate::{PelageColliders, PelageFrame, PelageGroom, PelageMeshDesc, PelageStatus};
 use pelage_core::cache::trim_file::{self, RecordsInfo};
+use pelage_core::interp::expand::ExpandJob;
 use pelage_core::surface::body::Body;
-use pelage_core::trim::length::{guide_lengths, shortest};
+use pelage_core::trim::length::{guide_lengths, shortest, shortest_own};
 use pelage_core::trim::meet::meet;
 use pelage_core::trim::TrimRecord;
-use pelage_core::Arena;
+use pelage_core::{Arena, Mesh};
 
 /// Where one guide first meets the cloth or a collider in one frame.
 #[repr(C)]
@@ -31,6 +33,41 @@ pub struct PelageTrimRecord {
 }
 
 same_layout!(PelageTrimRecord, TrimRecord, guide, cv, length);
+
+/// The memory of what guides and hairs meet: the cloth's grid, and the
+/// body's rim and grid.
+#[derive(Default)]
+struct ObstacleMemory {
+    cloth: Vec<u8>,
+    rim: Vec<u8>,
+    body: Vec<u8>,
+}
+
+impl ObstacleMemory {
+    /// The cloth (NULL: none) as a grid of its triangles, the host's
+    /// colliders, and the body of `mesh` when they ask for it.
+    fn build<'a>(
+        &'a mut self,
+        mesh: &Mesh,
+        cloth: *const PelageMeshDesc,
+        colliders: *const PelageColliders,
+    ) -> Result<(Option<Body<'a>>, HostColliders<'a>, Option<Body<'a>>), Failure> {
+        let cloth = match cloth.is_null() {
+            true => None,
+            false => {
+                let mesh = req(cloth, "cloth")?.view()?;
+                self.cloth.resize(Body::required_bytes(&mesh)?, 0);
+                Some(Body::new(&mesh, &mut Arena::new(&mut self.cloth))?)
+            }
+        };
+        let host = HostColliders::read(colliders)?;
+        let body = match host.body {
+            true => Some(body_of(mesh, &mut self.rim, &mut self.body)?),
+            false => None,
+        };
+        Ok((cloth, host, body))
+    }
+}
 
 /// The counts of a trim records file.
 #[repr(C)]
@@ -57,11 +94,12 @@ const _: () = assert!(PELAGE_TRIM_WHOLE == pelage_core::trim::WHOLE);
 /// something, in guide order, to `records` (capacity `capacity`; the
 /// frame's guide count always suffices) and their number to
 /// `*record_count`. Split over `thread_count` threads (0: all cores); the
-/// records do not depend on it. On failure nothing is written.
+/// records do not depend on it. On failure nothing else is written.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
 /// collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
-/// OUT_OF_DOMAIN, CAPACITY_EXCEEDED (`capacity`), MISALIGNED, PANIC.
+/// CAPACITY_EXCEEDED (`capacity`; `*record_count` gets the count
+/// needed), MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread; the frame may be read by
 /// other calls meanwhile.
@@ -81,24 +119,8 @@ pub extern "C" fn pelage_trim_find(
         if !frame.is_posed() {
             return Err(Failure::new(PelageStatus::InvalidArgument, "the frame has no guides (pelage_frame_set_guides)"));
         }
-        let cloth_mesh = match cloth.is_null() {
-            true => None,
-            false => Some(req(cloth, "cloth")?.view()?),
-        };
-        let mut cloth_memory = vec![];
-        let cloth_body = match &cloth_mesh {
-            Some(mesh) => {
-                cloth_memory.resize(Body::required_bytes(mesh)?, 0);
-                Some(Body::new(mesh, &mut Arena::new(&mut cloth_memory))?)
-            }
-            None => None,
-        };
-        let host = HostColliders::read(colliders)?;
-        let (mut rim_memory, mut body_memory) = (vec![], vec![]);
-        let body = match host.body {
-            true => Some(body_of(frame.mesh(), &mut rim_memory, &mut body_memory)?),
-            false => None,
-        };
+        let mut memory = ObstacleMemory::default();
+        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders)?;
         let colliders = host.colliders(body.as_ref());
         colliders.check()?;
         let guides = frame.guide_count();
@@ -108,6 +130,7 @@ pub extern "C" fn pelage_trim_find(
         let total: usize = found.iter().map(Vec::len).sum();
         let out: &mut [TrimRecord] = bytemuck::cast_slice_mut(slice_mut(records, capacity, "records")?);
         if total > out.len() {
+            *count = total;
             return Err(Failure::new(PelageStatus::CapacityExceeded, format!("records: {total} found, capacity {}", out.len())));
         }
         for (slot, record) in out.iter_mut().zip(found.into_iter().flatten()) {
@@ -129,8 +152,9 @@ pub extern "C" fn pelage_trim_find(
 /// failure `lengths` is unchanged.
 ///
 /// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
-/// groom's guides past `guide_count`), NON_FINITE, OUT_OF_DOMAIN (a length
-/// outside 0..1), INVALID_ARGUMENT (`length_count`), MISALIGNED, PANIC.
+/// groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
+/// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
+/// MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread while `groom` is alive,
 /// with distinct `lengths`.
@@ -151,11 +175,74 @@ pub extern "C" fn pelage_trim_shortest(
         if length_count != strands.len() {
             return Err(Failure::new(PelageStatus::InvalidArgument, format!("length_count {length_count} differs from the groom's {} strands", strands.len())));
         }
+        // guides are named by u32 (u32::MAX for none): no frame has more
+        if guide_count >= u32::MAX as usize {
+            return Err(Failure::new(PelageStatus::InvalidArgument, format!("guide_count {guide_count} is above 2^32 - 1")));
+        }
         groom.bounds.fits(usize::MAX, guide_count)?;
         let lengths = slice_mut(lengths, length_count, "lengths")?;
-        let mut per_guide = vec![0.0f32; guide_count];
+        let mut per_guide = Vec::new();
+        per_guide.try_reserve_exact(guide_count).map_err(|_| {
+            Failure::new(PelageStatus::InvalidArgument, format!("cannot allocate {guide_count} guide lengths"))
+        })?;
+        per_guide.resize(guide_count, 0.0f32);
         guide_lengths(records, points_per_guide as usize, &mut per_guide)?;
         shortest(&strands, &per_guide, lengths);
+        Ok(())
+    }
+}
+
+/// The shot pass on the hairs themselves, one frame at a time: each of
+/// `groom`'s strands is expanded on `frame` with `params` (its
+/// `thread_count` splits the strands; the lengths do not depend on it),
+/// and its stored length in `lengths` (`length_count` = the groom's strand
+/// count) becomes the shorter of itself and where the strand's own curve
+/// first meets `cloth` (NULL: none) or enters one of `colliders` (NULL:
+/// none; the body is the frame's mesh). Exact where
+/// `pelage_trim_shortest` estimates from the guides' records, so no cut
+/// hair crosses the cloth on any frame of the shot, at the cost of an
+/// expansion and a walk of every segment through the cloth per frame.
+/// Store the result with `pelage_trim_lengths_write` as the shot's (or one
+/// frame's, to reduce later) lengths. On failure `lengths` is unchanged.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
+/// without guides or posed for another point count, a collider, the
+/// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, PANIC.
+///
+/// Thread safety: may be called from any thread while `groom` is alive,
+/// with distinct `lengths`; the frame may be read by other calls meanwhile.
+#[no_mangle]
+pub extern "C" fn pelage_trim_shortest_hairs(
+    groom: PelageGroom,
+    frame: PelageFrame,
+    cloth: *const PelageMeshDesc,
+    colliders: *const PelageColliders,
+    params: *const PelageExpandParams,
+    lengths: *mut u16,
+    length_count: usize,
+) -> PelageStatus {
+    ffi_boundary! {
+        let groom = groom_ref(groom)?;
+        let frame = frame_ref(frame)?.posed();
+        let p = req(params, "params")?;
+        let core = core_params(p)?;
+        let strands = groom.strands();
+        let n = strands.len();
+        if length_count != n {
+            return Err(Failure::new(PelageStatus::InvalidArgument, format!("length_count {length_count} differs from the groom's {n} strands")));
+        }
+        let bytes = n.checked_mul(core.output_points() * 16).ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "strand count overflows"))?;
+        let job = ExpandJob::new(frame, strands, &groom.bounds, &core, bytes, 16)?;
+        let mut memory = ObstacleMemory::default();
+        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders)?;
+        let colliders = host.colliders(body.as_ref());
+        colliders.check()?;
+        let lengths = slice_mut(lengths, length_count, "lengths")?;
+        let mut own = lengths.to_vec();
+        split_over_threads(n, p.thread_count, &mut own, 1, |range, part| {
+            shortest_own(&job, range, cloth_body.as_ref(), &colliders, part)
+        })?;
+        lengths.copy_from_slice(&own);
         Ok(())
     }
 }
@@ -180,8 +267,7 @@ pub extern "C" fn pelage_trim_records_size(record_count: usize, bytes: *mut usiz
 /// `*written`. On failure `out` is untouched.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts), OUT_OF_RANGE,
-/// NON_FINITE, OUT_OF_DOMAIN (a record), CAPACITY_EXCEEDED, MISALIGNED,
-/// PANIC.
+/// NON_FINITE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -206,7 +292,7 @@ pub extern "C" fn pelage_trim_records_write(
 /// Reads the header of a trim records file (`size` bytes) into `*info`,
 /// checking its framing (magic, version, length, checksum).
 ///
-/// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH, PANIC.
+/// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -226,7 +312,7 @@ pub extern "C" fn pelage_trim_records_info(
 /// `capacity`) and its counts into `*info`. Every record is checked first:
 /// on failure nothing is written.
 ///
-/// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+/// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 /// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
@@ -299,7 +385,7 @@ pub extern "C" fn pelage_trim_lengths_write(
 /// `*strand_count`. On failure nothing is written to `lengths`; with too
 /// small a capacity, `*strand_count` still gets the count.
 ///
-/// Returns OK, NULL_PARAMETER, CORRUPT, VERSION_MISMATCH,
+/// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 /// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.

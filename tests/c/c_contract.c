@@ -2494,6 +2494,179 @@ static size_t strands_inside(const PelageStrandGroom *grooms) {
   return inside;
 }
 
+/* Trimming, strand edits, LOD counts and masks (paper 3.3 and 4): the
+ * happy path's consistency, then every failure with its status and nothing
+ * written. */
+static void test_trim_and_edits(void) {
+  const size_t n = g_in.strand_count, per = g_in.per, g = g_in.guide_count;
+  const uint32_t points = g_in.expand_params.points_per_strand;
+  PelageGroom groom = NULL;
+  PelageStrands r = records(g_in.strands, g_in.bindings, g_in.grooms, n);
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_new(&r, &groom));
+  REQUIRE(groom != NULL);
+  /* the half-space z > 1.05 over the unit sphere: the guides (0.2 long)
+   * near the pole enter it */
+  PelagePlane above = {{0.0f, 0.0f, -1.0f}, -1.05f};
+  PelageColliders col;
+  memset(&col, 0, sizeof col);
+  col.planes = &above, col.plane_count = 1;
+  PelageTrimRecord *rec = malloc(g * sizeof *rec), *back = malloc(g * sizeof *back);
+  uint16_t *lengths = malloc(n * sizeof *lengths), *lengths_back = malloc((n + 1) * sizeof *lengths);
+  REQUIRE(rec && back && lengths && lengths_back);
+  size_t count = 0;
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_find(g_in.frame, NULL, &col, 2, rec, g, &count));
+  CHECK(count > 0 && count < g);
+  int sane = 1;
+  for (size_t i = 0; i < count; ++i)
+    sane &= (i == 0 || rec[i].guide > rec[i - 1].guide) && rec[i].cv >= 1 && rec[i].cv < points && rec[i].length > 0.0f && rec[i].length < 1.0f;
+  CHECK(sane);
+  {
+    size_t one = 0;
+    PelageTrimRecord first[1];
+    EXPECT(PELAGE_STATUS_OK, pelage_trim_find(g_in.frame, NULL, &col, 1, rec, g, &one));
+    CHECK(one == count);
+    FILL(first, sizeof first);
+    EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_trim_find(g_in.frame, NULL, &col, 1, first, 1, &one));
+    CHECK(one == count && untouched(first, sizeof first)); /* the count needed, no record */
+  }
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_trim_find(NULL, NULL, &col, 1, rec, g, &count));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_trim_find(g_in.frame, NULL, &col, 1, rec, g, NULL));
+  {
+    PelageSphere bad = {{0.0f, 0.0f, 0.0f}, -1.0f};
+    PelageColliders c = col;
+    c.spheres = &bad, c.sphere_count = 1;
+    FILL(back, g * sizeof *back);
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_trim_find(g_in.frame, NULL, &c, 1, back, g, &count));
+    CHECK(untouched(back, g * sizeof *back));
+  }
+
+  /* the records file: round trip, then damage */
+  size_t size = 0, written = 0;
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_records_size(count, &size));
+  unsigned char *file = malloc(size);
+  REQUIRE(file);
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_records_write(rec, count, g, points, file, size, &written));
+  CHECK(written == size);
+  PelageTrimRecordsInfo info;
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_records_read(file, size, back, g, &info));
+  CHECK(info.guide_count == g && info.points_per_guide == points && info.record_count == count);
+  CHECK(memcmp(back, rec, count * sizeof *rec) == 0);
+  FILL(back, g * sizeof *back);
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_trim_records_read(file, size - 1, back, g, &info));
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_trim_records_read(file, size, back, count - 1, &info));
+  file[size - 1] ^= 1;
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_trim_records_read(file, size, back, g, &info));
+  file[size - 1] ^= 1, file[0] ^= 1;
+  EXPECT(PELAGE_STATUS_VERSION_MISMATCH, pelage_trim_records_info(file, size, &info));
+  CHECK(untouched(back, g * sizeof *back));
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_trim_records_write(rec, count, g, points, file, size - 1, &written));
+  {
+    PelageTrimRecord bad = rec[0];
+    bad.guide = (uint32_t)g;
+    EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_trim_records_write(&bad, 1, g, points, file, size, &written));
+  }
+
+  /* the shot pass from the records, and from the hairs themselves */
+  for (size_t i = 0; i < n; ++i) lengths[i] = PELAGE_TRIM_WHOLE;
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_shortest(groom, rec, count, g, points, lengths, n));
+  size_t cut = 0;
+  for (size_t i = 0; i < n; ++i) cut += lengths[i] < PELAGE_TRIM_WHOLE;
+  CHECK(cut > 0 && cut < n);
+  {
+    PelageTrimRecord bad = rec[0];
+    bad.cv = points;
+    memcpy(lengths_back, lengths, n * sizeof *lengths);
+    EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_trim_shortest(groom, &bad, 1, g, points, lengths, n));
+    bad = rec[0], bad.length = NAN;
+    EXPECT(PELAGE_STATUS_NON_FINITE, pelage_trim_shortest(groom, &bad, 1, g, points, lengths, n));
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_trim_shortest(groom, rec, count, g, points, lengths, n - 1));
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_trim_shortest(groom, rec, count, SIZE_MAX, points, lengths, n));
+    EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_trim_shortest(groom, rec, count, 1, points, lengths, n));
+    CHECK(memcmp(lengths_back, lengths, n * sizeof *lengths) == 0);
+  }
+  {
+    uint16_t *own = malloc(n * sizeof *own);
+    REQUIRE(own);
+    for (size_t i = 0; i < n; ++i) own[i] = PELAGE_TRIM_WHOLE;
+    EXPECT(PELAGE_STATUS_OK, pelage_trim_shortest_hairs(groom, g_in.frame, NULL, &col, &g_in.expand_params, own, n));
+    size_t own_cut = 0;
+    for (size_t i = 0; i < n; ++i) own_cut += own[i] < PELAGE_TRIM_WHOLE;
+    CHECK(own_cut > 0 && own_cut < n);
+    EXPECT(PELAGE_STATUS_NULL_PARAMETER,
+           pelage_trim_shortest_hairs(NULL, g_in.frame, NULL, &col, &g_in.expand_params, own, n));
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT,
+           pelage_trim_shortest_hairs(groom, g_in.frame, NULL, &col, &g_in.expand_params, own, n + 1));
+    free(own);
+  }
+
+  /* the lengths file */
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_lengths_size(n, &size));
+  CHECK(size == 40 + (n + 1) / 2 * 4);
+  unsigned char *lfile = malloc(size);
+  REQUIRE(lfile);
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_lengths_write(lengths, n, lfile, size, &written));
+  size_t strands = 0;
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_lengths_read(lfile, size, lengths_back, n, &strands));
+  CHECK(strands == n && memcmp(lengths_back, lengths, n * sizeof *lengths) == 0);
+  FILL(lengths_back, n * sizeof *lengths);
+  strands = 0;
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_trim_lengths_read(lfile, size, lengths_back, n - 1, &strands));
+  CHECK(strands == n && untouched(lengths_back, n * sizeof *lengths));
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_trim_lengths_read(lfile, size - 4, lengths_back, n, &strands));
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_trim_lengths_size(SIZE_MAX, &size));
+
+  /* expansion with edits: none changes nothing; a cut; a push mask needs colliders */
+  unsigned char *mask = malloc(n);
+  REQUIRE(mask);
+  memset(mask, 1, n);
+  PelageStrandEdits edits;
+  edits.lengths = NULL, edits.push_mask = NULL;
+  PelageCurves c = curves_of(g_in.points_out, 16, n * per, NULL, NULL);
+  FILL(g_in.points_out, points_out_bytes());
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_expand_edited(groom, g_in.frame, 0, n, &edits, &g_in.expand_params, &c));
+  CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) == 0);
+  edits.lengths = lengths;
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_expand_edited(groom, g_in.frame, 0, n, &edits, &g_in.expand_params, &c));
+  CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) != 0);
+  edits.lengths = (const uint16_t *)(const void *)((const unsigned char *)lengths_back + 1);
+  FAILS(PELAGE_STATUS_MISALIGNED, pelage_groom_expand_edited(groom, g_in.frame, 0, n, &edits, &g_in.expand_params, &c));
+  edits.lengths = NULL, edits.push_mask = mask;
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT,
+        pelage_groom_expand_edited(groom, g_in.frame, 0, n, &edits, &g_in.expand_params, &c));
+  {
+    PelageSphere bad = {{0.0f, 0.0f, NAN}, 1.0f};
+    PelageColliders b = col;
+    b.spheres = &bad, b.sphere_count = 1;
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_colliders(g_in.frame, &b));
+  }
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, &col));
+  EXPECT(PELAGE_STATUS_OK, pelage_groom_expand_edited(groom, g_in.frame, 0, n, &edits, &g_in.expand_params, &c));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, NULL));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_colliders(NULL, &col));
+
+  /* LOD counts need patches sorted by rank; masks need a finite threshold */
+  {
+    PelagePatch one = {0, 1}, all = {0, (uint32_t)n};
+    uint32_t kept = 7;
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_lod_counts(groom, &one, 1, UINT32_MAX, &kept));
+    CHECK(kept == 1);
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_groom_lod_counts(groom, &all, 1, (uint32_t)n / 2, &kept));
+    PelagePatch past = {(uint32_t)n, 1};
+    EXPECT(PELAGE_STATUS_OUT_OF_RANGE, pelage_groom_lod_counts(groom, &past, 1, 1, &kept));
+    PelageMap m;
+    memset(&m, 0, sizeof m);
+    m.kind = PELAGE_MAP_KIND_CONSTANT, m.constant = 1.0f;
+    memset(mask, 0, n);
+    EXPECT(PELAGE_STATUS_OK, pelage_map_mask(&g_in.mesh, &m, g_in.strands, n, 0.5f, mask));
+    size_t on = 0;
+    for (size_t i = 0; i < n; ++i) on += mask[i] == 1;
+    CHECK(on == n);
+    EXPECT(PELAGE_STATUS_NON_FINITE, pelage_map_mask(&g_in.mesh, &m, g_in.strands, n, NAN, mask));
+  }
+  free(mask), free(lfile), free(file), free(rec), free(back), free(lengths), free(lengths_back);
+  pelage_groom_free(groom);
+}
+
 static void test_settle(void) {
   const size_t n = g_in.strand_count, points = g_in.guide_count * GCVS;
   PelageExpandParams ep = g_in.expand_params;
@@ -2875,6 +3048,7 @@ int main(void) {
   test_interp_bad_input();
   test_hostile();
   test_groom_handle();
+  test_trim_and_edits();
   test_settle();
   test_interp_progress();
   test_files();

@@ -3,8 +3,9 @@
 //! skin, deforming with it); each frame's simulated guides are trimmed
 //! where they meet the shirt or the capsules, the records go through their
 //! file, the shot pass keeps each hair's shortest length, and the render
-//! hairs cut by it never cross the shirt and never change length between
-//! frames.
+//! hairs cut by it never change length between frames and cross the shirt
+//! far less than uncut; cut by the exact shot pass on their own curves,
+//! no hair crosses it on any frame.
 
 use glam::Vec3;
 use pelage::*;
@@ -186,6 +187,8 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
 
     // the simulation pass: each frame's guides, and its records through their file
     let mut shot = vec![PELAGE_TRIM_WHOLE; n];
+    // the exact shot pass, on the hairs' own curves
+    let mut exact = vec![PELAGE_TRIM_WHOLE; n];
     let mut frames = vec![];
     let mut per_frame = vec![];
     for f in 0..FRAMES {
@@ -233,6 +236,18 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
             );
         }
         per_frame.push(own);
+        ok(
+            pelage_trim_shortest_hairs(
+                groom,
+                handle.0,
+                &mesh_desc(&cloth),
+                &col,
+                &params,
+                exact.as_mut_ptr(),
+                n,
+            ),
+            "pelage_trim_shortest_hairs",
+        );
         let mut met = vec![false; guide_count];
         for r in &records {
             met[r.guide as usize] = true;
@@ -291,6 +306,7 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
 
     // the render pass: every frame expanded with the shot's lengths
     let (mut crossed, mut crossed_whole, mut crossed_inside, mut hairs_inside) = (0, 0, 0, 0);
+    let mut crossed_exact = 0;
     for (body, cloth, posed, _, met) in &frames {
         let handle = frame(
             &mesh_desc(body),
@@ -312,6 +328,22 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
                 },
                 &params,
                 &curves_desc(&mut cut, None),
+            ),
+            "pelage_groom_expand_edited",
+        );
+        let mut cut_exact = vec![[0.0f32; 4]; n * per];
+        ok(
+            pelage_groom_expand_edited(
+                groom,
+                handle.0,
+                0,
+                n,
+                &PelageStrandEdits {
+                    lengths: exact.as_ptr(),
+                    push_mask: std::ptr::null(),
+                },
+                &params,
+                &curves_desc(&mut cut_exact, None),
             ),
             "pelage_groom_expand_edited",
         );
@@ -362,6 +394,7 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
                 && (0..b.count as usize).all(|k| b.weights[k] == 0.0 || met[b.guides[k] as usize])
         };
         crossed_inside += crossings(&shirt_body, &cut, per, inside);
+        crossed_exact += crossings(&shirt_body, &cut_exact, per, |_| true);
         hairs_inside += (0..n).filter(|&i| inside(i)).count();
     }
     println!(
@@ -369,13 +402,22 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
          {crossed_whole} uncut; {crossed_inside} of hairs whose guides all met it \
          ({hairs_inside} hair-frames)"
     );
-    // interpolation between guides that meet the shirt at different
-    // parameters, and across its border, leaves some cut hairs through it
-    // (see the note on issue 31); the cut removes most crossings
+    let exact_trimmed = exact.iter().filter(|&&l| l < PELAGE_TRIM_WHOLE).count();
+    println!(
+        "the exact shot pass (each hair's own curve): {exact_trimmed} hairs trimmed; \
+         segments of any hair crossing the shirt over the shot: {crossed_exact}"
+    );
+    // from the guides' records, interpolation between guides that meet the
+    // shirt at different heights, and across its border, leaves some cut
+    // hairs through it; the cut removes most crossings
     assert!(crossed_whole > 0, "uncut, the fur goes through the shirt");
     assert!(
         crossed * 3 < crossed_whole,
         "the cut removes most crossings"
+    );
+    assert_eq!(
+        crossed_exact, 0,
+        "no hair cut by its own curve crosses the shirt"
     );
     pelage_groom_free(groom);
 }

@@ -140,7 +140,7 @@ pub fn lengths_bytes(strands: usize) -> Option<usize> {
 
 /// Payload bytes of `strands` lengths: 2 each, padded to 4.
 fn payload_of(strands: usize) -> Option<usize> {
-    Some(strands.checked_add(1)? / 2 * 4)
+    (strands.checked_add(1)? / 2).checked_mul(4)
 }
 
 /// Writes the stored lengths of a shot's strands as a lengths file into
@@ -179,7 +179,7 @@ pub fn lengths_count(bytes: &[u8]) -> Result<usize, Error> {
 fn parse_lengths(bytes: &[u8]) -> Result<(usize, &[u8]), Error> {
     let file = container::read(bytes, &LENGTHS_MAGIC, VERSION, LENGTH_FIELDS)?;
     let strands = product(&[file.fields[0]])?;
-    if payload_of(strands) != Some(file.payload.len()) {
+    if strands == 0 && !file.payload.is_empty() || payload_of(strands) != Some(file.payload.len()) {
         return Err(Error::Corrupt {
             what: "payload length does not match the counts",
         });
@@ -272,6 +272,14 @@ mod tests {
             for cut in 0..file.len() {
                 assert!(lengths_count(&file[..cut]).is_err());
             }
+        }
+        // a count whose payload size overflows, in a well-framed file
+        assert_eq!(lengths_bytes(usize::MAX), None);
+        assert_eq!(lengths_bytes(usize::MAX / 2), None);
+        for huge in [1u64 << 62, (1u64 << 63) - 1, u64::MAX] {
+            let mut file = vec![0u8; 40];
+            container::write(&mut file, &LENGTHS_MAGIC, VERSION, &[huge], |_| {});
+            assert!(lengths_count(&file).is_err(), "{huge}");
         }
     }
 }

@@ -338,7 +338,7 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
 /// as a guide's are; the radii stay. Unchanged (the same bits) when clear.
 /// A strand no tried rotation frees (in a crease narrower than it is long)
 /// is turned fully toward its normal and then cut where it enters a
-/// collider (as trimming cuts), so no point after the root stays inside.
+/// collider (as trimming cuts): where its first control point inside enters.
 pub fn push_out_curve(colliders: &Colliders, frame: &Frame, points: &mut [[f32; 4]]) -> PushOut {
     let n = points.len().min(MAX_POINTS);
     let mut local = [Vec3::ZERO; MAX_POINTS];

@@ -115,6 +115,11 @@ impl<'r, 'a> ExpandJob<'r, 'a> {
         self.strands.is_empty()
     }
 
+    /// The expansion parameters.
+    pub fn params(&self) -> &ExpandParams {
+        &self.params
+    }
+
     /// Output bytes between one strand's first point and the next's.
     pub fn bytes_per_strand(&self) -> usize {
         self.params.output_points() * self.stride

@@ -16,11 +16,18 @@
 //! The shot pass keeps each hair's shortest length over every frame of a
 //! shot, so a trimmed hair does not grow back and forth as the cloth moves.
 
+use crate::dynamics::collision::Colliders;
 use crate::interp::bind::StrandBinding;
+use crate::interp::expand::ExpandJob;
 use crate::interp::groom::StrandGroom;
+use crate::interp::strand::{EndPoints, MAX_STRAND_POINTS};
 use crate::interp::strands::Strands;
+use crate::surface::body::Body;
+use crate::trim::meet::first_meet;
 use crate::trim::meet::TrimRecord;
 use crate::Error;
+use core::ops::Range;
+use glam::Vec3;
 
 /// The stored length of a whole (untrimmed) strand.
 pub const WHOLE: u16 = u16::MAX;
@@ -55,15 +62,22 @@ pub fn hair_length(binding: &StrandBinding, groom: &StrandGroom, guides: &[f32])
         return WHOLE;
     }
     let untrimmed = s.max(1.0);
-    let mut rate = 0.0f32;
+    let (mut rate, mut weight, mut trimmed) = (0.0f32, 0.0f32, false);
     for k in 0..binding.count as usize {
         let w = binding.weights[k];
         if w > 0.0 {
-            rate += w / guides[binding.guides[k] as usize].min(untrimmed);
+            let c = guides[binding.guides[k] as usize];
+            trimmed |= c.is_finite();
+            rate += w / c.min(untrimmed);
+            weight += w;
         }
     }
-    // an orphan has no rate, and an infinite length
-    let f = 1.0 / (s * rate);
+    // the weights' sum may differ from 1 (a host's bindings, rounding):
+    // the mean is over the weights as they are
+    if !trimmed {
+        return WHOLE;
+    }
+    let f = weight / (s * rate);
     (f.min(1.0) * WHOLE as f32) as u16
 }
 
@@ -72,13 +86,95 @@ pub fn hair_length(binding: &StrandBinding, groom: &StrandGroom, guides: &[f32])
 /// this frame's per-guide parameters `guides`. Start a shot with every
 /// length [`WHOLE`]; the result does not depend on the order of frames.
 ///
+/// Stops at the shorter of `strands` and `lengths`.
+///
 /// # Panics
-/// When `lengths` is shorter than `strands` or a binding's guide is past
-/// `guides` (strand records checked against the frame's guide count do not).
+/// When a binding's guide is past `guides` (strand records checked against
+/// the frame's guide count do not).
 pub fn shortest(strands: &Strands, guides: &[f32], lengths: &mut [u16]) {
     for ((b, g), l) in strands.bindings.iter().zip(strands.grooms).zip(lengths) {
         *l = (*l).min(hair_length(b, g, guides));
     }
+}
+
+/// Strands expanded at a time by [`shortest_own`].
+const OWN_BATCH: usize = 8;
+
+/// The shot pass on the hairs themselves, one frame at a time: each strand
+/// of `range` of `job` (whose output stride is 16) is expanded, and its
+/// stored length in `lengths` (one per strand of the range) becomes the
+/// shorter of itself and where the strand's own curve first meets `cloth`
+/// or enters one of `colliders`. Exact where the guides' records
+/// ([`shortest`]) estimate: an interpolated hair never crosses the cloth
+/// before its cut, at any frame of the shot. Costs an expansion and a walk
+/// of every segment through the cloth's grid per frame. A cut is checked
+/// against the frame that shortens it and the ones after (its respread
+/// points must meet nothing there); a second pass over the shot's frames
+/// checks every cut against every frame.
+///
+/// # Panics
+/// When `range` is not within the job's strands, `lengths` is shorter than
+/// it, or the job's stride is not 16.
+pub fn shortest_own(
+    job: &ExpandJob,
+    range: Range<usize>,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+    lengths: &mut [u16],
+) {
+    let params = job.params();
+    let (per, n) = (params.output_points(), params.points_per_strand);
+    let first = (params.end_points == EndPoints::Pinned) as usize;
+    let mut buffer = [[0.0f32; 4]; OWN_BATCH * (MAX_STRAND_POINTS + 2)];
+    let mut start = range.start;
+    while start < range.end {
+        let end = (start + OWN_BATCH).min(range.end);
+        let curves = &mut buffer[..(end - start) * per];
+        job.run(start..end, bytemuck::cast_slice_mut(curves));
+        for (k, curve) in curves.chunks(per).enumerate() {
+            let points = &curve[first..first + n];
+            let at = |j: usize| Vec3::new(points[j][0], points[j][1], points[j][2]);
+            let l = &mut lengths[start - range.start + k];
+            // a step short of the meet, so rounding cannot put the tip on it
+            let own = first_meet(n, at, cloth, colliders).map_or(WHOLE, |(_, t)| {
+                ((t * WHOLE as f32) as u16).saturating_sub(1)
+            });
+            let shorter = (*l).min(own);
+            if shorter < WHOLE {
+                *l = clear_cut(points, shorter, cloth, colliders);
+            }
+        }
+        start = end;
+    }
+}
+
+/// Most times [`clear_cut`] shortens a cut whose respread points still
+/// meet the cloth.
+const CUT_TRIES: usize = 4;
+
+/// `length`, or shorter, so that `points` cut there meet nothing on this
+/// frame: the respread points' chords cut the corners of the curve, so a
+/// cut short of the curve's meet (this frame's, or an earlier frame's
+/// shorter one) can still meet the cloth.
+fn clear_cut(
+    points: &[[f32; 4]],
+    mut length: u16,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+) -> u16 {
+    let n = points.len();
+    let mut cut_points = [[0.0f32; 4]; MAX_STRAND_POINTS];
+    for _ in 0..CUT_TRIES {
+        let trial = &mut cut_points[..n];
+        trial.copy_from_slice(points);
+        cut(trial, length);
+        let at = |j: usize| Vec3::new(trial[j][0], trial[j][1], trial[j][2]);
+        match first_meet(n, at, cloth, colliders) {
+            Some((_, u)) => length = ((u * length as f32) as u16).saturating_sub(1),
+            None => break,
+        }
+    }
+    length
 }
 
 /// Cuts an expanded curve's `points` (evenly spaced along the strand) at

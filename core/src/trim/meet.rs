@@ -5,7 +5,7 @@ use crate::interp::posed::PosedFrame;
 use crate::surface::body::Body;
 use crate::Error;
 use bytemuck::{Pod, Zeroable};
-use core::ops::Range;
+use glam::Vec3;
 
 /// Where one guide first meets the cloth or a collider in one frame.
 #[repr(C)]
@@ -59,9 +59,10 @@ impl TrimRecord {
 
 /// Where guide `g` of `frame` first meets `cloth` (its triangles: the
 /// body's inside test plays no part) or enters one of `colliders`, walking
-/// from the root: the record, or `None` when it meets nothing. A point
-/// inside a collider is placed on the segment by bisection, at the last
-/// tried parameter still outside, so the cut never leaves a point inside.
+/// from the root: the record, or `None` when it meets nothing. A collider
+/// is entered at a segment whose end point is inside (a collider thinner
+/// than a segment can be passed through); the entry is placed on the
+/// segment by bisection, at the last tried parameter still outside.
 pub fn meet(
     frame: &PosedFrame,
     g: usize,
@@ -69,7 +70,23 @@ pub fn meet(
     colliders: &Colliders,
 ) -> Option<TrimRecord> {
     let n = frame.points();
-    let at = |j: usize| frame.world_point(g, j);
+    let (cv, length) = first_meet(n, |j| frame.world_point(g, j), cloth, colliders)?;
+    Some(TrimRecord {
+        guide: g as u32,
+        cv: cv as u32,
+        length,
+    })
+}
+
+/// Where the polyline of the `n` points `at(0)` (the root) .. `at(n - 1)`
+/// first meets `cloth` or enters one of `colliders` (see [`meet`]): the
+/// first point past the meet, and the curve parameter there.
+pub(crate) fn first_meet(
+    n: usize,
+    at: impl Fn(usize) -> Vec3,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+) -> Option<(usize, f32)> {
     let reach: f32 = (1..n).map(|j| at(j).distance(at(j - 1))).sum();
     let near = Near::new(colliders, at(0), reach);
     let colliding = !near.is_empty();
@@ -80,37 +97,10 @@ pub fn meet(
             t = Some(t.map_or(near.entry(a, b), |t| t.min(near.entry(a, b))));
         }
         if let Some(t) = t {
-            return Some(TrimRecord {
-                guide: g as u32,
-                cv: j as u32,
-                length: ((j - 1) as f32 + t) / (n - 1) as f32,
-            });
+            return Some((j, ((j - 1) as f32 + t) / (n - 1) as f32));
         }
     }
     None
-}
-
-/// Finds the records of guides `guides` of `frame` (see [`meet`]) and
-/// writes them, in guide order, to the start of `out`, which holds at least
-/// one record per guide of the range. Returns how many were written.
-///
-/// # Panics
-/// When `guides` is not within the frame's guides or `out` is too short.
-pub fn find(
-    frame: &PosedFrame,
-    guides: Range<usize>,
-    cloth: Option<&Body>,
-    colliders: &Colliders,
-    out: &mut [TrimRecord],
-) -> usize {
-    let mut written = 0;
-    for g in guides {
-        if let Some(record) = meet(frame, g, cloth, colliders) {
-            out[written] = record;
-            written += 1;
-        }
-    }
-    written
 }
 
 #[cfg(test)]
@@ -167,11 +157,16 @@ mod tests {
         let mut body_memory = vec![0u8; Body::required_bytes(&cloth.mesh()).unwrap()];
         let body = Body::new(&cloth.mesh(), &mut Arena::new(&mut body_memory)).unwrap();
         let g = guide_roots.len();
-        let mut records = vec![TrimRecord::default(); g];
+        let find = |cloth: Option<&Body>, colliders: &Colliders| -> Vec<TrimRecord> {
+            (0..g)
+                .filter_map(|i| meet(&frame, i, cloth, colliders))
+                .collect()
+        };
 
         // the cloth: every guide rises straight through it
         let none = Colliders::default();
-        assert_eq!(find(&frame, 0..g, Some(&body), &none, &mut records), g);
+        let records = find(Some(&body), &none);
+        assert_eq!(records.len(), g);
         for r in &records {
             let tip = frame.world_point(r.guide as usize, POINTS - 1).z;
             assert!((r.length * tip - CLOTH).abs() < 1e-5, "{r:?} tip {tip}");
@@ -188,8 +183,8 @@ mod tests {
             planes: &above,
             ..Colliders::default()
         };
-        let mut entered = vec![TrimRecord::default(); g];
-        assert_eq!(find(&frame, 0..g, None, &colliders, &mut entered), g);
+        let entered = find(None, &colliders);
+        assert_eq!(entered.len(), g);
         for (a, b) in records.iter().zip(&entered) {
             let segment = 1.0 / (POINTS - 1) as f32;
             assert!(b.length <= a.length + 1e-6, "{a:?} {b:?}");
@@ -205,7 +200,7 @@ mod tests {
             spheres: &far,
             ..Colliders::default()
         };
-        assert_eq!(find(&frame, 0..g, None, &colliders, &mut entered), 0);
+        assert!(find(None, &colliders).is_empty());
 
         // render hairs cut by the shot pass end at the cloth, not before
         let hairs = roots(skin.mesh(), 600, 9);
