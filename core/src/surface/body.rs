@@ -75,7 +75,7 @@ struct Shape {
 
 impl Shape {
     fn of(mesh: &Mesh) -> Result<Shape, Error> {
-        mesh.validate()?;
+        mesh.check()?;
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         let mut triangles = 0;
         for f in (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f)) {
