@@ -36,6 +36,39 @@ pub struct Rim<'a> {
     triangles: usize,
 }
 
+/// `keys` (`[low end, high end, direction, 0]`, ends below `vertices`)
+/// in increasing order, copied into `arena`: a counting sort by the low end,
+/// then each end's few edges sorted in place. A mesh's edges number three
+/// per triangle and a vertex has a handful, so this is linear where a
+/// comparison sort of every edge is not.
+fn sort_by_first_end<'a>(
+    keys: &[[u32; 4]],
+    vertices: usize,
+    arena: &mut Arena<'a>,
+) -> Result<&'a mut [[u32; 4]], Error> {
+    let sorted = arena.alloc::<[u32; 4]>(keys.len())?;
+    let start = arena.alloc::<u32>(vertices + 1)?;
+    start.fill(0);
+    for k in keys {
+        start[k[0] as usize + 1] += 1;
+    }
+    for v in 0..vertices {
+        start[v + 1] += start[v];
+    }
+    for k in keys {
+        let at = &mut start[k[0] as usize];
+        sorted[*at as usize] = *k;
+        *at += 1;
+    }
+    // each vertex's edges now end where the next vertex's begin
+    let mut begin = 0;
+    for &end in start[..vertices].iter() {
+        sorted[begin..end as usize].sort_unstable();
+        begin = end as usize;
+    }
+    Ok(sorted)
+}
+
 impl<'a> Rim<'a> {
     /// Arena bytes [`Rim::new`] takes for `mesh` (an upper bound: every edge
     /// could be a boundary edge).
@@ -46,6 +79,8 @@ impl<'a> Rim<'a> {
         layout
             .add::<u32>(vertices)
             .add::<[u32; 4]>(edges.max(vertices))
+            .add::<[u32; 4]>(edges)
+            .add::<u32>(vertices + 1)
             .add::<[u32; 2]>(edges)
             .add::<u32>(edges / 3 + 2);
         layout.bytes()
@@ -93,8 +128,7 @@ impl<'a> Rim<'a> {
                 }
             }
         }
-        let keys = &mut keys[..n];
-        keys.sort_unstable();
+        let keys = sort_by_first_end(&keys[..n], vertices, arena)?;
         // the surplus edges, compacted to the front as `[from, to, 0, 0]`
         let (mut i, mut e) = (0, 0);
         while i < n {
