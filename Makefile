@@ -49,10 +49,11 @@ rust-test:
 	cargo test --locked --workspace --release
 	cargo bench --locked --workspace --no-run
 
-# Miri on the fast core tests (the arena, strided reads, maps, mesh, RNG).
+# Miri on the fast core tests (the arena, strided reads, maps, mesh, RNG, the
+# trim lengths and their file).
 rust-miri:
 	@rustup +nightly component list --installed | grep -q '^miri' || rustup component add --toolchain nightly miri rust-src
-	cargo +nightly miri test --locked -p pelage-core --lib --no-default-features -- arena strided rng map:: mesh::
+	cargo +nightly miri test --locked -p pelage-core --lib --no-default-features -- arena strided rng map:: mesh:: trim::length trim_file
 
 # The file decoders under libFuzzer (cargo-fuzz, nightly), a while each.
 rust-fuzz:
