@@ -287,7 +287,7 @@ pub extern "C" fn pelage_frame_set_colliders(
             let memory: &mut Option<Buffer<u8>> = &mut body_memory;
             // SAFETY: the buffer is borrowed once, by the body made here,
             // which FrameColliders drops before it.
-            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), |bytes| unsafe {
+            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), 1, |bytes| unsafe {
                 memory.insert(Buffer::new(vec![0u8; bytes])).borrow()
             })?);
         }

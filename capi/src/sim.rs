@@ -3,7 +3,7 @@
 use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, strided, Float3Out};
 use crate::frame::frame_ref;
 use crate::status::Failure;
-use crate::threads::split_in_chunks;
+use crate::threads::{cut_into, run_parts, split_in_chunks, thread_total};
 use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance, Sphere};
@@ -14,6 +14,7 @@ use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::{Body, BodyPlan, Rim};
 use pelage_core::{Arena, Mesh};
 use std::ffi::c_void;
+use std::ops::Range;
 
 /// The opaque object a `PelageSim` points to.
 // not repr(C): cbindgen declares it in C without a definition
@@ -364,13 +365,15 @@ impl<'a> HostColliders<'a> {
 }
 
 /// The solid of `mesh`, its rim and grid built in the two arenas (grown
-/// as needed, kept for the next call).
+/// as needed, kept for the next call), its grid over `thread_count`
+/// threads.
 pub(crate) fn body_of<'a>(
     mesh: &Mesh,
     rim_arena: &mut Vec<u8>,
     body_arena: &'a mut Vec<u8>,
+    thread_count: u32,
 ) -> Result<Body<'a>, Failure> {
-    body_in(mesh, rim_arena, |bytes| {
+    body_in(mesh, rim_arena, thread_count, |bytes| {
         if body_arena.len() < bytes {
             body_arena.resize(bytes, 0);
         }
@@ -379,10 +382,12 @@ pub(crate) fn body_of<'a>(
 }
 
 /// The solid of `mesh`, its rim built in `rim_arena` (grown as needed), its
-/// grid in the memory `memory` gives for the bytes it needs.
+/// grid in the memory `memory` gives for the bytes it needs, built by
+/// layers over `thread_count` threads (the same bits on any count).
 pub(crate) fn body_in<'a>(
     mesh: &Mesh,
     rim_arena: &mut Vec<u8>,
+    thread_count: u32,
     memory: impl FnOnce(usize) -> &'a mut [u8],
 ) -> Result<Body<'a>, Failure> {
     let rim_bytes = Rim::required_bytes(mesh);
@@ -391,12 +396,46 @@ pub(crate) fn body_in<'a>(
     }
     let rim = Rim::new(mesh, &mut Arena::new(rim_arena))?;
     let plan = BodyPlan::of(mesh, &rim)?;
-    Ok(Body::build(
-        &plan,
-        mesh,
-        &rim,
-        &mut Arena::new(memory(plan.bytes())),
-    )?)
+    let mut parts = Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())))?;
+    let (layers, per) = (parts.layers(), parts.layer_cells());
+    let threads = thread_total(thread_count).clamp(1, layers.max(1));
+    let ranges: Vec<Range<usize>> = (0..threads)
+        .map(|t| t * layers / threads..(t + 1) * layers / threads)
+        .collect();
+    let cells: Vec<usize> = ranges.iter().map(|l| l.len() * per).collect();
+    let (grid, start, _, _) = parts.split();
+    let starts = cut_into(start, &cells);
+    let totals = run_parts(ranges.iter().cloned().zip(starts).collect(), |(l, part)| {
+        grid.count(l, part)
+    })?;
+    parts.set_total(totals.iter().map(|&t| u64::from(t)).sum())?;
+    let (grid, start, refs, class) = parts.split();
+    let bases = totals.iter().scan(0u32, |sum, &t| {
+        let base = *sum;
+        *sum += t;
+        Some(base)
+    });
+    let lists: Vec<usize> = totals.iter().map(|&t| t as usize).collect();
+    let work: Vec<_> = ranges
+        .iter()
+        .cloned()
+        .zip(bases)
+        .zip(cut_into(&mut *start, &cells))
+        .zip(cut_into(refs, &lists))
+        .collect();
+    run_parts(work, |(((l, base), start), refs)| {
+        grid.fill(l, base, start, refs)
+    })?;
+    let start = &*start;
+    run_parts(
+        ranges
+            .iter()
+            .cloned()
+            .zip(cut_into(class, &cells))
+            .collect(),
+        |(l, class)| grid.classify(l, start, class),
+    )?;
+    Ok(parts.finish())
 }
 
 /// The host's distance callback as a core field.
@@ -452,7 +491,7 @@ pub extern "C" fn pelage_sim_step(
         let frame = frame_ref(frame)?;
         let host = HostColliders::read(colliders)?;
         let body = match host.body {
-            true => Some(body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena)?),
+            true => Some(body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena, thread_count)?),
             false => None,
         };
         let colliders = host.colliders(body.as_ref());

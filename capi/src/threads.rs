@@ -12,7 +12,7 @@ const MAX_THREADS: usize = 64;
 /// host may ask for more threads than cores (up to 64, or the core count
 /// when larger), and the cap keeps a huge value from spawning one thread
 /// per strand.
-fn thread_total(thread_count: u32) -> usize {
+pub(crate) fn thread_total(thread_count: u32) -> usize {
     // asked once: on Linux the answer reads cgroup files (tens of
     // microseconds), which a renderer's per-patch calls would pay each time
     static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
@@ -216,4 +216,51 @@ pub(crate) fn split_in_chunks<T: Send>(
     };
     split_over_threads(threads, threads as u32, &mut [0u8; 0], 0, |_, _| run())?;
     Ok(())
+}
+
+/// Runs `work` on each of `parts` on scoped threads (the last on the
+/// calling thread) and returns the results in order.
+pub(crate) fn run_parts<P: Send, R: Send>(
+    parts: Vec<P>,
+    work: impl Fn(P) -> R + Sync,
+) -> Result<Vec<R>, Failure> {
+    std::thread::scope(|scope| {
+        let work = &work;
+        let mut parts = parts;
+        let last = parts.pop();
+        let mut handles = Vec::with_capacity(parts.len());
+        for part in parts {
+            match std::thread::Builder::new().spawn_scoped(scope, move || work(part)) {
+                Ok(h) => handles.push(h),
+                Err(e) => {
+                    return Err(Failure::new(
+                        PelageStatus::Panic,
+                        format!("could not start a worker thread ({e})"),
+                    ))
+                }
+            }
+        }
+        let last = last.map(work);
+        let mut results = Vec::with_capacity(handles.len() + 1);
+        for h in handles {
+            results.push(
+                h.join()
+                    .map_err(|_| Failure::new(PelageStatus::Panic, "a worker thread panicked"))?,
+            );
+        }
+        results.extend(last);
+        Ok(results)
+    })
+}
+
+/// Cuts `items` into consecutive parts of `lengths` (which sum to at most
+/// its length).
+pub(crate) fn cut_into<'a, T>(mut items: &'a mut [T], lengths: &[usize]) -> Vec<&'a mut [T]> {
+    let mut parts = Vec::with_capacity(lengths.len());
+    for &n in lengths {
+        let (head, tail) = std::mem::take(&mut items).split_at_mut(n);
+        parts.push(head);
+        items = tail;
+    }
+    parts
 }

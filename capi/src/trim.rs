@@ -45,12 +45,14 @@ struct ObstacleMemory {
 
 impl ObstacleMemory {
     /// The cloth (NULL: none) as a grid of its triangles, the host's
-    /// colliders, and the body of `mesh` when they ask for it.
+    /// colliders, and the body of `mesh` when they ask for it (its grid
+    /// built over `threads` threads).
     fn build<'a>(
         &'a mut self,
         mesh: &Mesh,
         cloth: *const PelageMeshDesc,
         colliders: *const PelageColliders,
+        threads: u32,
     ) -> Result<(Option<Body<'a>>, HostColliders<'a>, Option<Body<'a>>), Failure> {
         let cloth = match cloth.is_null() {
             true => None,
@@ -62,7 +64,7 @@ impl ObstacleMemory {
         };
         let host = HostColliders::read(colliders)?;
         let body = match host.body {
-            true => Some(body_of(mesh, &mut self.rim, &mut self.body)?),
+            true => Some(body_of(mesh, &mut self.rim, &mut self.body, threads)?),
             false => None,
         };
         Ok((cloth, host, body))
@@ -120,7 +122,7 @@ pub extern "C" fn pelage_trim_find(
             return Err(Failure::new(PelageStatus::InvalidArgument, "the frame has no guides (pelage_frame_set_guides)"));
         }
         let mut memory = ObstacleMemory::default();
-        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders)?;
+        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders, thread_count)?;
         let colliders = host.colliders(body.as_ref());
         colliders.check()?;
         let guides = frame.guide_count();
@@ -234,7 +236,7 @@ pub extern "C" fn pelage_trim_shortest_hairs(
         let bytes = n.checked_mul(core.output_points() * 16).ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "strand count overflows"))?;
         let job = ExpandJob::new(frame, strands, &groom.bounds, &core, bytes, 16)?;
         let mut memory = ObstacleMemory::default();
-        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders)?;
+        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders, p.thread_count)?;
         let colliders = host.colliders(body.as_ref());
         colliders.check()?;
         let lengths = slice_mut(lengths, length_count, "lengths")?;

@@ -37,6 +37,7 @@ use crate::arena::{Arena, ArenaLayout};
 use crate::surface::grid::floor_i32;
 pub use crate::surface::rim::Rim;
 use crate::{Error, Mesh};
+use core::ops::Range;
 use glam::Vec3;
 
 /// Cells per triangle the grid aims at (finer grids answer more points by lookup).
@@ -150,6 +151,16 @@ impl Shape {
     fn index(&self, x: usize, y: usize, z: usize) -> usize {
         (z * self.dims[1] + y) * self.dims[0] + x
     }
+
+    /// The centre of cell `(x, y, z)`.
+    fn centre(&self, x: usize, y: usize, z: usize) -> Vec3 {
+        self.origin + Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) / self.inv_cell
+    }
+
+    /// Cells in one layer (one z).
+    fn layer_cells(&self) -> usize {
+        self.dims[0] * self.dims[1]
+    }
 }
 
 /// The mesh as a solid, in caller-provided memory.
@@ -165,6 +176,222 @@ pub struct Body<'a> {
     /// Each cap's bounding ball and the end of its triangles in `caps`.
     loops: &'a [CapBall],
     class: &'a [u8],
+}
+
+/// A body's grid being built (from [`Body::parts`]), by stages over its
+/// layers of cells (along z), so a host with threads builds the layers at
+/// once: [`BodyGrid::count`] per range of layers, [`BodyParts::set_total`]
+/// with the ranges' sum, [`BodyGrid::fill`] per range, [`BodyGrid::classify`]
+/// per range, then [`BodyParts::finish`]. Each stage writes only its
+/// layers' part of each array, and a cell's result does not depend on the
+/// split: any split gives the bits of [`Body::build`].
+pub struct BodyParts<'a> {
+    grid: BodyGrid<'a>,
+    start: &'a mut [u32],
+    refs: &'a mut [u32],
+    class: &'a mut [u8],
+}
+
+/// What every stage of a [`BodyParts`] reads: the grid's placement, the
+/// triangles and the caps.
+pub struct BodyGrid<'a> {
+    shape: Shape,
+    triangles: &'a [Stored],
+    caps: &'a [Stored],
+    loops: &'a [CapBall],
+}
+
+impl<'a> BodyParts<'a> {
+    /// Layers of cells (along z).
+    pub fn layers(&self) -> usize {
+        self.grid.shape.dims[2]
+    }
+
+    /// Cells in one layer: a range of layers `l` owns the cells (and class
+    /// entries) `l.start * layer_cells() .. l.end * layer_cells()`.
+    pub fn layer_cells(&self) -> usize {
+        self.grid.shape.layer_cells()
+    }
+
+    /// The grid every stage reads, and the arrays they write: each cell's
+    /// first reference (one entry per cell, then the total), the
+    /// references, and the cells' classes.
+    pub fn split(&mut self) -> (&BodyGrid<'a>, &mut [u32], &mut [u32], &mut [u8]) {
+        (&self.grid, self.start, self.refs, self.class)
+    }
+
+    /// Records the references of every layer (the sum of what
+    /// [`BodyGrid::count`] returned), which must be the plan's.
+    pub fn set_total(&mut self, total: u64) -> Result<(), Error> {
+        if total != self.refs.len() as u64 {
+            return Err(Error::InvalidArgument("body plan made from another mesh"));
+        }
+        let cells = self.start.len() - 1;
+        self.start[cells] = total as u32;
+        Ok(())
+    }
+
+    /// The body, once every stage ran on every layer.
+    pub fn finish(self) -> Body<'a> {
+        Body {
+            shape: self.grid.shape,
+            start: self.start,
+            refs: self.refs,
+            triangles: self.grid.triangles,
+            caps: self.grid.caps,
+            loops: self.grid.loops,
+            class: self.class,
+        }
+    }
+}
+
+impl BodyGrid<'_> {
+    /// Visits the cells of layers `layers` that triangle `t`'s bounds
+    /// touch, by their index within those layers.
+    #[inline]
+    fn each_cell(&self, t: &Stored, layers: &Range<usize>, mut visit: impl FnMut(usize)) {
+        let shape = &self.shape;
+        let [.., lo, hi] = *t;
+        let (a, b) = shape.cell_range(lo.into(), hi.into());
+        let skip = layers.start * shape.layer_cells();
+        for z in a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1)) {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    visit(shape.index(x, y, z) - skip);
+                }
+            }
+        }
+    }
+
+    /// Stage 1: counts the triangles of each cell of `layers` into `start`
+    /// (those layers' cells), as each cell's end among the layers'
+    /// references; returns the layers' references.
+    pub fn count(&self, layers: Range<usize>, start: &mut [u32]) -> u32 {
+        start.fill(0);
+        if layers.is_empty() {
+            return 0;
+        }
+        for t in self.triangles {
+            self.each_cell(t, &layers, |c| start[c] += 1);
+        }
+        let mut sum = 0u32;
+        for s in start.iter_mut() {
+            sum += *s;
+            *s = sum;
+        }
+        sum
+    }
+
+    /// Stage 2: lists the triangles of each cell of `layers` in `refs` (the
+    /// layers' references, which begin at `base`, the references of every
+    /// layer before them), and makes `start` (those layers' cells) each
+    /// cell's first reference.
+    pub fn fill(&self, layers: Range<usize>, base: u32, start: &mut [u32], refs: &mut [u32]) {
+        if layers.is_empty() {
+            return;
+        }
+        // filled backwards from each cell's end, so each ends at its start
+        for (t, tri) in self.triangles.iter().enumerate() {
+            self.each_cell(tri, &layers, |c| {
+                start[c] -= 1;
+                refs[start[c] as usize] = t as u32;
+            });
+        }
+        for s in start.iter_mut() {
+            *s += base;
+        }
+    }
+
+    /// Stage 3: the class of each cell of `layers` into `class` (those
+    /// layers' cells), with every cell's first reference in `start` (all of
+    /// them, after stage 2).
+    pub fn classify(&self, layers: Range<usize>, start: &[u32], class: &mut [u8]) {
+        if layers.is_empty() {
+            return;
+        }
+        self.sweep(&layers, start, class);
+        self.mark_near_caps(&layers, class);
+    }
+
+    /// Sweeps each row of cell centres along x from the grid's empty first
+    /// layer (outside), adding up the signed crossings of the capped
+    /// surface. Each triangle's crossings with the rows' lines are added
+    /// first to the centre each comes before.
+    fn sweep(&self, layers: &Range<usize>, start: &[u32], class: &mut [u8]) {
+        let shape = &self.shape;
+        let skip = layers.start * shape.layer_cells();
+        class.fill(0);
+        for t in self.triangles.iter().chain(self.caps) {
+            let [.., lo, hi] = *t;
+            // the rows whose line may pass within the bounds (one more each
+            // way: `crossing` decides exactly)
+            let first = shape.cell_of(Vec3::from(lo) - 0.5 / shape.inv_cell);
+            let last = shape.cell_of(Vec3::from(hi) - 0.5 / shape.inv_cell);
+            let rows = |k: usize| {
+                let n = shape.dims[k] as i32;
+                first[k].clamp(0, n - 1) as usize..=(last[k] + 1).clamp(0, n - 1) as usize
+            };
+            let zs = rows(2);
+            for z in (*zs.start()).max(layers.start)..=(*zs.end()).min(layers.end.wrapping_sub(1)) {
+                for y in rows(1) {
+                    let Some((h, step)) = crossing::<0>(t, shape.centre(0, y, z)) else {
+                        continue;
+                    };
+                    // the first centre at or past the crossing
+                    let x = shape.cell_on(h, 0);
+                    if !(0..shape.dims[0] as i32).contains(&x) {
+                        continue;
+                    }
+                    let x = x as usize + (h > shape.centre(x as usize, y, z).x) as usize;
+                    if x < shape.dims[0] {
+                        let c = &mut class[shape.index(x, y, z) - skip];
+                        *c = (*c as i8).wrapping_add(step as i8) as u8;
+                    }
+                }
+            }
+        }
+        let nx = shape.dims[0];
+        let first_row = layers.start * shape.dims[1];
+        for (r, row) in class.chunks_exact_mut(nx).enumerate() {
+            let r = first_row + r;
+            let mut w = 0i32;
+            // a cell the surface passes through lists triangles
+            let listed = start[r * nx..=(r + 1) * nx].windows(2);
+            for (c, ends) in row.iter_mut().zip(listed) {
+                w += (*c as i8) as i32;
+                let winding = w.clamp(-MAX_WINDING - 1, MAX_WINDING) as i8;
+                *c = ((winding << WINDING_SHIFT) as u8) | ((ends[0] != ends[1]) as u8 * SURFACE);
+            }
+        }
+    }
+
+    /// Marks the cells where the caps' solid angle may reach a half turn
+    /// (2 pi): where it cannot, the capped surface's integer winding number
+    /// decides alone. A cap within a ball of radius `R` subtends at most
+    /// `2 pi (1 - sqrt(1 - R^2 / D^2))` from a distance `D > R` to the
+    /// ball's centre; with `K` caps, each kept below `2 pi / K`, their sum
+    /// stays below a half turn.
+    fn mark_near_caps(&self, layers: &Range<usize>, class: &mut [u8]) {
+        let shape = &self.shape;
+        let skip = layers.start * shape.layer_cells();
+        let share = 1.0 - 1.0 / self.loops.len() as f32;
+        let reach = 1.0 / libm::sqrtf(1.0 - share * share);
+        let half_diagonal = 0.5 * libm::sqrtf(3.0) / shape.inv_cell;
+        for ball in self.loops {
+            let centre = Vec3::from(ball.centre);
+            let d = ball.radius * reach * 1.001 + half_diagonal;
+            let (a, b) = shape.cell_range(centre - Vec3::splat(d), centre + Vec3::splat(d));
+            for z in a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1)) {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        if shape.centre(x, y, z).distance(centre) <= d {
+                            class[shape.index(x, y, z) - skip] |= NEAR_CAP;
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// A ball around one cap: every triangle of the cap lies inside it.
@@ -262,14 +489,16 @@ impl<'a> Body<'a> {
         Self::build(&BodyPlan::of(mesh, &rim)?, mesh, &rim, arena)
     }
 
-    /// Builds the grid and cell classes of `mesh`, placed by `plan` (made
-    /// from this mesh and `rim`).
-    pub fn build(
+    /// Starts building the grid of `mesh`, placed by `plan` (made from
+    /// this mesh and `rim`): the triangles and the caps are copied into
+    /// `arena`; the stages of [`BodyGrid`] then build the rest, on any split
+    /// of the layers (see [`BodyParts`]).
+    pub fn parts(
         plan: &BodyPlan,
         mesh: &Mesh,
         rim: &Rim,
         arena: &mut Arena<'a>,
-    ) -> Result<Self, Error> {
+    ) -> Result<BodyParts<'a>, Error> {
         let shape = plan.shape;
         let needed = plan.bytes();
         if arena.remaining() < needed {
@@ -303,53 +532,39 @@ impl<'a> Body<'a> {
         if solid.next().is_some() {
             return Err(another);
         }
-        // counting sort of triangle references by cell
-        start.fill(0);
-        let each_cell = |t: usize, visit: &mut dyn FnMut(usize)| {
-            let [.., lo, hi] = triangles[t];
-            let (a, b) = shape.cell_range(lo.into(), hi.into());
-            for z in a[2]..=b[2] {
-                for y in a[1]..=b[1] {
-                    for x in a[0]..=b[0] {
-                        visit(shape.index(x, y, z));
-                    }
-                }
-            }
-        };
-        // counts, summed in place to each cell's end, then filled
-        // backwards so each ends at its cell's start
-        for t in 0..shape.triangles {
-            each_cell(t, &mut |c| start[c] += 1);
-        }
-        let mut sum = 0u64;
-        for s in start[..cells].iter_mut() {
-            sum += u64::from(*s);
-            *s = sum as u32;
-        }
-        if sum != shape.refs as u64 {
-            return Err(another);
-        }
-        start[cells] = sum as u32;
-        for t in 0..shape.triangles {
-            each_cell(t, &mut |c| {
-                start[c] -= 1;
-                refs[start[c] as usize] = t as u32;
-            });
-        }
         cap(mesh, rim, caps, loops);
-        let mut body = Body {
-            shape,
+        Ok(BodyParts {
+            grid: BodyGrid {
+                shape,
+                triangles,
+                caps,
+                loops,
+            },
             start,
             refs,
-            triangles,
-            caps,
-            loops,
-            class: &[],
-        };
-        body.classify(class);
-        body.mark_near_caps(class);
-        body.class = class;
-        Ok(body)
+            class,
+        })
+    }
+
+    /// Builds the grid and cell classes of `mesh`, placed by `plan` (made
+    /// from this mesh and `rim`), on the calling thread (see
+    /// [`BodyParts`] to build it on several).
+    pub fn build(
+        plan: &BodyPlan,
+        mesh: &Mesh,
+        rim: &Rim,
+        arena: &mut Arena<'a>,
+    ) -> Result<Self, Error> {
+        let mut parts = Self::parts(plan, mesh, rim, arena)?;
+        let layers = 0..parts.layers();
+        let (grid, start, _, _) = parts.split();
+        let cells = start.len() - 1;
+        let total = grid.count(layers.clone(), &mut start[..cells]);
+        parts.set_total(u64::from(total))?;
+        let (grid, start, refs, class) = parts.split();
+        grid.fill(layers.clone(), 0, &mut start[..cells], refs);
+        grid.classify(layers, start, class);
+        Ok(parts.finish())
     }
 
     /// The triangles listed in cell `c`.
@@ -362,83 +577,7 @@ impl<'a> Body<'a> {
 
     /// The centre of cell `(x, y, z)`.
     fn centre(&self, x: usize, y: usize, z: usize) -> Vec3 {
-        self.shape.origin
-            + Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) / self.shape.inv_cell
-    }
-
-    /// Sweeps each row of cell centres along x from the grid's empty first
-    /// layer (outside), adding up the signed crossings of the capped
-    /// surface. Each triangle's crossings with the rows' lines are added
-    /// first to the centre each comes before.
-    fn classify(&self, class: &mut [u8]) {
-        let shape = &self.shape;
-        class.fill(0);
-        for t in self.triangles.iter().chain(self.caps) {
-            let [.., lo, hi] = *t;
-            // the rows whose line may pass within the bounds (one more each
-            // way: `crossing` decides exactly)
-            let first = shape.cell_of(Vec3::from(lo) - 0.5 / shape.inv_cell);
-            let last = shape.cell_of(Vec3::from(hi) - 0.5 / shape.inv_cell);
-            let rows = |k: usize| {
-                let n = shape.dims[k] as i32;
-                first[k].clamp(0, n - 1) as usize..=(last[k] + 1).clamp(0, n - 1) as usize
-            };
-            for z in rows(2) {
-                for y in rows(1) {
-                    let Some((h, step)) = crossing::<0>(t, self.centre(0, y, z)) else {
-                        continue;
-                    };
-                    // the first centre at or past the crossing
-                    let x = shape.cell_on(h, 0);
-                    if !(0..shape.dims[0] as i32).contains(&x) {
-                        continue;
-                    }
-                    let x = x as usize + (h > self.centre(x as usize, y, z).x) as usize;
-                    if x < shape.dims[0] {
-                        let c = &mut class[shape.index(x, y, z)];
-                        *c = (*c as i8).wrapping_add(step as i8) as u8;
-                    }
-                }
-            }
-        }
-        let nx = shape.dims[0];
-        for (r, row) in class.chunks_exact_mut(nx).enumerate() {
-            let mut w = 0i32;
-            // a cell the surface passes through lists triangles
-            let listed = self.start[r * nx..=(r + 1) * nx].windows(2);
-            for (c, ends) in row.iter_mut().zip(listed) {
-                w += (*c as i8) as i32;
-                let winding = w.clamp(-MAX_WINDING - 1, MAX_WINDING) as i8;
-                *c = ((winding << WINDING_SHIFT) as u8) | ((ends[0] != ends[1]) as u8 * SURFACE);
-            }
-        }
-    }
-
-    /// Marks the cells where the caps' solid angle may reach a half turn
-    /// (2 pi): where it cannot, the capped surface's integer winding number
-    /// decides alone. A cap within a ball of radius `R` subtends at most
-    /// `2 pi (1 - sqrt(1 - R^2 / D^2))` from a distance `D > R` to the
-    /// ball's centre; with `K` caps, each kept below `2 pi / K`, their sum
-    /// stays below a half turn.
-    fn mark_near_caps(&self, class: &mut [u8]) {
-        let shape = &self.shape;
-        let share = 1.0 - 1.0 / self.loops.len() as f32;
-        let reach = 1.0 / libm::sqrtf(1.0 - share * share);
-        let half_diagonal = 0.5 * libm::sqrtf(3.0) / shape.inv_cell;
-        for ball in self.loops {
-            let centre = Vec3::from(ball.centre);
-            let d = ball.radius * reach * 1.001 + half_diagonal;
-            let (a, b) = shape.cell_range(centre - Vec3::splat(d), centre + Vec3::splat(d));
-            for z in a[2]..=b[2] {
-                for y in a[1]..=b[1] {
-                    for x in a[0]..=b[0] {
-                        if self.centre(x, y, z).distance(centre) <= d {
-                            class[shape.index(x, y, z)] |= NEAR_CAP;
-                        }
-                    }
-                }
-            }
-        }
+        self.shape.centre(x, y, z)
     }
 
     /// True when `p` is inside the body: its generalized winding number is
@@ -893,6 +1032,56 @@ mod tests {
             inside += (w > 0.5) as usize;
         }
         inside
+    }
+
+    #[test]
+    fn any_split_of_the_layers_builds_the_same_grid() {
+        // a holed sphere: caps and near-cap cells too
+        let m = holed_sphere(0.5);
+        let mesh = m.mesh();
+        let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
+        let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
+        let plan = BodyPlan::of(&mesh, &rim).unwrap();
+        let mut whole_memory = vec![0u8; plan.bytes()];
+        let whole = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut whole_memory)).unwrap();
+        let n = whole.shape.dims[2];
+        for cuts in [
+            vec![0, n],
+            vec![0, 0, n / 2, n],
+            vec![0, 1, 2, n / 3, n - 1, n, n],
+        ] {
+            let mut memory = vec![0u8; plan.bytes()];
+            let mut parts = Body::parts(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
+            let per = parts.layer_cells();
+            let ranges: Vec<Range<usize>> = cuts.windows(2).map(|w| w[0]..w[1]).collect();
+            let (grid, start, _, _) = parts.split();
+            let totals: Vec<u32> = ranges
+                .iter()
+                .map(|l| grid.count(l.clone(), &mut start[l.start * per..l.end * per]))
+                .collect();
+            parts
+                .set_total(totals.iter().map(|&t| u64::from(t)).sum())
+                .unwrap();
+            let (grid, start, refs, class) = parts.split();
+            let mut base = 0u32;
+            for (l, &total) in ranges.iter().zip(&totals) {
+                let part = &mut refs[base as usize..(base + total) as usize];
+                grid.fill(
+                    l.clone(),
+                    base,
+                    &mut start[l.start * per..l.end * per],
+                    part,
+                );
+                base += total;
+            }
+            for l in &ranges {
+                grid.classify(l.clone(), start, &mut class[l.start * per..l.end * per]);
+            }
+            let body = parts.finish();
+            assert!(body.start == whole.start, "{cuts:?}");
+            assert!(body.refs == whole.refs, "{cuts:?}");
+            assert!(body.class == whole.class, "{cuts:?}");
+        }
     }
 
     /// A sphere with the triangles whose centroid has `y > cut` removed.
