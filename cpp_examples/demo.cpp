@@ -6,8 +6,9 @@
 // widths), settles the hairs out of the body, and expands every hair with pelage_expand straight into the float4
 // vertex buffer Embree shares (round Catmull-Rom curves, pinned ends). Shadow
 // rays see only the hairs with LOD rank < N/2 (half the hairs, as the paper's
-// shadow pass): a second curve geometry that shares the same vertex buffer
-// with an index buffer of just those hairs' segments. Renders fur.png.
+// shadow pass), twice as wide so that their shadows are as dense as every
+// hair's (PelageExpandParams.width_scale explains the factor): a second curve
+// geometry over a copy of just those hairs. Renders fur.png.
 //
 // Then the guides are simulated (tip springs, links, the body as collider)
 // while the creature shakes its upper body, the fur is expanded from the
@@ -239,27 +240,37 @@ int main(int argc, char** argv) try {
   const creature::Groom fur(roots.data(), bindings.data(), grooms.data(), n);  // checked once, kept for every frame
   rows.push_back({"handle", clock.seconds(), "strand records checked and copied once (pelage_groom_new)"});
 
-  // 7. Embree geometry sharing our buffers: every hair for the camera; the
-  // segments of the hairs with rank < N/2 (same vertex buffer) for shadows.
+  // 7. Embree geometry sharing our buffers: every hair for the camera; for
+  // shadows, a copy of the hairs with rank < N/2, widened by N / kept: k
+  // hairs of width w N / k cover as much as N of width w (coverage
+  // 1 - exp(-N w l / A) depends on N w alone).
   creature::Expander expander(ep);
   const size_t per = expander.points_per_curve(), segments = per - 3;
   std::vector<float> points(4 * per * n);  // the vertex buffer Embree reads
   const std::vector<uint32_t> indices = creature::segment_indices(n, per);
-  std::vector<uint32_t> shadow_indices;
-  shadow_indices.reserve(indices.size() / 2 + segments);
+  std::vector<size_t> shadow_hairs;
   for (size_t i = 0; i < n; ++i) {
-    if (roots[i].rank < n / 2) {
-      shadow_indices.insert(shadow_indices.end(), &indices[i * segments], &indices[(i + 1) * segments]);
-    }
+    if (roots[i].rank < n / 2) shadow_hairs.push_back(i);
   }
+  const float widen = float(n) / float(shadow_hairs.size());
+  std::vector<float> shadow_points(4 * per * shadow_hairs.size());
+  const std::vector<uint32_t> shadow_indices = creature::segment_indices(shadow_hairs.size(), per);
+  const auto copy_shadow_hairs = [&] {
+    for (size_t k = 0; k < shadow_hairs.size(); ++k) {
+      const float* from = &points[4 * per * shadow_hairs[k]];
+      float* to = &shadow_points[4 * per * k];
+      for (size_t j = 0; j < 4 * per; ++j) to[j] = j % 4 == 3 ? from[j] * widen : from[j];
+    }
+  };
   creature::Device device;
   RTCScene scene = rtcNewScene(device.device), shadow = rtcNewScene(device.device);
   const unsigned mesh_id = creature::attach_mesh(device.device, scene, mesh);
   const unsigned shadow_mesh_id = creature::attach_mesh(device.device, shadow, mesh);
   const unsigned curves_id =
       creature::attach_curves(device.device, scene, points.data(), per * n, indices.data(), indices.size());
-  const unsigned shadow_curves_id = creature::attach_curves(device.device, shadow, points.data(), per * n,
-                                                            shadow_indices.data(), shadow_indices.size());
+  const unsigned shadow_curves_id =
+      creature::attach_curves(device.device, shadow, shadow_points.data(), per * shadow_hairs.size(),
+                              shadow_indices.data(), shadow_indices.size());
   device.check("geometry");
 
   // 8. A frame's work once guides are posed (here: the rest pose): the
@@ -280,14 +291,15 @@ int main(int argc, char** argv) try {
   if (const size_t bad = creature::count_bad_points(points.data(), per * n)) {
     throw std::runtime_error(std::to_string(bad) + " control points are non-finite or have a negative radius");
   }
+  copy_shadow_hairs();
 
   // 9. BVHs: the camera scene and the half-density shadow scene.
   clock = {};
   rtcCommitScene(scene);
   rtcCommitScene(shadow);
   device.check("scene build");
-  std::snprintf(note, sizeof note, "%zu segments; shadows: %zu hairs (rank < N/2), %zu segments", indices.size(),
-                shadow_indices.size() / segments, shadow_indices.size());
+  std::snprintf(note, sizeof note, "%zu segments; shadows: %zu hairs (rank < N/2, %.2fx wide), %zu segments",
+                indices.size(), shadow_hairs.size(), double(widen), shadow_indices.size());
   rows.push_back({"BVH", clock.seconds(), note});
 
   // 10. Render: a pinhole camera, `spp` stratified samples per pixel.
@@ -364,6 +376,7 @@ int main(int argc, char** argv) try {
       expander.expand(frame, fur, 0, n, points.data(), per * n);
       fur_s.push_back(step_clock.seconds());
       if (f % steps_per_tile != steps_per_tile - 1) continue;
+      copy_shadow_hairs();
       for (auto [sc, geom] : {std::pair{scene, mesh_id}, {scene, curves_id}, {shadow, shadow_mesh_id},
                               {shadow, shadow_curves_id}}) {
         RTCGeometry g = rtcGetGeometry(sc, geom);
