@@ -139,14 +139,7 @@ pub extern "C" fn pelage_groom_expand(
     curves: *const PelageCurves,
 ) -> PelageStatus {
     ffi_boundary! {
-        let groom = groom_ref(groom)?;
-        let frame = frame_ref(frame)?;
-        let total = groom.roots.len();
-        let range = first..first.checked_add(count).filter(|&end| end <= total).ok_or_else(|| {
-            Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
-        })?;
-        let p = req(params, "params")?;
-        run(frame.posed(), groom.strands().range(range), &groom.bounds, Edits::default(), p, req(curves, "curves")?)
+        expand_range(groom, frame, first, count, std::ptr::null(), params, curves)
     }
 }
 
@@ -189,27 +182,61 @@ pub extern "C" fn pelage_groom_expand_edited(
     curves: *const PelageCurves,
 ) -> PelageStatus {
     ffi_boundary! {
-        let groom = groom_ref(groom)?;
-        let frame = frame_ref(frame)?;
-        let total = groom.roots.len();
-        let range = first..first.checked_add(count).filter(|&end| end <= total).ok_or_else(|| {
-            Failure::new(PelageStatus::OutOfRange, format!("strands {first} + {count} exceed the groom's {total}"))
-        })?;
-        let colliders = frame.push_colliders();
-        let mut edits_of = Edits::default();
-        if !edits.is_null() {
-            let e = req(edits, "edits")?;
-            if !e.lengths.is_null() {
-                edits_of.lengths = Some(&slice(e.lengths, total, "edits.lengths")?[range.clone()]);
-            }
-            if !e.push_mask.is_null() {
-                let colliders = colliders.as_ref().ok_or_else(|| {
-                    Failure::new(PelageStatus::InvalidArgument, "a push mask on a frame without colliders (pelage_frame_set_colliders)")
-                })?;
-                edits_of.push = Some((&slice(e.push_mask, total, "edits.push_mask")?[range.clone()], colliders));
-            }
-        }
-        let p = req(params, "params")?;
-        run(frame.posed(), groom.strands().range(range), &groom.bounds, edits_of, p, req(curves, "curves")?)
+        expand_range(groom, frame, first, count, edits, params, curves)
     }
+}
+
+/// The strands `first .. first + count` of `groom` expanded on `frame`
+/// with `edits` (NULL: none): the body of both groom expansions.
+fn expand_range(
+    groom: PelageGroom,
+    frame: PelageFrame,
+    first: usize,
+    count: usize,
+    edits: *const PelageStrandEdits,
+    params: *const PelageExpandParams,
+    curves: *const PelageCurves,
+) -> Result<(), Failure> {
+    let groom = groom_ref(groom)?;
+    let frame = frame_ref(frame)?;
+    let total = groom.roots.len();
+    let range = first
+        ..first
+            .checked_add(count)
+            .filter(|&end| end <= total)
+            .ok_or_else(|| {
+                Failure::new(
+                    PelageStatus::OutOfRange,
+                    format!("strands {first} + {count} exceed the groom's {total}"),
+                )
+            })?;
+    let colliders = frame.push_colliders();
+    let mut edits_of = Edits::default();
+    if !edits.is_null() {
+        let e = req(edits, "edits")?;
+        if !e.lengths.is_null() {
+            edits_of.lengths = Some(&slice(e.lengths, total, "edits.lengths")?[range.clone()]);
+        }
+        if !e.push_mask.is_null() {
+            let colliders = colliders.as_ref().ok_or_else(|| {
+                Failure::new(
+                    PelageStatus::InvalidArgument,
+                    "a push mask on a frame without colliders (pelage_frame_set_colliders)",
+                )
+            })?;
+            edits_of.push = Some((
+                &slice(e.push_mask, total, "edits.push_mask")?[range.clone()],
+                colliders,
+            ));
+        }
+    }
+    let p = req(params, "params")?;
+    run(
+        frame.posed(),
+        groom.strands().range(range),
+        &groom.bounds,
+        edits_of,
+        p,
+        req(curves, "curves")?,
+    )
 }
