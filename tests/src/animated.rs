@@ -161,6 +161,11 @@ pub struct ShotSim {
     /// The handle.
     pub sim: pelage::PelageSim,
     memory: Vec<u8>,
+    /// The guides at rest (roots, points), which each step's neutral pose
+    /// carries.
+    roots: Vec<Root>,
+    points: Vec<[f32; 3]>,
+    joints: usize,
 }
 
 impl ShotSim {
@@ -192,7 +197,38 @@ impl ShotSim {
             &mut sim,
         );
         assert_eq!(s, PelageStatus::Ok);
-        ShotSim { sim, memory }
+        ShotSim {
+            sim,
+            memory,
+            roots: roots.to_vec(),
+            points: points.to_vec(),
+            joints,
+        }
+    }
+
+    /// Steps the simulation by one frame of the shot (2 threads) to `body`,
+    /// colliding with `colliders`, and reads the posed guides back.
+    pub fn step(&self, body: &CreatureMesh, colliders: &pelage::PelageColliders) -> Vec<[f32; 3]> {
+        use crate::measure::{frame, guides_desc, mesh_desc};
+        use pelage::*;
+        let rest = guides_desc(&self.roots, &self.points);
+        let neutral = frame(&mesh_desc(body), &rest, self.joints as u32, 2).unwrap();
+        let s = pelage_sim_step(
+            self.sim,
+            neutral.0,
+            colliders,
+            std::ptr::null(),
+            0,
+            1.0 / FPS,
+            2,
+        );
+        assert_eq!(s, PelageStatus::Ok);
+        let mut posed = vec![[0.0f32; 3]; self.points.len()];
+        assert_eq!(
+            pelage_sim_read(self.sim, posed.as_mut_ptr().cast(), 12, posed.len()),
+            PelageStatus::Ok
+        );
+        posed
     }
 
     /// Bytes the simulation lives in.
@@ -210,36 +246,17 @@ impl Drop for ShotSim {
 /// Simulates `guides` combed guides of `points` joints over the whole shot
 /// (tip links, the 16 capsules; 2 threads) through the C API.
 pub fn simulate_shot(guides: u32, points: usize) -> SimulatedShot {
-    use crate::measure::{combed_guides, frame, guides_desc, mesh_desc, stamp_roots};
-    use pelage::*;
+    use crate::measure::{combed_guides, stamp_roots};
     let rest = crate::creature::default_creature();
     let roots = stamp_roots(mesh_view(&rest), guides, 1);
     let rest_points = combed_guides(&mesh_view(&rest), &roots, points, 0.06);
-    let gd = guides_desc(&roots, &rest_points);
     let shot_sim = ShotSim::new(&rest, &roots, &rest_points, points);
-    let sim = shot_sim.sim;
     let (mut meshes, mut posed) = (vec![], vec![]);
     for f in 0..FRAMES {
         let mesh = pose(&rest, f);
-        let handle = frame(&mesh_desc(&mesh), &gd, points as u32, 2).unwrap();
         let caps = capsules(&rest, &roots, f);
-        let s = pelage_sim_step(
-            sim,
-            handle.0,
-            &colliders(&caps, false),
-            std::ptr::null(),
-            0,
-            1.0 / FPS,
-            2,
-        );
-        assert_eq!(s, PelageStatus::Ok);
-        let mut out = vec![[0.0f32; 3]; roots.len() * points];
-        assert_eq!(
-            pelage_sim_read(sim, out.as_mut_ptr().cast(), 12, out.len()),
-            PelageStatus::Ok
-        );
+        posed.push(shot_sim.step(&mesh, &colliders(&caps, false)));
         meshes.push(mesh);
-        posed.push(out);
     }
 
     SimulatedShot {

@@ -10,7 +10,7 @@ use glam::Vec3;
 use pelage::*;
 use pelage_core::surface::body::Body;
 use pelage_core::Arena;
-use pelage_tests::animated::{capsules, colliders, pose, segment_distance, FPS};
+use pelage_tests::animated::{capsules, colliders, pose, segment_distance};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
     curves_desc, frame, groomed, guides_desc, mesh_desc, mesh_view, strands_desc,
@@ -38,7 +38,6 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
         2,
     );
     let n = fur.strands.len();
-    let guide_count = fur.guide_roots.len();
 
     // the mask: a per-vertex map, 1 within 0.15 of a capsule at rest
     let rest_caps = capsules(&rest, &fur.guide_roots, 0);
@@ -89,7 +88,6 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
     );
     let sim =
         pelage_tests::animated::ShotSim::new(&rest, &fur.guide_roots, &fur.guide_points, JOINTS);
-    let rest_guides = fur.guides();
     let params = |threads| PelageExpandParams {
         points_per_strand: JOINTS as u32,
         end_points: PelageEndPoints::Raw as u32,
@@ -105,16 +103,7 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
         let body = pose(&rest, f);
         let caps = capsules(&rest, &fur.guide_roots, f);
         let col = colliders(&caps, true);
-        let neutral = frame(&mesh_desc(&body), &rest_guides, JOINTS as u32, 2).unwrap();
-        ok(
-            pelage_sim_step(sim.sim, neutral.0, &col, std::ptr::null(), 0, 1.0 / FPS, 2),
-            "pelage_sim_step",
-        );
-        let mut posed = vec![[0.0f32; 3]; guide_count * JOINTS];
-        ok(
-            pelage_sim_read(sim.sim, posed.as_mut_ptr().cast(), 12, posed.len()),
-            "pelage_sim_read",
-        );
+        let posed = sim.step(&body, &col);
         let handle = frame(
             &mesh_desc(&body),
             &guides_desc(&fur.guide_roots, &posed),

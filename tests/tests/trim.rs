@@ -11,7 +11,7 @@ use glam::Vec3;
 use pelage::*;
 use pelage_core::surface::body::Body;
 use pelage_core::Arena;
-use pelage_tests::animated::{capsules, colliders, pose, FPS};
+use pelage_tests::animated::{capsules, colliders, pose};
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
     curves_desc, frame, groomed, guides_desc, mesh_desc, mesh_view, strands_desc,
@@ -175,7 +175,6 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
     ok(pelage_groom_new(&strands, &mut groom), "pelage_groom_new");
     let sim =
         pelage_tests::animated::ShotSim::new(&rest, &fur.guide_roots, &fur.guide_points, JOINTS);
-    let rest_guides = fur.guides();
     let n = fur.strands.len();
     let params = PelageExpandParams {
         points_per_strand: JOINTS as u32,
@@ -193,18 +192,9 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
     let mut per_frame = vec![];
     for f in 0..FRAMES {
         let body = pose(&rest, f);
-        let neutral = frame(&mesh_desc(&body), &rest_guides, JOINTS as u32, 2).unwrap();
         let caps = capsules(&rest, &fur.guide_roots, f);
         let col = colliders(&caps, false);
-        ok(
-            pelage_sim_step(sim.sim, neutral.0, &col, std::ptr::null(), 0, 1.0 / FPS, 2),
-            "pelage_sim_step",
-        );
-        let mut posed = vec![[0.0f32; 3]; guide_count * JOINTS];
-        ok(
-            pelage_sim_read(sim.sim, posed.as_mut_ptr().cast(), 12, posed.len()),
-            "pelage_sim_read",
-        );
+        let posed = sim.step(&body, &col);
         let handle = frame(
             &mesh_desc(&body),
             &guides_desc(&fur.guide_roots, &posed),
