@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <tuple>
@@ -307,6 +309,55 @@ std::vector<PelageStrandGroom> groom(const Mesh& mesh, const PelageGroomMaps& ma
   std::vector<PelageStrandGroom> grooms(count);
   check(pelage_groom_evaluate(&desc, &maps, roots, count, grooms.data(), grooms.size()), "pelage_groom_evaluate");
   return grooms;
+}
+
+std::vector<unsigned char> read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void write_file(const std::string& path, const unsigned char* data, size_t size) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+std::vector<unsigned char> groom_file(const Mesh& rest, const std::vector<PelageRoot>& guide_roots,
+                                      const std::vector<float>& rest_points, uint32_t cvs, uint32_t hairs,
+                                      uint32_t patch_size) {
+  PelageStampParams sp = pelage_stamp_params_defaults();
+  sp.target_count = hairs, sp.seed = 2;
+  const std::vector<PelageRoot> stamped = stamp(rest, sp);
+  const size_t n = stamped.size();
+  std::vector<uint32_t> order(n);
+  std::vector<PelagePatch> patches((n + patch_size - 1) / patch_size);
+  size_t patch_count = 0;
+  const PelageMeshDesc rest_desc = rest.desc();
+  check(pelage_patch_plan(&rest_desc, stamped.data(), n, patch_size, order.data(), patches.data(), patches.size(),
+                          &patch_count),
+        "pelage_patch_plan");
+  std::vector<PelageRoot> roots(n);
+  for (size_t k = 0; k < n; ++k) roots[k] = stamped[order[k]];
+  const PelageGuidesDesc rest_guides = guides_desc(guide_roots, rest_points, cvs);
+  PelageBindParams bp = pelage_bind_params_defaults();
+  bp.thread_count = 0;
+  const std::vector<PelageStrandBinding> bindings = bind(rest, rest_guides, roots.data(), n, bp);
+  PelageGroomMaps maps = pelage_groom_maps_defaults();
+  maps.root_width.constant = 0.0016f, maps.tip_width.constant = 0.0003f;
+  maps.kink_amplitude.constant = 0.03f, maps.clump.constant = 0.25f, maps.bend.constant = 0.1f;
+  const std::vector<PelageStrandGroom> grooms = groom(rest, maps, roots.data(), n);
+  PelageExpandParams ep = pelage_expand_params_defaults();
+  ep.points_per_strand = cvs;
+  const Frame rest_frame(rest, rest_guides, ep);
+  const PelageStrands strands{roots.data(), bindings.data(), grooms.data(), n};
+  const PelageGroomFileDesc desc{rest_frame.get(), guide_roots.data(), strands, patches.data(), patch_count};
+  size_t bytes = 0;
+  pelage_groom_file_write(&desc, nullptr, 0, &bytes);  // CAPACITY_EXCEEDED: the size
+  std::vector<unsigned char> file(bytes);
+  check(pelage_groom_file_write(&desc, file.data(), file.size(), &bytes), "pelage_groom_file_write");
+  file.resize(bytes);
+  return file;
 }
 
 PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, const PelageRoot* strands,

@@ -143,6 +143,21 @@ std::vector<PelageStrandBinding> bind(const Mesh& mesh, const PelageGuidesDesc& 
 std::vector<PelageStrandGroom> groom(const Mesh& mesh, const PelageGroomMaps& maps, const PelageRoot* roots,
                                      size_t count);
 
+// A whole file's bytes; throws when it cannot be read.
+std::vector<unsigned char> read_file(const std::string& path);
+
+// Writes `size` bytes to `path`; throws when it cannot be written.
+void write_file(const std::string& path, const unsigned char* data, size_t size);
+
+// The groom file of `hairs` render hairs stamped on `rest` (seed 2) and
+// stored patch by patch (runs of `patch_size`, pelage_patch_plan), bound to
+// the guides `guide_roots` / `rest_points` (`cvs` points each) and groomed
+// short, kinked and clumped: what the render-time examples write once per
+// asset. Throws.
+std::vector<unsigned char> groom_file(const Mesh& rest, const std::vector<PelageRoot>& guide_roots,
+                                      const std::vector<float>& rest_points, uint32_t cvs, uint32_t hairs,
+                                      uint32_t patch_size);
+
 // Settles `count` groomed strands out of the body at the rest pose
 // (pelage_settle, all cores): `grooms` updated in place. Throws.
 PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, const PelageRoot* strands,

@@ -24,8 +24,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -41,18 +39,6 @@ const uint32_t kGuides = 4000, kCvs = 16, kPatchSize = 1000;
 // Shutter samples: the creature's lean at shutter open and close.
 const int kSamples = 2;
 const float kLean[kSamples] = {0.15f, 0.3f};
-
-std::vector<unsigned char> read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-void write_file(const std::string& path, const unsigned char* data, size_t size) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
-  if (!out) throw std::runtime_error("cannot write " + path);
-}
 
 // The frame's deformed mesh at a shutter sample: the creature leaning
 // forward (the renderer gets it from the animation cache; the guides
@@ -72,39 +58,12 @@ void write_files(const creature::Mesh& rest, uint32_t hairs, const std::string& 
   PelageStampParams sp = pelage_stamp_params_defaults();
   sp.target_count = kGuides, sp.seed = 1;
   const std::vector<PelageRoot> guide_roots = creature::stamp(rest, sp);
-  sp.target_count = hairs, sp.seed = 2;
-  const std::vector<PelageRoot> stamped = creature::stamp(rest, sp);
-  const size_t n = stamped.size();
-  // strands stored patch by patch
-  std::vector<uint32_t> order(n);
-  std::vector<PelagePatch> patches((n + kPatchSize - 1) / kPatchSize);
-  size_t patch_count = 0;
-  const PelageMeshDesc rest_desc = rest.desc();
-  creature::check(pelage_patch_plan(&rest_desc, stamped.data(), n, kPatchSize, order.data(), patches.data(),
-                                    patches.size(), &patch_count),
-                  "pelage_patch_plan");
-  std::vector<PelageRoot> roots(n);
-  for (size_t k = 0; k < n; ++k) roots[k] = stamped[order[k]];
   const std::vector<float> rest_points = creature::combed_guides(rest, guide_roots, kCvs, 0.05f);
-  const PelageGuidesDesc rest_guides = creature::guides_desc(guide_roots, rest_points, kCvs);
-  PelageBindParams bp = pelage_bind_params_defaults();
-  bp.thread_count = 0;
-  const std::vector<PelageStrandBinding> bindings = creature::bind(rest, rest_guides, roots.data(), n, bp);
-  PelageGroomMaps maps = pelage_groom_maps_defaults();
-  maps.root_width.constant = 0.0016f, maps.tip_width.constant = 0.0003f;
-  maps.kink_amplitude.constant = 0.03f, maps.clump.constant = 0.25f, maps.bend.constant = 0.1f;
-  const std::vector<PelageStrandGroom> grooms = creature::groom(rest, maps, roots.data(), n);
-
+  const std::vector<unsigned char> file = creature::groom_file(rest, guide_roots, rest_points, kCvs, hairs, kPatchSize);
+  const size_t bytes = file.size();
+  creature::write_file(groom_path, file.data(), bytes);
   PelageExpandParams ep = pelage_expand_params_defaults();
   ep.points_per_strand = kCvs;
-  const creature::Frame rest_frame(rest, rest_guides, ep);
-  const PelageStrands strands{roots.data(), bindings.data(), grooms.data(), n};
-  const PelageGroomFileDesc desc{rest_frame.get(), guide_roots.data(), strands, patches.data(), patch_count};
-  size_t bytes = 0;
-  pelage_groom_file_write(&desc, nullptr, 0, &bytes);  // CAPACITY_EXCEEDED: the size
-  std::vector<unsigned char> file(bytes);
-  creature::check(pelage_groom_file_write(&desc, file.data(), file.size(), &bytes), "pelage_groom_file_write");
-  write_file(groom_path, file.data(), bytes);
 
   // the frame: at each shutter sample, guides on the deformed mesh (a
   // simulation's output), coded against the groom file's neutral pose
@@ -121,6 +80,7 @@ void write_files(const creature::Mesh& rest, uint32_t hairs, const std::string& 
   }
   PelageGroomFileInfo info{};
   creature::check(pelage_groom_file_info(file.data(), bytes, &info), "pelage_groom_file_info");
+  const size_t n = info.strand_count, patch_count = info.patch_count;
   std::vector<float> guide_local(guide_roots.size() * kCvs * 3);
   std::vector<PelageRoot> r(guide_roots.size()), sr(n);
   std::vector<PelageStrandBinding> sb(n);
@@ -136,7 +96,7 @@ void write_files(const creature::Mesh& rest, uint32_t hairs, const std::string& 
   const PelageFrame samples[kSamples] = {frames[0]->get(), frames[1]->get()};
   creature::check(pelage_guide_cache_write(&set, samples, kSamples, 0, cache.data(), most, &written),
                   "pelage_guide_cache_write");
-  write_file(cache_path, cache.data(), written);
+  creature::write_file(cache_path, cache.data(), written);
   std::printf("pipeline: %zu hairs in %zu patches; groom file %.1f MB, frame cache (%d samples) %.1f KB (dense: %.1f "
               "MB)\n", n, patch_count, double(bytes) / 1e6, kSamples, double(written) / 1e3,
               double(kSamples) * double(n) * (kCvs + 2) * 16 / 1e6);
@@ -164,7 +124,7 @@ struct Fur {
 
 void load_fur(Fur& fur, const std::string& groom_path, const std::string& cache_path,
               const std::vector<creature::Mesh>& meshes) {
-  const std::vector<unsigned char> file = read_file(groom_path), cache = read_file(cache_path);
+  const std::vector<unsigned char> file = creature::read_file(groom_path), cache = creature::read_file(cache_path);
   PelageGroomFileInfo info{};
   creature::check(pelage_groom_file_info(file.data(), file.size(), &info), "pelage_groom_file_info");
   fur.guide_roots.resize(info.guide_count);

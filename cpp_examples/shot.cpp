@@ -23,7 +23,6 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,18 +42,6 @@ const float kShirtGap = 0.6f * kGuideLength;
 // shutter), each one simulation step.
 const int kSamples = 2;
 const int kImageSize = 512;
-
-std::vector<unsigned char> read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-void write_file(const std::string& path, const unsigned char* data, size_t size) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
-  if (!out) throw std::runtime_error("cannot write " + path);
-}
 
 std::string frame_path(const std::string& dir, int frame, const std::string& suffix) {
   char name[16];
@@ -96,7 +83,7 @@ void write_meshes(const std::string& path, const std::vector<creature::Mesh>& sa
 }
 
 std::vector<creature::Mesh> read_meshes(const std::string& path) {
-  const std::vector<unsigned char> bytes = read_file(path);
+  const std::vector<unsigned char> bytes = creature::read_file(path);
   uint32_t counts[2] = {};
   if (bytes.size() >= sizeof counts) std::memcpy(counts, bytes.data(), sizeof counts);
   if (bytes.size() != sizeof counts + 12 * size_t(counts[1]) + kSamples * 24 * size_t(counts[0])) {
@@ -118,44 +105,6 @@ std::vector<creature::Mesh> read_meshes(const std::string& path) {
   return samples;
 }
 
-// Once per asset: guides combed on the rest pose, the render hairs stored
-// patch by patch with their bindings and groom values, as render_lazy does.
-void write_groom_file(const creature::Mesh& rest, const std::vector<PelageRoot>& guide_roots,
-                      const std::vector<float>& rest_points, uint32_t hairs, const std::string& path) {
-  PelageStampParams sp = pelage_stamp_params_defaults();
-  sp.target_count = hairs, sp.seed = 2;
-  const std::vector<PelageRoot> stamped = creature::stamp(rest, sp);
-  const size_t n = stamped.size();
-  std::vector<uint32_t> order(n);
-  std::vector<PelagePatch> patches((n + kPatchSize - 1) / kPatchSize);
-  size_t patch_count = 0;
-  const PelageMeshDesc rest_desc = rest.desc();
-  check(pelage_patch_plan(&rest_desc, stamped.data(), n, kPatchSize, order.data(), patches.data(), patches.size(),
-                          &patch_count),
-        "pelage_patch_plan");
-  std::vector<PelageRoot> roots(n);
-  for (size_t k = 0; k < n; ++k) roots[k] = stamped[order[k]];
-  const PelageGuidesDesc rest_guides = creature::guides_desc(guide_roots, rest_points, kCvs);
-  PelageBindParams bp = pelage_bind_params_defaults();
-  bp.thread_count = 0;
-  const std::vector<PelageStrandBinding> bindings = creature::bind(rest, rest_guides, roots.data(), n, bp);
-  PelageGroomMaps maps = pelage_groom_maps_defaults();
-  maps.root_width.constant = 0.0016f, maps.tip_width.constant = 0.0003f;
-  maps.kink_amplitude.constant = 0.03f, maps.clump.constant = 0.25f, maps.bend.constant = 0.1f;
-  const std::vector<PelageStrandGroom> grooms = creature::groom(rest, maps, roots.data(), n);
-
-  PelageExpandParams ep = pelage_expand_params_defaults();
-  ep.points_per_strand = kCvs;
-  const creature::Frame rest_frame(rest, rest_guides, ep);
-  const PelageStrands strands{roots.data(), bindings.data(), grooms.data(), n};
-  const PelageGroomFileDesc desc{rest_frame.get(), guide_roots.data(), strands, patches.data(), patch_count};
-  size_t bytes = 0;
-  pelage_groom_file_write(&desc, nullptr, 0, &bytes);  // CAPACITY_EXCEEDED: the size
-  std::vector<unsigned char> file(bytes);
-  check(pelage_groom_file_write(&desc, file.data(), file.size(), &bytes), "pelage_groom_file_write");
-  write_file(path, file.data(), bytes);
-}
-
 // What every job reads first: the groom file's guide set (the neutral pose
 // the caches are coded against) and its strands as a groom.
 struct Asset {
@@ -165,7 +114,7 @@ struct Asset {
   std::unique_ptr<creature::Groom> groom;
 
   explicit Asset(const std::string& path) {
-    const std::vector<unsigned char> file = read_file(path);
+    const std::vector<unsigned char> file = creature::read_file(path);
     check(pelage_groom_file_info(file.data(), file.size(), &info), "pelage_groom_file_info");
     const size_t n = info.strand_count;
     guide_roots.resize(info.guide_count);
@@ -221,7 +170,7 @@ size_t write_trim_records(const std::string& path, PelageFrame frame, const crea
   std::vector<unsigned char> file(bytes);
   check(pelage_trim_records_write(records.data(), count, guides, kCvs, file.data(), bytes, &bytes),
         "pelage_trim_records_write");
-  write_file(path, file.data(), bytes);
+  creature::write_file(path, file.data(), bytes);
   return count;
 }
 
@@ -239,7 +188,8 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   sp.target_count = kGuides, sp.seed = 1;
   const std::vector<PelageRoot> guide_roots = creature::stamp(rest, sp);
   const std::vector<float> rest_points = creature::combed_guides(rest, guide_roots, kCvs, kGuideLength);
-  write_groom_file(rest, guide_roots, rest_points, hairs, dir + "/creature.pgroom");
+  const std::vector<unsigned char> groom = creature::groom_file(rest, guide_roots, rest_points, kCvs, hairs, kPatchSize);
+  creature::write_file(dir + "/creature.pgroom", groom.data(), groom.size());
   const Asset asset(dir + "/creature.pgroom");
   const PelageGuideSet set = asset.set();
   std::printf("sim: groom file, %zu hairs on %zu guides: %.2f s\n", asset.info.strand_count, guide_roots.size(),
@@ -282,7 +232,7 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
     const PelageFrame at[kSamples] = {samples[0]->get(), samples[1]->get()};
     check(pelage_guide_cache_write(&set, at, kSamples, 0, cache.data(), cache.size(), &bytes),
           "pelage_guide_cache_write");
-    write_file(frame_path(dir, f, ".pguide"), cache.data(), bytes);
+    creature::write_file(frame_path(dir, f, ".pguide"), cache.data(), bytes);
     write_meshes(frame_path(dir, f, ".mesh"), meshes);
     std::printf("sim: frame %d: cache %.1f KB, up to %zu guides meet the shirt or the body: %.2f s\n", f,
                 double(bytes) / 1e3, met, clock.seconds());
@@ -296,7 +246,7 @@ void reduce(const std::string& dir, int frames) {
   std::vector<uint16_t> lengths(asset.info.strand_count, PELAGE_TRIM_WHOLE);
   for (int f = 0; f < frames; ++f) {
     for (int k = 0; k < kSamples; ++k) {
-      const std::vector<unsigned char> file = read_file(records_path(dir, f, k));
+      const std::vector<unsigned char> file = creature::read_file(records_path(dir, f, k));
       PelageTrimRecordsInfo info{};
       check(pelage_trim_records_info(file.data(), file.size(), &info), "pelage_trim_records_info");
       std::vector<PelageTrimRecord> records(info.record_count);
@@ -312,7 +262,7 @@ void reduce(const std::string& dir, int frames) {
   std::vector<unsigned char> file(bytes);
   check(pelage_trim_lengths_write(lengths.data(), lengths.size(), file.data(), bytes, &bytes),
         "pelage_trim_lengths_write");
-  write_file(dir + "/shot.ptriml", file.data(), bytes);
+  creature::write_file(dir + "/shot.ptriml", file.data(), bytes);
   const auto cut = std::count_if(lengths.begin(), lengths.end(), [](uint16_t l) { return l < PELAGE_TRIM_WHOLE; });
   std::printf("reduce: %d frames: %td of %zu hairs trimmed, %zu bytes\n", frames, cut, lengths.size(), bytes);
 }
@@ -379,7 +329,7 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
                   const std::string& dir, int f) {
   creature::Stopwatch clock;
   const std::vector<creature::Mesh> meshes = read_meshes(frame_path(dir, f, ".mesh"));
-  const std::vector<unsigned char> cache = read_file(frame_path(dir, f, ".pguide"));
+  const std::vector<unsigned char> cache = creature::read_file(frame_path(dir, f, ".pguide"));
   const PelageGuideSet set = asset.set();
   PelageExpandParams ep = pelage_expand_params_defaults();
   ep.points_per_strand = asset.info.points_per_guide;
@@ -425,7 +375,7 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
 
 void render(const std::string& dir, int first, int count) {
   const Asset asset(dir + "/creature.pgroom");
-  const std::vector<unsigned char> file = read_file(dir + "/shot.ptriml");
+  const std::vector<unsigned char> file = creature::read_file(dir + "/shot.ptriml");
   std::vector<uint16_t> lengths(asset.info.strand_count);
   size_t strands = 0;
   check(pelage_trim_lengths_read(file.data(), file.size(), lengths.data(), lengths.size(), &strands),
