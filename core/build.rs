@@ -1,5 +1,5 @@
 //! Bakes the Poisson tile into the crate: `src/stamp/tile/generate.rs` runs here,
-//! once, and its points, levels and cell starts become static arrays.
+//! once, and its points, levels, orders and cell starts become static arrays.
 
 // the modules are borrowed from the crate, which uses more of them
 #![allow(dead_code)]
@@ -31,9 +31,11 @@ fn main() {
     });
     let list = |v: &[u32]| v.iter().map(|x| format!("{x},")).collect::<String>();
     let levels: Vec<u32> = tile.levels.iter().map(|&l| l as u32).collect();
+    let orders: Vec<u32> = tile.orders.iter().map(|&o| o as u32).collect();
     let n = tile.points.len();
     writeln!(src, "static POINTS: [[f32; 2]; {n}] = [{points}];").unwrap();
     writeln!(src, "static LEVELS: [u8; {n}] = [{}];", list(&levels)).unwrap();
+    writeln!(src, "static ORDERS: [u8; {n}] = [{}];", list(&orders)).unwrap();
     let cells = tile.cell_start.len();
     let starts = list(&tile.cell_start);
     writeln!(src, "static CELL_START: [u32; {cells}] = [{starts}];").unwrap();

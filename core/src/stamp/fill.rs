@@ -18,25 +18,34 @@ use crate::surface::grid::HashGrid;
 use crate::Error;
 use glam::Vec3;
 
-/// Darts a cut edge's strip takes per root it holds on average.
-pub(super) const DARTS_PER_ROOT: f32 = 2.0;
-/// Share of the edge pass's loss the fill wins back, measured on the
-/// creature from 10K to 1M roots: the radius is first predicted with the
-/// rest of the loss.
-pub(super) const REFILLED: f32 = 0.45;
+/// Darts a cut edge's strip takes per root it holds on average: with 6,
+/// 1M roots on the creature keep no hole wider than 1.1 r_hex (2 leave
+/// holes up to 1.5).
+pub(super) const DARTS_PER_ROOT: f32 = 6.0;
+/// Share of the edge pass's loss the fill wins back, as `REFILLED +
+/// REFILL_SLOPE * loss / target`: where the loss is a larger share of the
+/// roots (fewer roots, so more cut edge per root) the darts also fill gaps
+/// the tile left along cut edges, and win back more than the loss. A fit
+/// on the creature and the head from 10K to 1M roots: the radius is first
+/// predicted with the rest of the loss.
+pub(super) const REFILLED: f32 = 0.82;
+/// See [`REFILLED`].
+pub(super) const REFILL_SLOPE: f32 = 2.0;
 /// Darts of one face tested together (a face with more takes them in runs).
 const RUN: usize = 256;
 /// Barycentric `(u, v)` of each corner.
 const BARY: [[f32; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
 
-/// A dart at `uv` on face `f`: the finest LOD level, near every boundary.
+/// A dart at `uv` on face `f`: the finest LOD step, near every boundary,
+/// first in its step (it fills a hole: the count trim drops it last).
 fn dart(f: usize, uv: [f32; 2]) -> Candidate {
     Candidate {
         face: f as u32,
         uv,
         level: (LOD_LEVELS - 1) as u8,
         step: (LEVEL_STEPS - 1) as u8,
-        near_levels: LOD_LEVELS as u16,
+        order: 0,
+        near_levels: LOD_LEVELS as u8,
     }
 }
 

@@ -3,18 +3,22 @@
 use super::near::Near;
 use super::{face_frame, Candidate, Scratch, Stamper, GRID_CELL};
 use crate::rng::{self, Purpose};
-use crate::stamp::tile::{LEVEL_STEPS, LOD_LEVELS};
+use crate::stamp::tile::{step_spacing, LEVEL_STEPS, LOD_LEVELS};
 use crate::surface::grid::HashGrid;
 use crate::{Error, Root};
 use glam::Vec3;
 
-/// Bits of the hash that orders the candidates within one step of a LOD
-/// level (ties keep candidate order).
-pub(super) const RANK_HASH_BITS: u32 = 10;
+/// Bits of the key that orders the candidates within one step of a LOD
+/// level: their order from the tile (8 bits), then a hash (ties keep
+/// candidate order).
+pub(super) const RANK_ORDER_BITS: u32 = 8 + HASH_BITS;
+/// Bits of the hash below the tile order: it spreads the points of one
+/// order over the mesh.
+const HASH_BITS: u32 = 2;
 /// 2^64 over the golden ratio, odd.
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 /// Counters of the rank sort: one per (level, step, hash) key.
-pub(super) const RANK_KEYS: usize = (LOD_LEVELS * LEVEL_STEPS) << RANK_HASH_BITS;
+pub(super) const RANK_KEYS: usize = (LOD_LEVELS * LEVEL_STEPS) << RANK_ORDER_BITS;
 
 impl<'m, 'a> Stamper<'m, 'a> {
     /// Assigns LOD levels across triangles, ranks the candidates, and writes
@@ -56,22 +60,16 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let counts = &mut *scratch.counts;
         counts.fill(0);
         // Fibonacci hashing of the candidate index, offset by the seed: the
-        // keys of consecutive candidates (neighbours on one face) step by
-        // the golden ratio around the key range, so they land far apart in
-        // the order, and any run of keys takes candidates from all over
+        // keys of consecutive candidates (neighbours on one face) of one
+        // order step by the golden ratio around the hash range
         let offset = rng::hash(self.seed, 0, Purpose::LodOrder, 0);
         let levels = scratch.level[..n].iter();
-        for (j, ((key, &l), c)) in keys.iter_mut().zip(levels).zip(cands).enumerate() {
-            let h = offset.wrapping_add(j as u64).wrapping_mul(GOLDEN) >> (64 - RANK_HASH_BITS);
-            // a point raised to a finer level comes after that level's
-            // own points
-            let step = if l == c.level {
-                c.step
-            } else {
-                LEVEL_STEPS as u8 - 1
-            };
-            let fine = l as u32 * LEVEL_STEPS as u32 + step as u32;
-            *key = (fine << RANK_HASH_BITS) | h as u32;
+        for (j, ((key, &t), c)) in keys.iter_mut().zip(levels).zip(cands).enumerate() {
+            let h = offset.wrapping_add(j as u64).wrapping_mul(GOLDEN) >> (64 - HASH_BITS);
+            // a point raised to a finer step is near another triangle's
+            // point: last in its step, so the count trim drops it first
+            let order = if t == sub_level(c) { c.order } else { u8::MAX };
+            *key = (t as u32) << RANK_ORDER_BITS | (order as u32) << HASH_BITS | h as u32;
             counts[*key as usize] += 1;
         }
         let mut first = 0;
@@ -100,26 +98,31 @@ impl<'m, 'a> Stamper<'m, 'a> {
         Ok(())
     }
 
-    /// Nested LOD levels across triangles. A point `q` of tile level `t(q)`
-    /// takes the finest of `t(q)` and, for every point `p` of another
-    /// triangle that comes before it (a coarser tile level, or the same one
-    /// on an earlier triangle) and lies closer than the spacing of `t(q)`,
-    /// the first level whose spacing their distance respects.
+    /// Nested LOD steps across triangles. The steps of all levels, coarsest
+    /// first, are the sub-levels here (`level * LEVEL_STEPS + step`, see
+    /// [`step_spacing`]); a prefix of the rank is a prefix of them, so each
+    /// one's spacing holds across triangles as it does inside the tile. A
+    /// point `q` of tile sub-level `t(q)` takes the finest of `t(q)` and,
+    /// for every point `p` of another triangle that comes before it (a
+    /// coarser tile sub-level, or the same one on an earlier triangle) and
+    /// lies closer than the spacing of `t(q)`, the first sub-level whose
+    /// spacing their distance respects.
     ///
-    /// Every pair then respects the spacing of every level both are in:
+    /// Every pair then respects the spacing of every sub-level both are in:
     /// only the later point of a pair needs to move, and only when it is
-    /// closer than its own level's spacing, since the earlier point's tile
-    /// level is coarser still. The rule reads tile levels only, so each
-    /// level is one query per point, in any order, with no re-checking as
-    /// levels change.
+    /// closer than its own sub-level's spacing, since the earlier point's
+    /// tile sub-level is coarser still. The rule reads tile sub-levels only,
+    /// so each is one query per point, in any order, with no re-checking as
+    /// levels change. The finest sub-level's spacing is the disk radius,
+    /// which the edge pass keeps.
     ///
-    /// A candidate whose [`Candidate::near_levels`] stop before its tile
-    /// level conflicts with no other triangle at that level or any
-    /// finer one, so it keeps its tile level; the others are copied to
-    /// [`Near`] records grouped by tile level. Level `k` puts the records of
-    /// coarser levels within its spacing of a boundary into a grid, then
-    /// tests its own records against it one triangle at a time, adding each
-    /// triangle's records after its test.
+    /// A candidate whose [`Candidate::near_levels`] show that no disk of its
+    /// step's spacing reaches past its triangle conflicts with no other
+    /// triangle there or finer, so it keeps its tile sub-level; the others
+    /// are copied to [`Near`] records grouped by tile sub-level. Level `k`
+    /// puts the records of coarser levels whose disk reaches a boundary into
+    /// a grid, then tests each step's records against it one triangle at a
+    /// time, adding each triangle's records after its test.
     fn assign_levels(
         &self,
         cands: &[Candidate],
@@ -127,24 +130,25 @@ impl<'m, 'a> Stamper<'m, 'a> {
         done: &mut dyn FnMut(f32) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let n = cands.len();
-        let finest = LOD_LEVELS - 1;
-        let squares = self.spacings.map(|s| s * s);
+        let finest = SUB_LEVELS - 1;
+        let squares: [f32; SUB_LEVELS] = core::array::from_fn(|t| {
+            let s = step_spacing(t / LEVEL_STEPS, t % LEVEL_STEPS);
+            s * s
+        });
         let level = &mut scratch.level[..n];
-        let takes_part =
-            |c: &Candidate| (c.level as u16) < c.near_levels && (c.level as usize) < finest;
         let taking = &mut *scratch.next;
-        let mut start = [0usize; LOD_LEVELS + 1];
+        let mut start = [0usize; SUB_LEVELS + 1];
         let mut m = 0;
         for (j, (c, l)) in cands.iter().zip(level.iter_mut()).enumerate() {
-            *l = c.level;
+            *l = sub_level(c);
             // branch-free: which candidates take part is close to random
-            let takes = takes_part(c) as usize;
-            start[c.level as usize + 1] += takes;
+            let takes = (reaches(c, c.level as usize) && (*l as usize) < finest) as usize;
+            start[*l as usize + 1] += takes;
             taking[m] = j as u32;
             m += takes;
         }
-        for l in 0..LOD_LEVELS {
-            start[l + 1] += start[l];
+        for t in 0..SUB_LEVELS {
+            start[t + 1] += start[t];
         }
         let mut fill = start;
         let mut frame = (u32::MAX, [Vec3::ZERO; 3]);
@@ -153,49 +157,77 @@ impl<'m, 'a> Stamper<'m, 'a> {
             if c.face != frame.0 {
                 frame = (c.face, face_frame(&self.mesh, c.face as usize));
             }
-            scratch.near[fill[c.level as usize]] = Near::new(c, j as usize, &frame.1);
-            fill[c.level as usize] += 1;
+            let t = sub_level(c) as usize;
+            scratch.near[fill[t]] = Near::new(c, j as usize, &frame.1);
+            fill[t] += 1;
         }
         let near = &scratch.near[..m];
         // no level holds more than the records: the rest of the table is
         // never read, nor cleared
         let buckets = HashGrid::buckets_for(m).min(scratch.heads.len());
         let mut grid = HashGrid::new(&mut scratch.heads[..buckets], scratch.next, self.radius);
-        for k in 0..finest {
-            let s = self.spacings[k];
-            let (coarser, end) = (start[k], start[k + 1]);
-            grid.reset(GRID_CELL * self.radius * s, end);
-            // coarser levels block every other triangle; this level's
-            // records block the triangles after their own, so go in after it
+        for k in 0..LOD_LEVELS {
+            let steps = k * LEVEL_STEPS..((k + 1) * LEVEL_STEPS).min(finest);
+            let coarser = start[steps.start];
+            grid.reset(
+                GRID_CELL * self.radius * step_spacing(k, 0),
+                start[steps.end],
+            );
+            // coarser levels block every other triangle; each step's records
+            // block the triangles after their own and the later steps, so
+            // go in after it
             for (i, q) in near[..coarser].iter().enumerate() {
-                grid.insert_if((k as u32) < q.near_levels, i as u32, q.position.into());
+                let reaching = k <= q.near_levels as usize;
+                grid.insert_if(reaching, i as u32, q.position.into());
             }
             let mut first = coarser;
-            for group in near[coarser..end].chunk_by(|a, b| a.face == b.face) {
-                let f = group[0].face;
-                let reach = self.local_radius(f) * s * 1.0001;
-                let buf = &mut scratch.gathered;
-                Self::gather(&grid, near, group, reach, buf, |buf| {
-                    // squared distances in units of the pair's local radius
-                    self.weigh(buf, f, |scale| {
-                        let w = scale / self.radius;
-                        w * w
-                    });
-                    for q in group {
-                        let d = buf.nearest(q.position);
-                        let l = &mut level[q.index as usize];
-                        while (*l as usize) < finest && d < squares[*l as usize] {
-                            *l += 1;
+            for t in steps {
+                let s = libm::sqrtf(squares[t]);
+                for group in near[first..start[t + 1]].chunk_by(|a, b| a.face == b.face) {
+                    let f = group[0].face;
+                    let reach = self.local_radius(f) * s * 1.0001;
+                    let buf = &mut scratch.gathered;
+                    Self::gather(&grid, near, group, reach, buf, |buf| {
+                        // squared distances in units of the pair's local radius
+                        self.weigh(buf, f, |scale| {
+                            let w = scale / self.radius;
+                            w * w
+                        });
+                        for q in group {
+                            let d = buf.nearest(q.position);
+                            let l = &mut level[q.index as usize];
+                            while (*l as usize) < finest && d < squares[*l as usize] {
+                                *l += 1;
+                            }
                         }
+                    });
+                    for (i, q) in (first..).zip(group) {
+                        grid.insert(i as u32, Vec3::from(q.position));
                     }
-                });
-                for (i, q) in (first..).zip(group) {
-                    grid.insert(i as u32, Vec3::from(q.position));
+                    first += group.len();
                 }
-                first += group.len();
             }
             done((k + 1) as f32 / LOD_LEVELS as f32)?;
         }
         Ok(())
     }
+}
+
+/// The steps of all LOD levels, as the sub-levels of the rank.
+const SUB_LEVELS: usize = LOD_LEVELS * LEVEL_STEPS;
+
+/// Candidate `c`'s tile sub-level: `level * LEVEL_STEPS + step`.
+#[inline]
+fn sub_level(c: &Candidate) -> u8 {
+    c.level * LEVEL_STEPS as u8 + c.step
+}
+
+/// Whether a disk of `c`'s step spacing, at level `k` or a coarser one,
+/// may reach past its triangle: the steps before a level's last are wider
+/// than its spacing but narrower than the coarser level's, which
+/// [`Candidate::near_levels`] counts.
+#[inline]
+fn reaches(c: &Candidate, k: usize) -> bool {
+    let last = c.step as usize == LEVEL_STEPS - 1;
+    k < c.near_levels as usize + !last as usize
 }

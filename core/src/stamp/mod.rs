@@ -29,12 +29,16 @@
 //!    corrects the radius until the count is within [`COUNT_TOLERANCE`] of
 //!    the target (dense stamps usually need no correction). (The paper's
 //!    `0.35 / (sqrt(N) * A_max_normalized)` is not dimensionally a length.)
-//! 4. **LOD.** Each tile point carries a nested level. Across triangles, a
-//!    point moves to the first level whose spacing it respects from every
-//!    point of another triangle that comes before it (a coarser tile level,
-//!    or the same level on an earlier triangle); the rule reads tile levels
-//!    only, so it needs one query per point and level and no re-checking.
-//!    The rank is a counting sort by (level, step, hash of the index).
+//! 4. **LOD.** The tile is grown coarse to fine, one step of a nested
+//!    level at a time, so every rank prefix within a chart is a Poisson set
+//!    grown for its own size; each point also carries its place in its step
+//!    (farthest-point order). Across triangles, a point moves to the first
+//!    step whose spacing it respects from every point of another triangle
+//!    that comes before it (a coarser tile step, or the same step on an
+//!    earlier triangle); the rule reads tile steps only, so it needs one
+//!    query per point and no re-checking. The rank is a counting sort by
+//!    (step, place in the step, hash of the index); the surplus of the
+//!    count leaves from the end, the points nearest to others.
 //!
 //! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
 //! spread it over threads; the result is bitwise identical for any split.
@@ -69,7 +73,8 @@ use sizing::*;
 pub use sizing::{max_roots, required_bytes, DENSITY_STEPS};
 
 /// Width of the band above the target where the radius correction stops;
-/// the surplus is trimmed by LOD rank.
+/// the surplus is trimmed by LOD rank (the end of the last step: the points
+/// nearest to others, so the trim opens no hole).
 pub const COUNT_TOLERANCE: f32 = 0.02;
 /// Grid cells of the LOD passes, in disk radii times the level's spacing:
 /// larger cells mean fewer buckets per face's query box but more points per
@@ -196,6 +201,10 @@ pub struct Candidate {
     /// [`step_spacing`](tile::step_spacing)): the rank orders a level's
     /// points by step.
     pub step: u8,
+    /// Its place within its step, from the tile (0 first, 255 last; see
+    /// [`Tile::run`](tile::Tile::run)): the rank orders a step's points by
+    /// it, so the count trim drops those nearest to others.
+    pub order: u8,
     /// How many LOD levels, coarsest first, have a spacing (in units of the
     /// local disk radius) that reaches from the point past a cut edge of its
     /// triangle or the far side of a linked neighbour. Within that distance
@@ -204,7 +213,7 @@ pub struct Candidate {
     /// [`LOD_LEVELS`] means even the disk radius reaches (the point takes
     /// part in the edge pass), and is also given to every point of a face
     /// near another shell and to the fill's darts.
-    pub near_levels: u16,
+    pub near_levels: u8,
 }
 
 impl Candidate {
@@ -384,8 +393,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// Expected number of points the edge pass removes at radius `r`, net of
     /// what the fill wins back: each face's half of an edge of length `l`
     /// (scaled by density, `x = l / 2r`) loses `EDGE_LOSS * x^2 / (x +
-    /// EDGE_LOSS_KNEE)` points, of which the fill restores
-    /// [`REFILLED`](fill::REFILLED). Long edges lose a fixed number per
+    /// EDGE_LOSS_KNEE)` points, of which the fill restores a share (see
+    /// [`REFILLED`](fill::REFILLED)), more than all when the loss is a
+    /// large share of the target. Long edges lose a fixed number per
     /// radius of length; short ones less, as their faces hold fewer points.
     fn predicted_loss(&self, r: f32) -> f64 {
         let k = 0.5 / r;
@@ -403,8 +413,13 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 };
             }
         }
-        let refilled = if self.fills() { fill::REFILLED } else { 0.0 };
-        (EDGE_LOSS * (1.0 - refilled)) as f64 * loss as f64
+        let gross = EDGE_LOSS as f64 * loss as f64;
+        let refilled = if self.fills() {
+            fill::REFILLED as f64 + fill::REFILL_SLOPE as f64 * gross / self.target.max(1) as f64
+        } else {
+            0.0
+        };
+        (1.0 - refilled) * gross
     }
 
     /// The radius whose stamp is expected to keep the middle of the count
@@ -629,6 +644,7 @@ pub fn stamp_with_progress(
 mod tests {
     use super::near::Near;
     use super::sizing::HEX_PACKING;
+    use super::tile::LEVEL_STEPS;
     use super::*;
     use crate::testmesh::{graded_plane, seamed_sphere, sphere};
     use crate::Strided;
@@ -787,16 +803,17 @@ mod tests {
         });
     }
 
-    /// Checks the LOD spacing of every pair of kept candidates (see above);
-    /// returns how many candidates left their tile level.
+    /// Checks the LOD spacing of every pair of kept candidates (see above):
+    /// the spacing of the finer of their steps; returns how many candidates
+    /// left their tile step.
     fn check_lod_spacing(stamper: &Stamper, cands: &[Candidate], levels: &[u8]) -> usize {
         let mut raised = 0;
+        let tile_step = |c: &Candidate| c.level as usize * LEVEL_STEPS + c.step as usize;
         for (c, &l) in cands.iter().zip(levels) {
-            assert!(l >= c.level && (l as usize) < LOD_LEVELS);
-            raised += (l > c.level) as usize;
+            assert!(l as usize >= tile_step(c) && (l as usize) < LOD_LEVELS * LEVEL_STEPS);
+            raised += (l as usize > tile_step(c)) as usize;
         }
         let at = |c: &Candidate| position(&stamper.mesh, c);
-        let spacings = stamper.spacings;
         for (i, a) in cands.iter().enumerate() {
             for (b, &lb) in cands[i + 1..].iter().zip(&levels[i + 1..]) {
                 let (fa, fb) = (
@@ -806,14 +823,14 @@ mod tests {
                 if Vec3::from(fa.normal).dot(Vec3::from(fb.normal)) <= 0.0 {
                     continue;
                 }
-                let k = levels[i].max(lb) as usize;
+                let t = levels[i].max(lb) as usize;
+                let spacing = tile::step_spacing(t / LEVEL_STEPS, t % LEVEL_STEPS);
                 let r = stamper.radius / fa.scale.max(fb.scale);
                 let d = at(a).distance(at(b));
                 assert!(
-                    d >= spacings[k] * r * 0.999,
-                    "levels {} and {lb}: {d} < {} * {r}",
+                    d >= spacing * r * 0.999,
+                    "steps {} and {lb}: {d} < {spacing} * {r}",
                     levels[i],
-                    spacings[k]
                 );
             }
         }

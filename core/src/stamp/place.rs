@@ -113,6 +113,7 @@ pub(super) struct Batch {
     x: [f32; BATCH],
     y: [f32; BATCH],
     pub(super) level: [u8; BATCH],
+    order: [u8; BATCH],
     len: usize,
 }
 
@@ -122,6 +123,7 @@ impl Default for Batch {
             x: [0.0; BATCH],
             y: [0.0; BATCH],
             level: [0; BATCH],
+            order: [0; BATCH],
             len: 0,
         }
     }
@@ -209,7 +211,7 @@ impl Placing {
     /// slot is written either way: a branch would mispredict about every
     /// other point). `batch` must have room.
     #[inline]
-    fn test(&self, batch: &mut Batch, p: Vec2, level: u8) {
+    fn test(&self, batch: &mut Batch, p: Vec2, level: u8, order: u8) {
         let [cx, cy, cc] = self.cross;
         // the same operations in the same order as `emit`'s barycentrics,
         // so the same bits
@@ -218,6 +220,7 @@ impl Placing {
         // the caller keeps len below BATCH; the mask spares the bounds checks
         let i = batch.len & (BATCH - 1);
         (batch.x[i], batch.y[i], batch.level[i]) = (p.x, p.y, level);
+        batch.order[i] = order;
         batch.len += inside as usize;
     }
 
@@ -238,7 +241,7 @@ impl Placing {
             needed: n + len,
             available,
         })?;
-        let mut near = [0u16; BATCH];
+        let mut near = [0u8; BATCH];
         let lanes = len.div_ceil(LANES) * LANES;
         self.near_levels(&batch.x[..lanes], &batch.y[..lanes], squares, &mut near);
         let [cx, cy, cc] = self.cross_by_edge();
@@ -256,6 +259,7 @@ impl Placing {
                 uv: [u, v],
                 level: batch.level[i] / LEVEL_STEPS as u8,
                 step: batch.level[i] % LEVEL_STEPS as u8,
+                order: batch.order[i],
                 near_levels: near[i],
             };
         }
@@ -271,7 +275,7 @@ impl Placing {
         xs: &[f32],
         ys: &[f32],
         squares: &[f32; LOD_LEVELS],
-        out: &mut [u16],
+        out: &mut [u8],
     ) {
         let [cross_x, cross_y, cross_c] = self.cross_by_edge();
         let lanes = xs.chunks_exact(LANES).zip(ys.chunks_exact(LANES));
@@ -310,10 +314,10 @@ impl Placing {
                     best[l] = if term[l] < best[l] { term[l] } else { best[l] };
                 }
             }
-            let mut near = [0u16; LANES];
+            let mut near = [0u8; LANES];
             for &s2 in squares {
                 for l in 0..LANES {
-                    near[l] += (best[l] < s2) as u16;
+                    near[l] += (best[l] < s2) as u8;
                 }
             }
             d.copy_from_slice(&near);
@@ -349,7 +353,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let shells = &self.shells;
         if shells.near_other(f) {
             for c in &mut out[first..] {
-                c.near_levels = LOD_LEVELS as u16;
+                c.near_levels = LOD_LEVELS as u8;
             }
         }
         let lift = BURY_LIFT * self.local_radius(f as u32);
@@ -400,12 +404,12 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let wx = cx.rem_euclid(side);
                 let len = (side - wx).min(last - cx + 1);
                 let shift = Vec2::new((cx - wx) as f32 * cell, shift_y);
-                let (points, levels) = TILE.run(wx as usize, wy as usize, len as usize);
-                for (&p, &level) in points.iter().zip(levels) {
+                let (points, levels, orders) = TILE.run(wx as usize, wy as usize, len as usize);
+                for ((&p, &level), &order) in points.iter().zip(levels).zip(orders) {
                     if batch.len == BATCH {
                         n = place.emit(batch, f as u32, squares, out, n)?;
                     }
-                    place.test(batch, Vec2::from(p) + shift, level);
+                    place.test(batch, Vec2::from(p) + shift, level, order);
                 }
                 cx += len;
             }

@@ -21,6 +21,7 @@ include!(concat!(env!("OUT_DIR"), "/tile.rs"));
 pub struct Tile {
     points: &'static [[f32; 2]],
     levels: &'static [u8],
+    orders: &'static [u8],
     cell_start: &'static [u32],
 }
 
@@ -28,6 +29,7 @@ pub struct Tile {
 pub static TILE: Tile = Tile {
     points: &POINTS,
     levels: &LEVELS,
+    orders: &ORDERS,
     cell_start: &CELL_START,
 };
 
@@ -48,17 +50,19 @@ impl Tile {
     }
 
     /// Points of the `len` cells (x, y) to (x + len - 1, y) of one row,
-    /// and their LOD steps (`level * LEVEL_STEPS + step`, see
-    /// [`step_spacing`]): cells are stored row by row, so a run of cells
-    /// is one slice. `x + len <= CELLS`, `y < CELLS`.
+    /// their LOD steps (`level * LEVEL_STEPS + step`, see
+    /// [`step_spacing`]) and their orders within the step (0 first, 255
+    /// last: the farthest-point order of the step, scaled): cells are stored
+    /// row by row, so a run of cells is one slice. `x + len <= CELLS`, `y <
+    /// CELLS`.
     #[inline]
-    pub fn run(&self, x: usize, y: usize, len: usize) -> (&[[f32; 2]], &[u8]) {
+    pub fn run(&self, x: usize, y: usize, len: usize) -> (&[[f32; 2]], &[u8], &[u8]) {
         let c = y * CELLS + x;
         let (s, e) = (
             self.cell_start[c] as usize,
             self.cell_start[c + len] as usize,
         );
-        (&self.points[s..e], &self.levels[s..e])
+        (&self.points[s..e], &self.levels[s..e], &self.orders[s..e])
     }
 
     /// All points with their LOD steps (`level * LEVEL_STEPS + step`).
@@ -79,6 +83,7 @@ mod tests {
         let bits = |p: &[[f32; 2]]| p.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
         assert_eq!(bits(TILE.points), bits(&fresh.points));
         assert_eq!(TILE.levels, &fresh.levels[..]);
+        assert_eq!(TILE.orders, &fresh.orders[..]);
         assert_eq!(TILE.cell_start, &fresh.cell_start[..]);
     }
 
