@@ -281,7 +281,9 @@ mod tests {
                 .all(|w| scene.roots[w[0] as usize].rank < scene.roots[w[1] as usize].rank));
         }
         assert_eq!(next as usize, s);
-        // a patch is a place: smaller than the whole
+        // a patch is a place: on average smaller than the whole (a random
+        // seventh of the roots spans nearly all of it; Morton runs on a
+        // curved surface are not round)
         let spread = |run: &[u32]| {
             let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
             for &i in run {
@@ -291,13 +293,11 @@ mod tests {
             }
             (hi - lo).length()
         };
-        let first = &order[..32];
-        assert!(
-            spread(first) < 0.6 * spread(&order),
-            "{} vs {}",
-            spread(first),
-            spread(&order)
-        );
+        let runs = patches
+            .iter()
+            .map(|p| spread(&order[p.first as usize..(p.first + p.count) as usize]));
+        let mean = runs.sum::<f32>() / patches.len() as f32;
+        assert!(mean < 0.75 * spread(&order), "{mean} vs {}", spread(&order));
     }
 
     #[test]

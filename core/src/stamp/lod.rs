@@ -66,9 +66,14 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let levels = scratch.level[..n].iter();
         for (j, ((key, &t), c)) in keys.iter_mut().zip(levels).zip(cands).enumerate() {
             let h = offset.wrapping_add(j as u64).wrapping_mul(GOLDEN) >> (64 - HASH_BITS);
-            // a point raised to a finer step is near another triangle's
-            // point: last in its step, so the count trim drops it first
-            let order = if t == sub_level(c) { c.order } else { u8::MAX };
+            // the count trim drops the end of the last step: not points
+            // near a cut, where the edge pass has thinned the roots already
+            // (whatever crowded them in the tile may lie across the cut)
+            let order = if t as usize == SUB_LEVELS - 1 && c.near_edge() {
+                0
+            } else {
+                c.order
+            };
             *key = (t as u32) << RANK_ORDER_BITS | (order as u32) << HASH_BITS | h as u32;
             counts[*key as usize] += 1;
         }
