@@ -7,10 +7,12 @@
 //! (which the renderer has). In the root frame, the offset of each point
 //! from its rest position is quantized to steps of `L / 2^14` (L the
 //! guide's rest length), so every coordinate decodes within `L / 2^15` (plus
-//! the float32 rounding of the coordinate itself). Along the guide the
-//! quantized offsets are predicted from the two before (a guide bends
-//! smoothly), and the prediction errors are bit-packed at the smallest
-//! width per guide and axis: a still guide costs 4 bytes. A guide that
+//! the float32 rounding of the coordinate itself). Per axis, the offsets
+//! or, when shorter, their differences from the offsets of the guide
+//! before in its block (neighbouring guides bend alike: half the bytes of
+//! a simulated frame) are predicted along the guide from the two before (a
+//! guide bends smoothly), and the prediction errors are Rice-coded with the
+//! best parameter per guide and axis: a still guide costs 4 bytes. A guide that
 //! cannot be coded so (zero length, an offset past 2^30 steps) is stored as
 //! raw float32 root-frame coordinates. The exact mode stores world-space
 //! float32 points instead, decoded bit for bit.
@@ -31,8 +33,9 @@ use glam::Vec3;
 
 /// The file's magic.
 pub const MAGIC: [u8; 8] = *b"PLGUIDE\0";
-/// The format version this build writes and reads.
-pub const VERSION: u32 = 1;
+/// The format version this build writes. It reads version 1 too: a
+/// version 1 file is a version 2 file that never predicts from a neighbour.
+pub const VERSION: u32 = 2;
 /// Guides per block of the offset table.
 pub const BLOCK: usize = 256;
 const FIELDS: usize = 6;
@@ -45,6 +48,13 @@ const MAX_STEPS: i64 = 1 << 30;
 const MAX_K: u8 = 40;
 /// The parameter byte of an axis whose every error is zero (no bits).
 const ZERO: u8 = 0xff;
+/// The parameter byte of an axis coded from the guide before it in its
+/// block whose every error is zero.
+const NEIGHBOUR_ZERO: u8 = 0xfe;
+/// Flag of a parameter byte: the axis codes its offsets' difference from
+/// those of the guide before it in its block (neighbouring guides bend
+/// alike), then the Rice parameter in the low bits.
+const NEIGHBOUR: u8 = 0x80;
 /// A value whose quotient reaches this many ones is escaped: the ones,
 /// then the value in [`RAW_BITS`] bits.
 const ESCAPE: u64 = 24;
@@ -133,10 +143,38 @@ struct Coded {
     errors: [[u64; 64]; 3],
     raw: [[f32; 3]; 64],
     bytes: usize,
+    /// The quantized offsets, per axis (packed guides only).
+    q: [[i64; 64]; 3],
 }
 
-/// Codes guide `g` of `frame` (its root-frame points) against `rest`.
-fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]]) -> Coded {
+/// The zigzagged second-order errors along the guide of the offsets `q`.
+fn errors_of(q: &[i64], errors: &mut [u64]) {
+    for j in 0..q.len() {
+        let before = |k: usize| if j >= k { q[j - k] } else { 0 };
+        errors[j] = zigzag(q[j] - predict(j, before(1), before(2)));
+    }
+}
+
+/// The parameter byte and bits of the Rice code of `errors` (`zero` for
+/// all zero).
+fn rice_parameter(errors: &[u64], zero: u8) -> (u8, u64) {
+    if errors.iter().all(|&z| z == 0) {
+        return (zero, 0);
+    }
+    let cost = |k: u32| errors.iter().map(|&z| rice_bits(z, k)).sum::<u64>();
+    // the best k sits by log2 of the mean (geometric errors)
+    let mean = errors.iter().sum::<u64>() / errors.len() as u64;
+    let near = (64 - mean.leading_zeros()).min(u32::from(MAX_K));
+    let k = (near.saturating_sub(2)..=near)
+        .min_by_key(|&k| (cost(k), k))
+        .unwrap_or(0);
+    (k as u8, cost(k))
+}
+
+/// Codes guide `g` of `frame` (its root-frame points) against `rest`; each
+/// axis from its own offsets or, when that is shorter, from their
+/// difference with `before`'s (the packed guide before it in its block).
+fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]], before: Option<&Coded>) -> Coded {
     let n = rest.len();
     let mut c = Coded {
         tag: RAW,
@@ -144,6 +182,7 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]]) -> Coded {
         errors: [[0; 64]; 3],
         raw: [[0.0; 3]; 64],
         bytes: 1 + 12 * n,
+        q: [[0; 64]; 3],
     };
     for (j, r) in c.raw[..n].iter_mut().enumerate() {
         *r = frame.local_point(g, j).to_array();
@@ -153,7 +192,6 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]]) -> Coded {
         return c;
     }
     let inv = STEPS / length;
-    let mut q = [[0i64; 64]; 3];
     for (j, (raw, rest)) in c.raw[..n].iter().zip(rest).enumerate() {
         for axis in 0..3 {
             let d = (f64::from(raw[axis]) - f64::from(rest[axis])) * inv;
@@ -161,30 +199,37 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]]) -> Coded {
             if d.abs().partial_cmp(&(MAX_STEPS as f64)) != Some(Ordering::Less) {
                 return c;
             }
-            q[axis][j] = libm::round(d) as i64;
+            c.q[axis][j] = libm::round(d) as i64;
         }
     }
+    let before = before.filter(|b| b.tag == PACKED);
     let mut bits = 0;
     for axis in 0..3 {
-        let errors = &mut c.errors[axis];
-        let q = &q[axis];
-        for j in 0..n {
-            let before = |k: usize| if j >= k { q[j - k] } else { 0 };
-            errors[j] = zigzag(q[j] - predict(j, before(1), before(2)));
+        let q = &c.q[axis][..n];
+        errors_of(q, &mut c.errors[axis][..n]);
+        let (mut k, mut cost) = rice_parameter(&c.errors[axis][..n], ZERO);
+        if let Some(b) = before {
+            let mut d = [0i64; 64];
+            for ((d, &q), &p) in d.iter_mut().zip(q).zip(&b.q[axis]) {
+                *d = q - p;
+            }
+            let mut errors = [0u64; 64];
+            errors_of(&d[..n], &mut errors[..n]);
+            let (nk, ncost) = rice_parameter(&errors[..n], NEIGHBOUR_ZERO);
+            if ncost < cost {
+                (k, cost) = (
+                    if nk == NEIGHBOUR_ZERO {
+                        nk
+                    } else {
+                        NEIGHBOUR | nk
+                    },
+                    ncost,
+                );
+                c.errors[axis] = errors;
+            }
         }
-        if errors[..n].iter().all(|&z| z == 0) {
-            c.ks[axis] = ZERO;
-            continue;
-        }
-        let cost = |k: u32| errors[..n].iter().map(|&z| rice_bits(z, k)).sum::<u64>();
-        // the best k sits by log2 of the mean (geometric errors)
-        let mean = errors[..n].iter().sum::<u64>() / n as u64;
-        let near = (64 - mean.leading_zeros()).min(u32::from(MAX_K));
-        let k = (near.saturating_sub(2)..=near)
-            .min_by_key(|&k| (cost(k), k))
-            .unwrap_or(0);
-        c.ks[axis] = k as u8;
-        bits += cost(k);
+        c.ks[axis] = k;
+        bits += cost;
     }
     // wild offsets can cost more bits than the floats themselves
     let packed = 4 + bits.div_ceil(8) as usize;
@@ -230,8 +275,8 @@ fn write_coded(w: &mut Writer, c: &Coded, n: usize) {
         w.u8(k);
     }
     let mut bits = BitWriter { w, acc: 0, bits: 0 };
-    for axis in (0..3).filter(|&a| c.ks[a] != ZERO) {
-        let k = u32::from(c.ks[axis]);
+    for axis in (0..3).filter(|&a| c.ks[a] != ZERO && c.ks[a] != NEIGHBOUR_ZERO) {
+        let k = u32::from(c.ks[axis] & !NEIGHBOUR);
         for &z in &c.errors[axis][..n] {
             let q = z >> k;
             if q < ESCAPE {
@@ -325,11 +370,14 @@ pub fn encode(
         }
         let stream = w.position();
         let mut entry = table;
+        // the guide before, in its block
+        let mut before: Option<Coded> = None;
         for frame in samples {
             for i in 0..g {
                 if i % BLOCK == 0 {
                     w.patch_u32(entry, (w.position() - stream) as u32);
                     entry += 4;
+                    before = None;
                 }
                 match mode {
                     Mode::Exact => {
@@ -339,7 +387,9 @@ pub fn encode(
                     }
                     Mode::Quantized => {
                         let rest = &groom.guide_points[i * n..(i + 1) * n];
-                        write_coded(w, &code(frame, i, rest), n);
+                        let coded = code(frame, i, rest, before.as_ref());
+                        write_coded(w, &coded, n);
+                        before = Some(coded);
                     }
                 }
             }
@@ -353,7 +403,12 @@ impl<'a> GuideCache<'a> {
     /// Checks a cache's framing (magic, version, length, checksum), counts
     /// and offset table.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
-        let file = container::read(bytes, &MAGIC, VERSION, FIELDS)?;
+        let file = match container::read(bytes, &MAGIC, VERSION, FIELDS) {
+            Err(Error::VersionMismatch { found: 1, .. }) => {
+                container::read(bytes, &MAGIC, 1, FIELDS)?
+            }
+            file => file?,
+        };
         let [guides, points, samples, mode, groom, block, ..] = file.fields;
         let bad = |what| Err(Error::Corrupt { what });
         if guides == 0 || guides >= u64::from(u32::MAX) || !(2..=64).contains(&points) {
@@ -541,6 +596,9 @@ impl<'a> GuideCache<'a> {
         let (start, end) = (self.offset(index), self.offset(index + 1));
         let mut r = Reader::new(&self.stream[start..end]);
         let first = b * BLOCK;
+        // the offsets of the guide before, while it is packed
+        let mut before = false;
+        let mut offsets = [[[0i64; 64]; 3]; 2];
         for i in first..(first + BLOCK).min(g) {
             let slot = match target {
                 None => &mut out[..6 * n],
@@ -565,7 +623,20 @@ impl<'a> GuideCache<'a> {
                         read_point(&mut r)?;
                     }
                 }
-                (Mode::Quantized, _) => decode_guide(&mut r, frame.as_ref(), rest, local, world)?,
+                (Mode::Quantized, _) => {
+                    let [previous, q] = &mut offsets;
+                    let packed = decode_guide(
+                        &mut r,
+                        frame.as_ref(),
+                        rest,
+                        before.then_some(&*previous),
+                        q,
+                        local,
+                        world,
+                    )?;
+                    offsets.swap(0, 1);
+                    before = packed;
+                }
             }
         }
         if r.position() != end - start {
@@ -594,14 +665,18 @@ fn read_point(r: &mut Reader) -> Result<Vec3, Error> {
 }
 
 /// Decodes one guide's record into its local lanes and, with a `frame`,
-/// its world lanes (without, the record is only checked).
+/// its world lanes (without, the record is only checked); `before` holds
+/// the quantized offsets of the guide before in the block when that one
+/// is packed, and `q` takes this one's. Returns whether it is packed.
 fn decode_guide(
     r: &mut Reader,
     frame: Option<&Frame>,
     rest: &[[f32; 3]],
+    before: Option<&[[i64; 64]; 3]>,
+    q: &mut [[i64; 64]; 3],
     local: &mut [f32],
     world: &mut [f32],
-) -> Result<(), Error> {
+) -> Result<bool, Error> {
     let n = rest.len();
     match r.u8()? {
         RAW => {
@@ -611,15 +686,20 @@ fn decode_guide(
                     put(local, world, n, j, l, frame.to_world(l));
                 }
             }
-            Ok(())
+            Ok(false)
         }
         PACKED => {
             let mut ks = [0u8; 3];
             for k in ks.iter_mut() {
                 *k = r.u8()?;
-                if *k > MAX_K && *k != ZERO {
+                if *k & !NEIGHBOUR > MAX_K && *k != ZERO && *k != NEIGHBOUR_ZERO {
                     return Err(Error::Corrupt {
                         what: "a Rice parameter past 40",
+                    });
+                }
+                if *k & NEIGHBOUR != 0 && *k != ZERO && before.is_none() {
+                    return Err(Error::Corrupt {
+                        what: "a guide coded from a guide before it that is not packed",
                     });
                 }
             }
@@ -632,29 +712,37 @@ fn decode_guide(
             let step = f64::from(rest_length(rest)) / STEPS;
             for (axis, &k) in ks.iter().enumerate() {
                 let lane = &mut local[axis * n..(axis + 1) * n];
-                if k == ZERO {
-                    for (l, r) in lane.iter_mut().zip(rest) {
-                        *l = r[axis];
+                let q = &mut q[axis];
+                // the offsets the coded ones are differences from
+                let base = match before {
+                    Some(b) if k & NEIGHBOUR != 0 && k != ZERO => &b[axis],
+                    _ => &[0; 64],
+                };
+                if k == ZERO || k == NEIGHBOUR_ZERO {
+                    q[..n].copy_from_slice(&base[..n]);
+                } else {
+                    let k = u32::from(k & !NEIGHBOUR);
+                    // the two values before, for the prediction
+                    let (mut d1, mut d2) = (0i64, 0i64);
+                    for j in 0..n {
+                        let ones = bits.ones()?;
+                        let z = if ones < ESCAPE as u32 {
+                            (u64::from(ones) << k) | bits.take(k)?
+                        } else {
+                            bits.take(RAW_BITS)?
+                        };
+                        let d = unzigzag(z).wrapping_add(predict(j, d1, d2));
+                        (d2, d1) = (d1, d);
+                        q[j] = d.wrapping_add(base[j]);
                     }
-                    continue;
                 }
-                let k = u32::from(k);
-                // the two offsets before, for the prediction
-                let (mut q1, mut q2) = (0i64, 0i64);
                 for (j, l) in lane.iter_mut().enumerate() {
-                    let ones = bits.ones()?;
-                    let z = if ones < ESCAPE as u32 {
-                        (u64::from(ones) << k) | bits.take(k)?
-                    } else {
-                        bits.take(RAW_BITS)?
-                    };
-                    let q = unzigzag(z).wrapping_add(predict(j, q1, q2));
+                    let q = q[j];
                     if !(-MAX_STEPS..=MAX_STEPS).contains(&q) {
                         return Err(Error::Corrupt {
                             what: "a quantized offset past 2^30 steps",
                         });
                     }
-                    (q2, q1) = (q1, q);
                     *l = (f64::from(rest[j][axis]) + q as f64 * step) as f32;
                     if l.abs() > MAX_COORDINATE {
                         return Err(Error::Corrupt {
@@ -671,7 +759,7 @@ fn decode_guide(
                     (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
                 }
             }
-            Ok(())
+            Ok(true)
         }
         _ => Err(Error::Corrupt {
             what: "a guide's tag is neither packed nor raw",
@@ -909,15 +997,68 @@ mod tests {
         });
     }
 
+    /// Writes a valid CRC into `bytes`.
+    fn seal(bytes: &mut [u8]) {
+        let crc_at = container::header_bytes(FIELDS) - 8;
+        let mut h = crc32fast::Hasher::new();
+        h.update(&bytes[..crc_at]);
+        h.update(&bytes[crc_at + 8..]);
+        let crc = h.finalize().to_le_bytes();
+        bytes[crc_at..crc_at + 4].copy_from_slice(&crc);
+    }
+
     #[test]
     fn a_guide_at_its_neutral_pose_costs_four_bytes() {
         let scene = Scene::new(300);
         let groom = scene.groom();
         scene.with_frame(&scene.rest, &scene.guide_world, |f| {
-            let bytes = write(&groom, &[f], Mode::Quantized);
+            let mut bytes = write(&groom, &[f], Mode::Quantized);
             let g = f.guide_count();
             let table = 4 * (g.div_ceil(BLOCK) + 1);
             assert_eq!(bytes.len(), container::header_bytes(FIELDS) + table + 4 * g);
+            // it predicts from no neighbour, so as version 1 it reads the same
+            bytes[8..12].copy_from_slice(&1u32.to_le_bytes());
+            seal(&mut bytes);
+            let cache = GuideCache::parse(&bytes).unwrap();
+            let (_, other) = scene.posed(0.5);
+            scene.with_frame(&scene.rest, &other, |d| {
+                cache.decode(&groom, GROOM_ID, 0, d).unwrap();
+                assert_eq!(d.local_point(9, 4), f.local_point(9, 4));
+            });
+            bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
+            seal(&mut bytes);
+            assert!(matches!(
+                GuideCache::parse(&bytes),
+                Err(Error::VersionMismatch { found: 3, .. })
+            ));
+        });
+    }
+
+    #[test]
+    fn neighbouring_guides_code_from_each_other() {
+        let scene = Scene::new(300);
+        let groom = scene.groom();
+        let (mesh, world) = scene.posed(0.8);
+        scene.with_frame(&mesh, &world, |f| {
+            let n = groom.points;
+            let (mut alone, mut chained, mut from_neighbour) = (0, 0, 0);
+            let mut before: Option<Coded> = None;
+            for g in 0..f.guide_count().min(BLOCK) {
+                let rest = &groom.guide_points[g * n..(g + 1) * n];
+                let coded = code(f, g, rest, before.as_ref());
+                alone += code(f, g, rest, None).bytes;
+                chained += coded.bytes;
+                from_neighbour += coded
+                    .ks
+                    .iter()
+                    .filter(|&&k| k != ZERO && k & NEIGHBOUR != 0)
+                    .count();
+                before = Some(coded);
+            }
+            assert!(
+                from_neighbour > 0 && chained < alone,
+                "{chained} vs {alone}"
+            );
         });
     }
 
@@ -993,17 +1134,14 @@ mod tests {
                         bad[at] ^= 0x04;
                         assert!(decode(&bad).is_err(), "bit flipped at {at}");
                     }
-                    // a width past 40 bits and a bad tag, sealed with a valid CRC
+                    // a width past 40 bits, a bad tag, and a block's first
+                    // guide coded from a guide before it, sealed with a
+                    // valid CRC
                     let stream = container::header_bytes(FIELDS) + 4 * (2 * 2 + 1);
-                    for (at, value) in [(stream + 1, 41u8), (stream, 9)] {
+                    for (at, value) in [(stream + 1, 41u8), (stream, 9), (stream + 1, 0x85)] {
                         let mut bad = bytes.to_vec();
                         bad[at] = value;
-                        let crc_at = container::header_bytes(FIELDS) - 8;
-                        let mut h = crc32fast::Hasher::new();
-                        h.update(&bad[..crc_at]);
-                        h.update(&bad[crc_at + 8..]);
-                        let crc = h.finalize().to_le_bytes();
-                        bad[crc_at..crc_at + 4].copy_from_slice(&crc);
+                        seal(&mut bad);
                         assert!(matches!(decode(&bad), Err(Error::Corrupt { .. })));
                     }
                     let cache = GuideCache::parse(bytes).unwrap();
