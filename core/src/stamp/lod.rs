@@ -17,7 +17,7 @@ pub(super) const RANK_ORDER_BITS: u32 = 8 + HASH_BITS;
 const HASH_BITS: u32 = 2;
 /// 2^64 over the golden ratio, odd.
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
-/// Counters of the rank sort: one per (level, step, hash) key.
+/// Counters of the rank sort: one per (step, order, hash) key.
 pub(super) const RANK_KEYS: usize = (LOD_LEVELS * LEVEL_STEPS) << RANK_ORDER_BITS;
 
 impl<'m, 'a> Stamper<'m, 'a> {
@@ -54,8 +54,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
         }
         scratch.check(n)?;
         self.assign_levels(cands, scratch, done)?;
-        // a stable counting sort by (level, hash): the slot a candidate
-        // takes in it is its rank
+        // a stable counting sort by (step, order in the step, hash): the
+        // slot a candidate takes in it is its rank
         let keys = &mut scratch.next[..n];
         let counts = &mut *scratch.counts;
         counts.fill(0);
