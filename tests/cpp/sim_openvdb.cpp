@@ -80,17 +80,19 @@ int main(int argc, char** argv) {
     std::vector<float> root_pos, root_nrm;
     creature::evaluate(mesh, roots, root_pos, root_nrm);
 
-    // the props: a ball and a box, 0.03-0.035 off the skin above a root
+    // the props: a ball and a box, 0.015 off the skin above a root,
+    // each wide enough to stand over several roots (3000 roots are about
+    // 0.06 apart)
     auto grid = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
         0.05f, openvdb::Vec3f(0, 0, 0), kVoxel, 3.0f);
     {
       const creature::V3 p = creature::at3(root_pos, 100), n = creature::at3(root_nrm, 100);
-      const creature::V3 c = p + 0.08f * n;
-      grid = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.05f, openvdb::Vec3f(c.x, c.y, c.z), kVoxel,
+      const creature::V3 c = p + 0.095f * n;
+      grid = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.08f, openvdb::Vec3f(c.x, c.y, c.z), kVoxel,
                                                                        3.0f);
       const creature::V3 q = creature::at3(root_pos, 2000), m = creature::at3(root_nrm, 2000);
       const creature::V3 b = q + 0.075f * m;
-      add_box(*grid, b - creature::V3{0.04f, 0.04f, 0.04f}, b + creature::V3{0.04f, 0.04f, 0.04f});
+      add_box(*grid, b - creature::V3{0.06f, 0.06f, 0.06f}, b + creature::V3{0.06f, 0.06f, 0.06f});
     }
     // no root inside a prop: it would have no way out
     std::vector<float> d(roots.size());
