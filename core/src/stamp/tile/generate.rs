@@ -82,16 +82,10 @@ pub fn torus_dist2(a: [f32; 2], b: [f32; 2]) -> f32 {
 
 #[inline]
 fn wrap_coord(x: f32) -> f32 {
-    // x is within 2 of the tile: one add or subtract brings it back, and
-    // rounding may land exactly on the far side
-    let w = if x < 0.0 {
-        x + SIDE
-    } else if x >= SIDE {
-        x - SIDE
-    } else {
-        x
-    };
-    if w < SIDE {
+    // a coarse step throws its candidates several tiles out: whole tiles
+    // come off, and rounding may land exactly on the far side
+    let w = x - SIDE * libm::floorf(x / SIDE);
+    if (0.0..SIDE).contains(&w) {
         w
     } else {
         0.0
