@@ -24,8 +24,8 @@ const MAX_POINTS: usize = (2.0 * TILE_SIDE as f64 * TILE_SIDE as f64 / 1.732_050
 const FAR: f32 = 1.0e6;
 
 /// A generated tile: the points ordered by lookup cell (row by row), their
-/// LOD steps and their order within the step (see [`step_orders`]), and where each cell's points start (one entry per cell,
-/// plus the end).
+/// LOD steps and their order within the step (see [`step_orders`]), and
+/// where each cell's points start (one entry per cell, plus the end).
 pub struct Generated {
     pub points: Vec<[f32; 2]>,
     pub levels: Vec<u8>,
