@@ -251,6 +251,9 @@ pub struct Stamper<'m, 'a> {
     places: &'a [TilePlace],
     shells: Shells<'a>,
     first_radius: f32,
+    /// Share of the scaled area on skin that is not buried (1 on a mesh
+    /// without a body): the first pass aims at the skin that grows roots.
+    unburied: f64,
     radius: f32,
     /// The radius was given: one pass, every root kept.
     fixed: bool,
@@ -377,6 +380,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             places,
             shells,
             first_radius: radius,
+            unburied: 1.0,
             fixed,
             radius,
             previous: None,
@@ -385,6 +389,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             spacings: core::array::from_fn(level_spacing),
         };
         if !fixed {
+            stamper.unburied = stamper.unburied_share(sums.area);
             stamper.radius = stamper.predicted_radius();
         }
         Ok((Some(stamper), sums))
@@ -422,13 +427,48 @@ impl<'m, 'a> Stamper<'m, 'a> {
         (1.0 - refilled) * gross
     }
 
+    /// Share of `area` (the faces' scaled area) on skin that is not buried,
+    /// at the first radius, each face counted by its centroid (one test a
+    /// face: the placement tests the points of a face near another shell
+    /// one by one, but an estimate for the first radius needs no more).
+    fn unburied_share(&self, area: f64) -> f64 {
+        let buried: f64 = (0..self.faces.len())
+            .filter(|&f| {
+                let scale = self.faces[f].scale;
+                let lift = place::BURY_LIFT * self.first_radius / scale;
+                scale > 0.0
+                    && self
+                        .shells
+                        .face_buried(&self.mesh, f, lift)
+                        .unwrap_or_else(|| {
+                            let [a, b, c] = self.mesh.corners(f);
+                            let normal = Vec3::from(self.faces[f].normal);
+                            self.shells.buried((a + b + c) / 3.0, normal, lift)
+                        })
+            })
+            .map(|f| {
+                let scale = self.faces[f].scale as f64;
+                self.mesh.area(f) as f64 * scale * scale
+            })
+            .sum();
+        if area > 0.0 {
+            (1.0 - buried / area).clamp(0.0, 1.0)
+        } else {
+            1.0
+        }
+    }
+
     /// The radius whose stamp is expected to keep the middle of the count
     /// band after the edge pass, so that most stamps need one pass: the
-    /// fixed point of `r = sqrt(rho * area / (aim + loss(r)))`, which
-    /// converges fast as the loss moves slowly with `r`.
+    /// fixed point of `r = sqrt(rho * area / (aim + loss(r)))` over the area
+    /// that is not buried, which converges fast as the loss moves slowly
+    /// with `r`.
     fn predicted_radius(&self) -> f32 {
         let aim = self.target as f64 * (1.0 + 0.5 * COUNT_TOLERANCE as f64);
-        let stamped = self.first_radius as f64 * self.first_radius as f64 * self.target as f64;
+        let stamped = self.first_radius as f64
+            * self.first_radius as f64
+            * self.target as f64
+            * self.unburied;
         let floor = self.first_radius * min_radius_factor(self.target, self.mesh.triangle_count());
         let mut r = self.first_radius;
         for _ in 0..PREDICTION_STEPS {
