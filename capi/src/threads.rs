@@ -41,47 +41,20 @@ pub(crate) fn split_over_threads<T: Send, R: Send>(
     if threads == 1 {
         return Ok(vec![work(0..n, out)]);
     }
-    std::thread::scope(|scope| {
-        let mut rest = out;
-        let mut handles = vec![];
-        let mut last = None;
-        for t in 0..threads {
-            let range = t * n / threads..(t + 1) * n / threads;
-            let take = if t + 1 == threads {
-                rest.len()
-            } else {
-                range.len() * per
-            };
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
-            rest = tail;
-            let work = &work;
-            if t + 1 == threads {
-                last = Some(work(range, mine));
-            } else {
-                match std::thread::Builder::new().spawn_scoped(scope, move || work(range, mine)) {
-                    Ok(h) => handles.push(h),
-                    // the scope still joins the threads already running
-                    Err(e) => {
-                        return Err(Failure::new(
-                            PelageStatus::Panic,
-                            format!(
-                            "could not start a worker thread ({e}); outputs may be partly written"
-                        ),
-                        ))
-                    }
-                }
-            }
-        }
-        let mut results = Vec::with_capacity(threads);
-        for h in handles {
-            results.push(
-                h.join()
-                    .map_err(|_| Failure::new(PelageStatus::Panic, "a worker thread panicked"))?,
-            );
-        }
-        results.extend(last);
-        Ok(results)
-    })
+    let mut rest = out;
+    let mut parts = Vec::with_capacity(threads);
+    for t in 0..threads {
+        let range = t * n / threads..(t + 1) * n / threads;
+        let take = if t + 1 == threads {
+            rest.len()
+        } else {
+            range.len() * per
+        };
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
+        rest = tail;
+        parts.push((range, mine));
+    }
+    run_parts(parts, |(range, mine)| work(range, mine))
 }
 
 /// Runs `check` on the ranges [`split_over_threads`] would use, in parallel,
@@ -232,10 +205,13 @@ pub(crate) fn run_parts<P: Send, R: Send>(
         for part in parts {
             match std::thread::Builder::new().spawn_scoped(scope, move || work(part)) {
                 Ok(h) => handles.push(h),
+                // the scope still joins the threads already running
                 Err(e) => {
                     return Err(Failure::new(
                         PelageStatus::Panic,
-                        format!("could not start a worker thread ({e})"),
+                        format!(
+                            "could not start a worker thread ({e}); outputs may be partly written"
+                        ),
                     ))
                 }
             }

@@ -433,18 +433,15 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// one by one, but an estimate for the first radius needs no more).
     fn unburied_share(&self, area: f64) -> f64 {
         let buried: f64 = (0..self.faces.len())
+            .filter(|&f| self.faces[f].scale > 0.0)
             .filter(|&f| {
-                let scale = self.faces[f].scale;
-                let lift = place::BURY_LIFT * self.first_radius / scale;
-                scale > 0.0
-                    && self
-                        .shells
-                        .face_buried(&self.mesh, f, lift)
-                        .unwrap_or_else(|| {
-                            let [a, b, c] = self.mesh.corners(f);
-                            let normal = Vec3::from(self.faces[f].normal);
-                            self.shells.buried((a + b + c) / 3.0, normal, lift)
-                        })
+                // the radius is still the first one
+                let lift = place::BURY_LIFT * self.local_radius(f as u32);
+                let [a, b, c] = self.mesh.corners(f);
+                let normal = Vec3::from(self.faces[f].normal);
+                self.shells
+                    .face_buried(&self.mesh, f, lift)
+                    .unwrap_or_else(|| self.shells.buried((a + b + c) / 3.0, normal, lift))
             })
             .map(|f| {
                 let scale = self.faces[f].scale as f64;
