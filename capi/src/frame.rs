@@ -4,7 +4,7 @@
 use crate::buffers::{req, req_mut};
 use crate::sim::{body_in, HostColliders, HostField};
 use crate::status::Failure;
-use crate::threads::{check_over_threads, split_in_chunks, split_over_threads, CHUNK};
+use crate::threads::{split_in_chunks, split_over_threads};
 use crate::{PelageColliders, PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::cache::groom_file::Groom;
@@ -12,8 +12,6 @@ use pelage_core::cache::guide_cache::{GuideCache, BLOCK};
 use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance, Sphere};
 use pelage_core::surface::body::Body;
 
-// a chunk of guides is a block of the cache
-const _: () = assert!(CHUNK == BLOCK);
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::{Arena, Mesh, Strided};
 
@@ -66,6 +64,9 @@ pub(crate) struct Frame {
     push: Option<FrameColliders>,
     /// Borrows the buffers below; declared before them, so dropped first.
     posed: PosedFrame<'static>,
+    /// Where a guide cache is unpacked before the guides are written
+    /// (kept between decodes: a renderer decodes every frame).
+    scratch: Vec<u32>,
     _positions: Buffer<[f32; 3]>,
     _triangles: Buffer<[u32; 3]>,
     _uvs: Option<Buffer<[f32; 2]>>,
@@ -103,8 +104,8 @@ impl Frame {
     }
 
     /// Decodes shutter sample `sample` of `cache` into this frame's guides,
-    /// checked whole first, over `thread_count` threads (runs of whole
-    /// blocks: the chunks of `split_in_chunks` are blocks).
+    /// checked whole first, over `thread_count` threads: unpacked by runs
+    /// of whole blocks into the frame's scratch, then posed by chunks.
     pub(crate) fn decode_guides(
         &mut self,
         cache: &GuideCache,
@@ -114,11 +115,22 @@ impl Frame {
         thread_count: u32,
     ) -> Result<(), Failure> {
         cache.check(groom, groom_id, sample, &self.posed)?;
-        check_over_threads(cache.blocks(), thread_count, |blocks| {
-            cache.check_blocks(groom, sample, blocks)
-        })?;
-        let decoding = cache.decoding(groom, sample, &mut self.posed);
+        self.scratch.resize(cache.scratch_words(), 0);
+        let unpacked = &mut self.scratch[..];
+        let per_block = BLOCK * cache.words_per_guide();
+        split_over_threads(
+            cache.blocks(),
+            thread_count,
+            unpacked,
+            per_block,
+            |blocks, part| cache.unpack(groom, sample, blocks, part),
+        )?
+        .into_iter()
+        .collect::<Result<(), _>>()?;
+        let unpacked = &self.scratch[..];
+        let decoding = cache.decoding(groom, &mut self.posed);
         let filler = decoding.filler;
+        let words = cache.words_per_guide();
         let failed = std::sync::Mutex::new(None);
         split_in_chunks(
             cache.info().guides,
@@ -126,7 +138,8 @@ impl Frame {
             &mut *decoding.data,
             filler.floats_per_guide(),
             |range, part| {
-                if let Err(e) = filler.fill(range.start, part) {
+                let mine = &unpacked[range.start * words..range.end * words];
+                if let Err(e) = filler.fill(range.start, mine, part) {
                     *failed.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
                 }
             },
@@ -213,6 +226,7 @@ pub extern "C" fn pelage_frame_new(
         let frame = Box::new(Frame {
             push: None,
             posed,
+            scratch: Vec::new(),
             _positions: positions,
             _triangles: triangles,
             _uvs: uvs,

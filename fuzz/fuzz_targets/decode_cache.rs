@@ -62,7 +62,10 @@ fuzz_target!(|data: &[u8]| {
         let before: Vec<_> = (0..scene::GUIDES * scene::POINTS)
             .map(|k| frame.world_point(k / scene::POINTS, k % scene::POINTS))
             .collect();
-        let ok = cache.decode(&groom, GROOM_ID, sample, frame).is_ok();
+        let mut scratch = vec![0; cache.scratch_words()];
+        let ok = cache
+            .decode(&groom, GROOM_ID, sample, frame, &mut scratch)
+            .is_ok();
         for k in 0..scene::GUIDES * scene::POINTS {
             let (p, l) = (
                 frame.world_point(k / scene::POINTS, k % scene::POINTS),

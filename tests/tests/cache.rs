@@ -77,7 +77,9 @@ fn every_frame_decodes_from_its_own_file_within_the_bound() {
             // decoded into a frame of the sample's mesh holding other guides
             let other = &shot.posed[(source + 40) % frames];
             with_frame(&shot.meshes[source], roots, other, |decoded| {
-                cache.decode(&groom, id, s, decoded).unwrap();
+                cache
+                    .decode(&groom, id, s, decoded, &mut vec![0; cache.scratch_words()])
+                    .unwrap();
                 with_frame(&shot.meshes[source], roots, &shot.posed[source], |truth| {
                     for (g, length) in lengths.iter().enumerate() {
                         let bound = length / 32768.0;

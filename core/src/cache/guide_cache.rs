@@ -13,7 +13,8 @@
 //! a simulated frame) are predicted along the guide from the two before (a
 //! guide bends smoothly), and the prediction errors are Rice-coded with the
 //! best parameter per guide and axis: a still guide costs 4 bytes. A guide that
-//! cannot be coded so (zero length, an offset past 2^30 steps) is stored as
+//! cannot be coded so (zero length, an offset past 2^30 steps, a point that
+//! could decode past 1e9 by the bound of the coordinates and offsets) is stored as
 //! raw float32 root-frame coordinates. The exact mode stores world-space
 //! float32 points instead, decoded bit for bit.
 //!
@@ -25,7 +26,7 @@ use super::container::{self, product, Reader, Writer};
 use super::groom_file::{check_guides, Groom};
 use crate::interp::posed::PosedFrame;
 use crate::root::check_root;
-use crate::surface::frame::Frame;
+use crate::surface::frame::{self, Frame, FRAME_LANES};
 use crate::surface::mesh::MAX_COORDINATE;
 use crate::{Error, Mesh};
 use core::cmp::Ordering;
@@ -201,6 +202,13 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]], before: Option<&Coded>)
             }
             c.q[axis][j] = libm::round(d) as i64;
         }
+    }
+    let spread =
+        c.q.iter()
+            .flat_map(|q| &q[..n])
+            .fold(0, |s, q| s.max(q.unsigned_abs()));
+    if !fits_packed(rest, spread, length / STEPS) {
+        return c;
     }
     let before = before.filter(|b| b.tag == PACKED);
     let mut bits = 0;
@@ -465,29 +473,47 @@ impl<'a> GuideCache<'a> {
         u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize
     }
 
+    /// Scratch words [`GuideCache::unpack`] writes per guide: a tag and
+    /// three per point.
+    pub fn words_per_guide(&self) -> usize {
+        1 + 3 * self.info.points
+    }
+
+    /// Scratch words one whole sample takes ([`GuideCache::decode`]).
+    pub fn scratch_words(&self) -> usize {
+        self.info.guides * self.words_per_guide()
+    }
+
     /// Decodes shutter sample `sample` into `frame` (made on that sample's
     /// deformed mesh, for the groom's guide and point counts): every guide,
     /// local and world. `groom` and `groom_id` are the groom file's
-    /// contents and id. The cache is checked whole before the frame is
-    /// written: on error the frame keeps the guides it had. (A host that
-    /// decodes on several threads runs the same steps: [`GuideCache::check`],
-    /// [`GuideCache::check_blocks`] over every block, then
-    /// [`GuideCache::decoding`].)
+    /// contents and id; `scratch` (at least [`GuideCache::scratch_words`]
+    /// words) holds the unpacked sample meanwhile. The cache is checked
+    /// whole before the frame is written: on error the frame keeps the
+    /// guides it had. (A host that decodes on several threads runs the
+    /// same steps: [`GuideCache::check`], [`GuideCache::unpack`] over runs
+    /// of blocks, then [`GuideCache::decoding`] over any runs of guides.)
     pub fn decode(
         &self,
         groom: &Groom,
         groom_id: u32,
         sample: usize,
         frame: &mut PosedFrame,
+        scratch: &mut [u32],
     ) -> Result<(), Error> {
         self.check(groom, groom_id, sample, frame)?;
-        self.check_blocks(groom, sample, 0..self.blocks())?;
+        let words = scratch
+            .get_mut(..self.scratch_words())
+            .ok_or(Error::InvalidArgument(
+                "the scratch is smaller than the cache's scratch_words",
+            ))?;
+        self.unpack(groom, sample, 0..self.blocks(), words)?;
         let Decoding {
             filler,
             data,
             posed,
-        } = self.decoding(groom, sample, frame);
-        filler.fill(0, data)?;
+        } = self.decoding(groom, frame);
+        filler.fill(0, words, data)?;
         *posed = true;
         Ok(())
     }
@@ -497,41 +523,46 @@ impl<'a> GuideCache<'a> {
         self.info.guides.div_ceil(BLOCK)
     }
 
-    /// Checks blocks `blocks` of sample `sample` (a sample [`GuideCache::check`]
-    /// accepted) without writing anything: every tag, Rice parameter, bit,
-    /// offset and stored point.
-    pub fn check_blocks(
+    /// Unpacks blocks `blocks` of sample `sample` (a sample
+    /// [`GuideCache::check`] accepted) into `scratch`, exactly
+    /// [`GuideCache::words_per_guide`] words per guide of those blocks,
+    /// checking every tag, Rice parameter, bit, offset and stored point.
+    /// Writes nothing but `scratch`.
+    pub fn unpack(
         &self,
         groom: &Groom,
         sample: usize,
         blocks: core::ops::Range<usize>,
+        scratch: &mut [u32],
     ) -> Result<(), Error> {
-        let mut scratch = [0.0f32; 6 * 64];
-        for b in blocks {
-            self.decode_block(groom, None, sample, b, &mut scratch)?;
+        let g = self.info.guides;
+        let per = self.words_per_guide();
+        let guides = (blocks.end * BLOCK)
+            .min(g)
+            .saturating_sub(blocks.start * BLOCK);
+        if blocks.end > self.blocks() || Some(scratch.len()) != guides.checked_mul(per) {
+            return Err(Error::InvalidArgument(
+                "unpacked blocks take words_per_guide words per guide",
+            ));
+        }
+        for (b, out) in blocks.zip(scratch.chunks_mut(BLOCK * per)) {
+            self.unpack_block(groom, sample, b, out)?;
         }
         Ok(())
     }
 
-    /// The frame's guide slots and a filler that decodes blocks of sample
-    /// `sample` into them, for a host that splits them over threads (by
-    /// runs of whole blocks); [`Decoding::finish`] marks the frame posed.
-    /// Check first ([`GuideCache::check`], [`GuideCache::check_blocks`]):
-    /// a block that fails leaves its slots part written.
-    pub fn decoding<'r>(
-        &'r self,
-        groom: &'r Groom<'r>,
-        sample: usize,
-        frame: &'r mut PosedFrame,
-    ) -> Decoding<'r> {
+    /// The frame's guide slots and a filler that poses unpacked guides
+    /// into them, for a host that splits them over threads; [`Decoding::finish`]
+    /// marks the frame posed. Unpack first ([`GuideCache::check`],
+    /// [`GuideCache::unpack`]).
+    pub fn decoding<'r>(&'r self, groom: &'r Groom<'r>, frame: &'r mut PosedFrame) -> Decoding<'r> {
         let (mesh, tangents, data, posed) = frame.slots();
         Decoding {
-            filler: BlockFiller {
+            filler: CacheFiller {
                 cache: self,
                 groom,
                 mesh,
                 tangents,
-                sample,
             },
             data,
             posed,
@@ -579,63 +610,40 @@ impl<'a> GuideCache<'a> {
         check_guides(&[], groom.guide_points)
     }
 
-    /// Decodes block `b` of `sample` into `out` (its guides' slots) on the
-    /// frame of `target` (its mesh and tangents), or without one only
-    /// checks it (`out` then holds one guide's slot, rewritten).
-    fn decode_block(
+    /// Unpacks block `b` of `sample` into `out` (its guides' words).
+    fn unpack_block(
         &self,
         groom: &Groom,
-        target: Option<(&Mesh, &[[f32; 3]])>,
         sample: usize,
         b: usize,
-        out: &mut [f32],
+        out: &mut [u32],
     ) -> Result<(), Error> {
         let (g, n) = (self.info.guides, self.info.points);
-        let blocks = g.div_ceil(BLOCK);
-        let index = sample * blocks + b;
+        let index = sample * self.blocks() + b;
         let (start, end) = (self.offset(index), self.offset(index + 1));
         let mut r = Reader::new(&self.stream[start..end]);
         let first = b * BLOCK;
-        // the offsets of the guide before, while it is packed
+        // whether the guide before is packed: its offsets are the base of
+        // this one's differences
         let mut before = false;
         let mut offsets = [[[0i64; 64]; 3]; 2];
-        for i in first..(first + BLOCK).min(g) {
-            let slot = match target {
-                None => &mut out[..6 * n],
-                Some(_) => &mut out[(i - first) * 6 * n..(i - first + 1) * 6 * n],
-            };
-            // a dry run checks the bytes only
-            let root = &groom.guide_roots[i];
-            let frame = target.map(|(mesh, tangents)| {
-                Frame::at(mesh, tangents, root.face as usize, root.u, root.v)
-            });
+        let guides = first..(first + BLOCK).min(g);
+        for (i, words) in guides.zip(out.chunks_exact_mut(self.words_per_guide())) {
+            let (tag, lanes) = words.split_at_mut(1);
             let rest = &groom.guide_points[i * n..(i + 1) * n];
-            let (local, world) = slot.split_at_mut(3 * n);
-            match (self.info.mode, &frame) {
-                (Mode::Exact, Some(frame)) => {
+            match self.info.mode {
+                Mode::Exact => {
+                    tag[0] = TAG_WORLD;
                     for j in 0..n {
-                        let p = read_point(&mut r)?;
-                        put(local, world, n, j, frame.to_local(p), p);
+                        put_bits(lanes, n, j, read_point(&mut r)?);
                     }
                 }
-                (Mode::Exact, None) => {
-                    for _ in 0..n {
-                        read_point(&mut r)?;
-                    }
-                }
-                (Mode::Quantized, _) => {
-                    let [previous, q] = &mut offsets;
-                    let packed = decode_guide(
-                        &mut r,
-                        frame.as_ref(),
-                        rest,
-                        before.then_some(&*previous),
-                        q,
-                        local,
-                        world,
-                    )?;
-                    offsets.swap(0, 1);
-                    before = packed;
+                Mode::Quantized => {
+                    // the two slots take turns (no copy)
+                    let [even, odd] = &mut offsets;
+                    let (previous, q) = if i % 2 == 0 { (odd, even) } else { (even, odd) };
+                    before =
+                        unpack_guide(&mut r, rest, before.then_some(&*previous), q, tag, lanes)?;
                 }
             }
         }
@@ -648,9 +656,15 @@ impl<'a> GuideCache<'a> {
     }
 }
 
-fn put(local: &mut [f32], world: &mut [f32], n: usize, j: usize, l: Vec3, p: Vec3) {
-    (local[j], local[n + j], local[2 * n + j]) = (l.x, l.y, l.z);
-    (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+/// The tag word of an unpacked guide whose points are world-space floats.
+const TAG_WORLD: u32 = u32::MAX - 1;
+/// The tag word of an unpacked guide whose points are root-frame floats.
+/// (A packed guide's tag is its rest length, a finite float's bits.)
+const TAG_LOCAL: u32 = u32::MAX;
+
+/// Stores point `j`'s bits in unpacked lanes of `n` points.
+fn put_bits(lanes: &mut [u32], n: usize, j: usize, p: Vec3) {
+    (lanes[j], lanes[n + j], lanes[2 * n + j]) = (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
 }
 
 fn read_point(r: &mut Reader) -> Result<Vec3, Error> {
@@ -664,27 +678,23 @@ fn read_point(r: &mut Reader) -> Result<Vec3, Error> {
     Ok(Vec3::from(p[0]))
 }
 
-/// Decodes one guide's record into its local lanes and, with a `frame`,
-/// its world lanes (without, the record is only checked); `before` holds
+/// Unpacks one guide's record into its `tag` and `lanes`; `before` holds
 /// the quantized offsets of the guide before in the block when that one
 /// is packed, and `q` takes this one's. Returns whether it is packed.
-fn decode_guide(
+fn unpack_guide(
     r: &mut Reader,
-    frame: Option<&Frame>,
     rest: &[[f32; 3]],
     before: Option<&[[i64; 64]; 3]>,
     q: &mut [[i64; 64]; 3],
-    local: &mut [f32],
-    world: &mut [f32],
+    tag: &mut [u32],
+    lanes: &mut [u32],
 ) -> Result<bool, Error> {
     let n = rest.len();
     match r.u8()? {
         RAW => {
+            tag[0] = TAG_LOCAL;
             for j in 0..n {
-                let l = read_point(r)?;
-                if let Some(frame) = frame {
-                    put(local, world, n, j, l, frame.to_world(l));
-                }
+                put_bits(lanes, n, j, read_point(r)?);
             }
             Ok(false)
         }
@@ -703,15 +713,9 @@ fn decode_guide(
                     });
                 }
             }
-            let mut bits = BitReader {
-                bytes: r.rest(),
-                next: 0,
-                acc: 0,
-                have: 0,
-            };
-            let step = f64::from(rest_length(rest)) / STEPS;
+            let mut bits = BitReader::new(r.rest());
+            let mut spread = 0u64;
             for (axis, &k) in ks.iter().enumerate() {
-                let lane = &mut local[axis * n..(axis + 1) * n];
                 let q = &mut q[axis];
                 // the offsets the coded ones are differences from
                 let base = match before {
@@ -720,43 +724,24 @@ fn decode_guide(
                 };
                 if k == ZERO || k == NEIGHBOUR_ZERO {
                     q[..n].copy_from_slice(&base[..n]);
+                    spread = q[..n].iter().fold(spread, |s, q| s.max(q.unsigned_abs()));
                 } else {
                     let k = u32::from(k & !NEIGHBOUR);
-                    // the two values before, for the prediction
-                    let (mut d1, mut d2) = (0i64, 0i64);
-                    for j in 0..n {
-                        let ones = bits.ones()?;
-                        let z = if ones < ESCAPE as u32 {
-                            (u64::from(ones) << k) | bits.take(k)?
-                        } else {
-                            bits.take(RAW_BITS)?
-                        };
-                        let d = unzigzag(z).wrapping_add(predict(j, d1, d2));
-                        (d2, d1) = (d1, d);
-                        q[j] = d.wrapping_add(base[j]);
-                    }
-                }
-                for (j, l) in lane.iter_mut().enumerate() {
-                    let q = q[j];
-                    if !(-MAX_STEPS..=MAX_STEPS).contains(&q) {
-                        return Err(Error::Corrupt {
-                            what: "a quantized offset past 2^30 steps",
-                        });
-                    }
-                    *l = (f64::from(rest[j][axis]) + q as f64 * step) as f32;
-                    if l.abs() > MAX_COORDINATE {
-                        return Err(Error::Corrupt {
-                            what: "a decoded point beyond 1e9",
-                        });
-                    }
+                    spread = spread.max(rice_axis(&mut bits, k, &base[..n], &mut q[..n])?);
                 }
             }
+            let length = rest_length(rest);
+            if !fits_packed(rest, spread, f64::from(length) / STEPS) {
+                return Err(Error::Corrupt {
+                    what: "a quantized offset past 2^30 steps or a decoded point beyond 1e9",
+                });
+            }
             r.take(bits.bytes_used())?;
-            if let Some(frame) = frame {
-                for j in 0..n {
-                    let l = Vec3::new(local[j], local[n + j], local[2 * n + j]);
-                    let p = frame.to_world(l);
-                    (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+            tag[0] = length.to_bits();
+            for (lane, q) in lanes.chunks_exact_mut(n).zip(q.iter()) {
+                for (w, &q) in lane.iter_mut().zip(q) {
+                    // within 2^30: an i32
+                    *w = q as i32 as u32;
                 }
             }
             Ok(true)
@@ -767,57 +752,135 @@ fn decode_guide(
     }
 }
 
-/// A frame being filled from a cache (see [`GuideCache::decoding`]).
+/// Decodes one axis of a packed guide: its Rice-coded errors (parameter
+/// `k`) into the offsets `q`, predicted along the guide as [`predict`]
+/// does and added to `base`. Returns the largest offset's magnitude.
+#[inline]
+fn rice_axis(bits: &mut BitReader, k: u32, base: &[i64], q: &mut [i64]) -> Result<u64, Error> {
+    // points 0 and 1 predict from nothing and from one point: peeled, so
+    // the loop's prediction has no branch
+    let mut d2 = unzigzag(bits.rice(k)?);
+    let mut d1 = unzigzag(bits.rice(k)?).wrapping_add(d2);
+    q[0] = d2.wrapping_add(base[0]);
+    q[1] = d1.wrapping_add(base[1]);
+    let mut spread = q[0].unsigned_abs().max(q[1].unsigned_abs());
+    for (q, &base) in q.iter_mut().zip(base).skip(2) {
+        let d = unzigzag(bits.rice(k)?).wrapping_add(predict(2, d1, d2));
+        (d2, d1) = (d1, d);
+        *q = d.wrapping_add(base);
+        spread = spread.max(q.unsigned_abs());
+    }
+    Ok(spread)
+}
+
+/// Whether a guide with rest points `rest`, offsets of magnitude up to
+/// `spread` steps of `step`, may be packed: the offsets stay within 2^30
+/// steps and every decoded coordinate within 1e9. Coder and decoder test
+/// this one bound per guide (rounding is monotonic, so no point can
+/// exceed it), not each point.
+fn fits_packed(rest: &[[f32; 3]], spread: u64, step: f64) -> bool {
+    // rest points are finite (the groom is checked): no NaN to order
+    let reach = rest
+        .iter()
+        .flatten()
+        .fold(0.0f32, |m, c| if c.abs() > m { c.abs() } else { m });
+    spread <= MAX_STEPS as u64
+        && f64::from(reach) + spread as f64 * step <= f64::from(MAX_COORDINATE)
+}
+
+/// A frame being filled from an unpacked cache (see [`GuideCache::decoding`]).
 pub struct Decoding<'r> {
-    /// Decodes runs of blocks.
-    pub filler: BlockFiller<'r>,
-    /// [`BlockFiller::floats_per_guide`] floats per guide, guide after guide.
+    /// Poses runs of unpacked guides.
+    pub filler: CacheFiller<'r>,
+    /// [`CacheFiller::floats_per_guide`] floats per guide, guide after guide.
     pub data: &'r mut [f32],
     posed: &'r mut bool,
 }
 
 impl Decoding<'_> {
-    /// Marks the frame posed, once every block is filled.
+    /// Marks the frame posed, once every guide is filled.
     pub fn finish(self) {
         *self.posed = true;
     }
 }
 
-/// Decodes runs of blocks of one sample (see [`Decoding`]).
+/// Poses runs of unpacked guides (see [`Decoding`]).
 #[derive(Clone, Copy)]
-pub struct BlockFiller<'r> {
+pub struct CacheFiller<'r> {
     cache: &'r GuideCache<'r>,
     groom: &'r Groom<'r>,
     mesh: &'r Mesh<'r>,
     tangents: &'r [[f32; 3]],
-    sample: usize,
 }
 
-impl BlockFiller<'_> {
+impl CacheFiller<'_> {
     /// Floats each guide takes.
     pub fn floats_per_guide(&self) -> usize {
         6 * self.cache.info.points
     }
 
-    /// Decodes the guides `first ..` that `part` holds, `first` a multiple
-    /// of [`BLOCK`] and `part` whole blocks (or up to the last guide).
-    pub fn fill(&self, first: usize, part: &mut [f32]) -> Result<(), Error> {
-        let per = self.floats_per_guide();
+    /// Poses the guides `first ..` that `part` holds from their words in
+    /// `unpacked` (as [`GuideCache::unpack`] wrote them for these guides:
+    /// `part`'s guides times [`GuideCache::words_per_guide`]). Any split
+    /// into runs gives the same bits.
+    pub fn fill(&self, first: usize, unpacked: &[u32], part: &mut [f32]) -> Result<(), Error> {
+        let n = self.cache.info.points;
+        let (per, words) = (self.floats_per_guide(), self.cache.words_per_guide());
         let guides = part.len() / per;
-        let whole = guides % BLOCK == 0 || first + guides == self.cache.info.guides;
-        if first % BLOCK != 0
-            || part.len() % per != 0
-            || !whole
+        if part.len() % per != 0
             || first + guides > self.cache.info.guides
+            || unpacked.len() != guides * words
         {
             return Err(Error::InvalidArgument(
-                "a decoded run is whole blocks of guides",
+                "a filled run takes the unpacked words of its guides",
             ));
         }
-        for (k, out) in part.chunks_mut(BLOCK * per).enumerate() {
-            let target = Some((self.mesh, self.tangents));
-            self.cache
-                .decode_block(self.groom, target, self.sample, first / BLOCK + k, out)?;
+        // frames a block at a time (their square-root chains overlap)
+        let (mut frames, mut basis) = ([Frame::default(); FRAME_LANES], None);
+        let slots = part.chunks_exact_mut(per).zip(unpacked.chunks_exact(words));
+        for (i, (slot, words)) in slots.enumerate() {
+            let g = first + i;
+            if i % FRAME_LANES == 0 {
+                let roots = &self.groom.guide_roots[g..];
+                frame::frames(self.mesh, self.tangents, roots, &mut basis, &mut frames);
+            }
+            let frame = &frames[i % FRAME_LANES];
+            let rest = &self.groom.guide_points[g * n..(g + 1) * n];
+            let (local, world) = slot.split_at_mut(3 * n);
+            let lanes = &words[1..];
+            match words[0] {
+                TAG_WORLD => {
+                    for j in 0..n {
+                        let p = Vec3::new(
+                            f32::from_bits(lanes[j]),
+                            f32::from_bits(lanes[n + j]),
+                            f32::from_bits(lanes[2 * n + j]),
+                        );
+                        let l = frame.to_local(p);
+                        (local[j], local[n + j], local[2 * n + j]) = (l.x, l.y, l.z);
+                        (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+                    }
+                    continue;
+                }
+                TAG_LOCAL => {
+                    for (l, &w) in local.iter_mut().zip(lanes) {
+                        *l = f32::from_bits(w);
+                    }
+                }
+                length => {
+                    let step = f64::from(f32::from_bits(length)) / STEPS;
+                    let lanes = local.chunks_exact_mut(n).zip(lanes.chunks_exact(n));
+                    for (axis, (lane, q)) in lanes.enumerate() {
+                        for ((l, &q), rest) in lane.iter_mut().zip(q).zip(rest) {
+                            *l = (f64::from(rest[axis]) + f64::from(q as i32) * step) as f32;
+                        }
+                    }
+                }
+            }
+            for j in 0..n {
+                let p = frame.to_world(Vec3::new(local[j], local[n + j], local[2 * n + j]));
+                (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
+            }
         }
         Ok(())
     }
@@ -826,36 +889,47 @@ impl BlockFiller<'_> {
 /// Reads bits least significant first from a slice, failing past its end.
 struct BitReader<'a> {
     bytes: &'a [u8],
-    /// Bytes consumed into `acc`.
+    /// Bytes counted into `acc`.
     next: usize,
-    /// Bits from the slice, the first `have` of them counted in; any above
-    /// are the bytes after `next`, loaded early.
+    /// The bits held, the first `have` counted; any above are the bytes
+    /// from `next` on, loaded early.
     acc: u64,
     have: u32,
 }
 
-impl BitReader<'_> {
-    /// Loads whole bytes while they fit (at least 56 bits held, unless the
-    /// slice ends).
-    #[inline]
+impl<'a> BitReader<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        BitReader {
+            bytes,
+            next: 0,
+            acc: 0,
+            have: 0,
+        }
+    }
+
+    /// Counts whole bytes in while they fit: at least 56 bits held unless
+    /// the slice ends.
+    #[inline(always)]
     fn refill(&mut self) {
-        if let Some(word) = self.bytes.get(self.next..self.next + 8) {
-            let v = u64::from_le_bytes([
-                word[0], word[1], word[2], word[3], word[4], word[5], word[6], word[7],
-            ]);
-            self.acc |= v << self.have;
-            let fit = (63 - self.have) / 8;
-            self.next += fit as usize;
-            self.have += fit * 8;
+        if let Some(w) = self.bytes.get(self.next..self.next + 8) {
+            let word = u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]);
+            self.acc |= word << self.have;
+            self.next += ((63 - self.have) >> 3) as usize;
+            self.have |= 56;
         } else {
-            while self.have <= 56 {
-                let Some(&b) = self.bytes.get(self.next) else {
-                    return;
-                };
-                self.acc |= u64::from(b) << self.have;
-                self.next += 1;
-                self.have += 8;
-            }
+            self.refill_tail();
+        }
+    }
+
+    #[cold]
+    fn refill_tail(&mut self) {
+        while self.have <= 56 {
+            let Some(&b) = self.bytes.get(self.next) else {
+                return;
+            };
+            self.acc |= u64::from(b) << self.have;
+            self.next += 1;
+            self.have += 8;
         }
     }
 
@@ -868,15 +942,10 @@ impl BitReader<'_> {
     /// The `bits` (<= 40) next bits.
     #[inline]
     fn take(&mut self, bits: u32) -> Result<u64, Error> {
-        if bits == 0 {
-            return Ok(0);
-        }
         if self.have < bits {
             self.refill();
             if self.have < bits {
-                return Err(Error::Corrupt {
-                    what: "truncated guide bits",
-                });
+                return Err(truncated());
             }
         }
         let v = self.acc & ((1u64 << bits) - 1);
@@ -885,27 +954,49 @@ impl BitReader<'_> {
         Ok(v)
     }
 
-    /// Counts ones up to a zero (consumed) or to [`ESCAPE`] ones.
-    #[inline]
-    fn ones(&mut self) -> Result<u32, Error> {
-        if self.have <= ESCAPE as u32 {
+    /// One Rice-coded value with parameter `k`: a run of ones (the
+    /// quotient), a zero, `k` low bits; a run of [`ESCAPE`] ones is
+    /// followed by the value in [`RAW_BITS`] bits.
+    #[inline(always)]
+    fn rice(&mut self, k: u32) -> Result<u64, Error> {
+        if self.have < 32 {
             self.refill();
         }
+        // bits past `have` may be zeros that end the run early: the fast
+        // path takes a code only when it lies within `have`
+        let run = (!self.acc).trailing_zeros();
+        let used = run + 1 + k;
+        if run < ESCAPE as u32 && used <= self.have {
+            let v = (u64::from(run) << k) | ((self.acc >> (run + 1)) & ((1u64 << k) - 1));
+            self.acc >>= used;
+            self.have -= used;
+            return Ok(v);
+        }
+        self.rice_slow(k)
+    }
+
+    /// [`BitReader::rice`] for a long or escaped code, or near the
+    /// slice's end.
+    #[cold]
+    #[inline(never)]
+    fn rice_slow(&mut self, k: u32) -> Result<u64, Error> {
+        self.refill();
         let run = (!self.acc).trailing_zeros().min(self.have);
         if run >= ESCAPE as u32 {
-            self.acc >>= ESCAPE as u32;
-            self.have -= ESCAPE as u32;
-            return Ok(ESCAPE as u32);
+            self.take(ESCAPE as u32)?;
+            return self.take(RAW_BITS);
         }
         if run == self.have {
-            return Err(Error::Corrupt {
-                what: "truncated guide bits",
-            });
+            return Err(truncated());
         }
-        // the zero ends the run
-        self.acc >>= run + 1;
-        self.have -= run + 1;
-        Ok(run)
+        self.take(run + 1)?;
+        Ok((u64::from(run) << k) | self.take(k)?)
+    }
+}
+
+fn truncated() -> Error {
+    Error::Corrupt {
+        what: "truncated guide bits",
     }
 }
 
@@ -915,6 +1006,10 @@ mod tests {
     use crate::cache::fixture::{Scene, POINTS};
 
     const GROOM_ID: u32 = 77;
+
+    fn scratch(cache: &GuideCache) -> Vec<u32> {
+        vec![0; cache.scratch_words()]
+    }
 
     fn write(groom: &Groom, samples: &[&PosedFrame], mode: Mode) -> Vec<u8> {
         let (g, n) = (groom.guide_roots.len(), groom.points);
@@ -958,7 +1053,9 @@ mod tests {
                 // decoded into a frame of the sample's mesh, posed with other guides
                 let (_, other) = scene.posed(0.3);
                 scene.with_frame(mesh, &other, |f| {
-                    cache.decode(&groom, GROOM_ID, s, f).unwrap();
+                    cache
+                        .decode(&groom, GROOM_ID, s, f, &mut scratch(&cache))
+                        .unwrap();
                     for g in 0..f.guide_count() {
                         let rest = &groom.guide_points[g * POINTS..(g + 1) * POINTS];
                         let bound = rest_length(rest) / 32768.0;
@@ -986,12 +1083,60 @@ mod tests {
             let cache = GuideCache::parse(bytes).unwrap();
             let (_, other) = scene.posed(0.1);
             scene.with_frame(mesh, &other, |f| {
-                cache.decode(&groom, GROOM_ID, s, f).unwrap();
+                cache
+                    .decode(&groom, GROOM_ID, s, f, &mut scratch(&cache))
+                    .unwrap();
                 for g in 0..f.guide_count() {
                     for j in 0..POINTS {
                         assert_eq!(f.world_point(g, j), source.world_point(g, j));
                         assert_eq!(f.local_point(g, j), source.local_point(g, j));
                     }
+                }
+            });
+        });
+    }
+
+    #[test]
+    fn any_split_into_runs_decodes_the_same_bits() {
+        let scene = Scene::new(700);
+        let groom = scene.groom();
+        two_samples(&scene, (0.4, 0.7), Mode::Quantized, |bytes, s, _, mesh| {
+            let cache = GuideCache::parse(bytes).unwrap();
+            let (_, other) = scene.posed(0.1);
+            let whole = scene.with_frame(mesh, &other, |f| {
+                cache
+                    .decode(&groom, GROOM_ID, s, f, &mut scratch(&cache))
+                    .unwrap();
+                (0..f.guide_count() * POINTS)
+                    .map(|k| {
+                        (
+                            f.local_point(k / POINTS, k % POINTS),
+                            f.world_point(k / POINTS, k % POINTS),
+                        )
+                    })
+                    .collect::<Vec<_>>()
+            });
+            scene.with_frame(mesh, &other, |f| {
+                cache.check(&groom, GROOM_ID, s, f).unwrap();
+                let mut words = scratch(&cache);
+                let per = cache.words_per_guide();
+                // block by block, then posed in runs of 7 guides
+                for b in 0..cache.blocks() {
+                    let end = ((b + 1) * BLOCK).min(cache.info().guides);
+                    let part = &mut words[b * BLOCK * per..end * per];
+                    cache.unpack(&groom, s, b..b + 1, part).unwrap();
+                }
+                let decoding = cache.decoding(&groom, f);
+                let floats = decoding.filler.floats_per_guide();
+                for (r, run) in decoding.data.chunks_mut(7 * floats).enumerate() {
+                    let guides = run.len() / floats;
+                    let mine = &words[7 * r * per..(7 * r + guides) * per];
+                    decoding.filler.fill(7 * r, mine, run).unwrap();
+                }
+                decoding.finish();
+                for (k, &(l, w)) in whole.iter().enumerate() {
+                    let (g, j) = (k / POINTS, k % POINTS);
+                    assert_eq!((f.local_point(g, j), f.world_point(g, j)), (l, w));
                 }
             });
         });
@@ -1022,7 +1167,9 @@ mod tests {
             let cache = GuideCache::parse(&bytes).unwrap();
             let (_, other) = scene.posed(0.5);
             scene.with_frame(&scene.rest, &other, |d| {
-                cache.decode(&groom, GROOM_ID, 0, d).unwrap();
+                cache
+                    .decode(&groom, GROOM_ID, 0, d, &mut scratch(&cache))
+                    .unwrap();
                 assert_eq!(d.local_point(9, 4), f.local_point(9, 4));
             });
             bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
@@ -1077,7 +1224,9 @@ mod tests {
             let cache = GuideCache::parse(&bytes).unwrap();
             let (_, other) = scene.posed(0.5);
             scene.with_frame(&scene.rest, &other, |d| {
-                cache.decode(&groom, GROOM_ID, 0, d).unwrap();
+                cache
+                    .decode(&groom, GROOM_ID, 0, d, &mut scratch(&cache))
+                    .unwrap();
                 assert_eq!(d.local_point(7, 5), f.local_point(7, 5));
             });
         });
@@ -1093,10 +1242,12 @@ mod tests {
             points[40][2] = f32::NAN;
             let mut groom = scene.groom();
             groom.guide_points = &points;
-            assert!(cache.decode(&groom, GROOM_ID, 0, f).is_err());
+            assert!(cache
+                .decode(&groom, GROOM_ID, 0, f, &mut scratch(&cache))
+                .is_err());
             groom.guide_points = &scene.guide_local[1..];
             assert!(matches!(
-                cache.decode(&groom, GROOM_ID, 0, f),
+                cache.decode(&groom, GROOM_ID, 0, f, &mut scratch(&cache)),
                 Err(Error::InvalidArgument(_))
             ));
         });
@@ -1124,7 +1275,8 @@ mod tests {
                             .all(|k| f.world_point(k / POINTS, k % POINTS) == before[k])
                     };
                     let mut decode = |b: &[u8]| {
-                        GuideCache::parse(b).and_then(|c| c.decode(&groom, GROOM_ID, 0, f))
+                        GuideCache::parse(b)
+                            .and_then(|c| c.decode(&groom, GROOM_ID, 0, f, &mut scratch(&c)))
                     };
                     for len in (0..bytes.len()).step_by(7) {
                         assert!(decode(&bytes[..len]).is_err(), "truncated to {len}");
@@ -1146,15 +1298,22 @@ mod tests {
                     }
                     let cache = GuideCache::parse(bytes).unwrap();
                     assert!(matches!(
-                        cache.decode(&groom, GROOM_ID + 1, 0, f),
+                        cache.decode(&groom, GROOM_ID + 1, 0, f, &mut scratch(&cache)),
                         Err(Error::InvalidArgument(_))
                     ));
                     assert!(matches!(
-                        cache.decode(&groom, GROOM_ID, 2, f),
+                        cache.decode(&groom, GROOM_ID, 2, f, &mut scratch(&cache)),
+                        Err(Error::InvalidArgument(_))
+                    ));
+                    let short = &mut scratch(&cache)[1..];
+                    assert!(matches!(
+                        cache.decode(&groom, GROOM_ID, 0, f, short),
                         Err(Error::InvalidArgument(_))
                     ));
                     assert!(kept(f));
-                    cache.decode(&groom, GROOM_ID, 0, f).unwrap();
+                    cache
+                        .decode(&groom, GROOM_ID, 0, f, &mut scratch(&cache))
+                        .unwrap();
                     assert!(!kept(f));
                     let err = (f.world_point(5, 3) - source.world_point(5, 3)).length();
                     assert!(err < 1e-4, "{err}");

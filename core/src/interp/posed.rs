@@ -10,7 +10,7 @@
 use crate::arena::{Arena, ArenaLayout};
 use crate::guides::Guides;
 use crate::interp::strand::{ExpandParams, MAX_STRAND_POINTS};
-use crate::surface::frame::{self, Frame};
+use crate::surface::frame::{self, Frame, FRAME_LANES};
 use crate::{Error, Mesh};
 use glam::Vec3;
 
@@ -258,10 +258,15 @@ impl GuideFiller<'_> {
     pub fn fill(&self, first: usize, part: &mut [f32]) {
         let n = self.points;
         let step = 1.0 / (n - 1) as f32;
+        // frames a block at a time (their square-root chains overlap)
+        let (mut frames, mut basis) = ([Frame::default(); FRAME_LANES], None);
         for (i, slot) in part.chunks_exact_mut(6 * n).enumerate() {
             let g = first + i;
-            let r = &self.guides.roots[g];
-            let frame = Frame::at(self.mesh, self.tangents, r.face as usize, r.u, r.v);
+            if i % FRAME_LANES == 0 {
+                let roots = &self.guides.roots[g..];
+                frame::frames(self.mesh, self.tangents, roots, &mut basis, &mut frames);
+            }
+            let frame = &frames[i % FRAME_LANES];
             let (_, count) = self.guides.span(g);
             let (local, world) = slot.split_at_mut(3 * n);
             for j in 0..n {
