@@ -98,6 +98,11 @@ impl Frame {
         })
     }
 
+    /// The body `pelage_frame_set_colliders` built for this frame, if any.
+    pub(crate) fn body(&self) -> Option<&Body<'_>> {
+        self.push.as_ref().and_then(|c| c.body.as_ref())
+    }
+
     /// The posed frame, for no longer than this handle lives.
     pub(crate) fn posed(&self) -> &PosedFrame<'_> {
         &self.posed

@@ -464,6 +464,9 @@ impl SignedDistance for HostField {
 /// neutral pose (the rest shape carried by the root frame), the tip spring,
 /// the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
 /// `thread_count` threads (0: all cores); the bits do not depend on it.
+/// The body collider (`colliders->body`) is the frame's mesh: the body
+/// `pelage_frame_set_colliders` built for the frame when it has one (the
+/// same solid, built once per frame), else built here, every step.
 /// `external_points` (NULL: none) holds another simulator's curves, float3
 /// world points `external_stride` bytes apart, points_per_guide per guide:
 /// the guides `params.external` selects take their shape from them
@@ -490,11 +493,18 @@ pub extern "C" fn pelage_sim_step(
         let sim = sim_mut(sim)?;
         let frame = frame_ref(frame)?;
         let host = HostColliders::read(colliders)?;
-        let body = match host.body {
-            true => Some(body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena, thread_count)?),
-            false => None,
+        // the frame's own body, when its colliders have one, is this mesh's:
+        // built once per frame, shared with the render strands' push-out
+        let built;
+        let body = match (host.body, frame.body()) {
+            (false, _) => None,
+            (true, Some(body)) => Some(body),
+            (true, None) => {
+                built = body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena, thread_count)?;
+                Some(&built)
+            }
         };
-        let colliders = host.colliders(body.as_ref());
+        let colliders = host.colliders(body);
         let external = match external_points.is_null() {
             true => None,
             false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),

@@ -88,13 +88,23 @@ fn main() {
                 })
                 .collect(),
         );
-        let run = |body: u32| {
+        // body: 0 none, 1 built by the step, 2 the frame's (built before
+        // the step, untimed there, as a host that also pushes render
+        // strands out has it)
+        let mut frame_body = vec![];
+        let mut run = |body: u32| {
             assert_eq!(pelage_sim_reset(sim), PelageStatus::Ok);
             median(
                 (0..FRAMES as usize)
                     .map(|f| {
                         let caps = &props[f];
                         let colliders = colliders(caps, body != 0);
+                        if body == 2 {
+                            let t = Instant::now();
+                            let s = pelage_frame_set_colliders(frames[f].0, &colliders);
+                            frame_body.push(t.elapsed().as_secs_f64());
+                            assert_eq!(s, PelageStatus::Ok);
+                        }
                         let t = Instant::now();
                         let s = pelage_sim_step(
                             sim,
@@ -107,6 +117,10 @@ fn main() {
                         );
                         let e = t.elapsed().as_secs_f64();
                         assert_eq!(s, PelageStatus::Ok);
+                        if body == 2 {
+                            // the frame's body freed (96 would not fit)
+                            pelage_frame_set_colliders(frames[f].0, std::ptr::null());
+                        }
                         e
                     })
                     .collect(),
@@ -114,9 +128,11 @@ fn main() {
         };
         let with_capsules = run(0);
         let with_body = run(1);
+        let with_frame_body = run(2);
         for (name, t) in [
             ("links + 16 capsules", with_capsules),
             ("links + 16 capsules + body", with_body),
+            ("... + the frame's body", with_frame_body),
             ("floor: neutral read, posed written", floor),
         ] {
             println!(
@@ -127,9 +143,11 @@ fn main() {
             );
         }
         println!(
-            "{:>34} {threads:>7} | {:>9.2} ms more for the body",
+            "{:>34} {threads:>7} | {:>9.2} ms more for the body; {:.2} ms with the frame's, which pelage_frame_set_colliders built in {:.2} ms (one thread)",
             "",
-            (with_body - with_capsules) * 1e3
+            (with_body - with_capsules) * 1e3,
+            (with_frame_body - with_capsules) * 1e3,
+            median(frame_body) * 1e3
         );
     }
     full_frame(sim, &rest, &roots, &points, &frames, &props);

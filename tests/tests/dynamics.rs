@@ -94,12 +94,15 @@ impl Drop for SimHandle {
 }
 
 /// Steps `sim` through frames `range` of the shot with `threads`, calling
-/// `each` with every frame's posed mesh and the simulated guides.
+/// `each` with every frame's posed mesh and the simulated guides. With
+/// `frame_body`, each frame builds its body first (as a host that also
+/// pushes render strands out does) and the step uses it.
 fn run(
     shot: &Shot,
     sim: &SimHandle,
     range: std::ops::Range<u32>,
     threads: u32,
+    frame_body: bool,
     mut each: impl FnMut(u32, &CreatureMesh, &[[f32; 3]], &[PelageCapsule]),
 ) {
     let guides = guides_desc(&shot.roots, &shot.points);
@@ -108,6 +111,10 @@ fn run(
         let handle: Frame = frame(&mesh_desc(&mesh), &guides, JOINTS as u32, threads).unwrap();
         let caps = capsules(&shot.rest, &shot.roots, f);
         let colliders = colliders(&caps, true);
+        if frame_body {
+            let s = pelage_frame_set_colliders(handle.0, &colliders);
+            assert_eq!(s, PelageStatus::Ok, "frame {f}");
+        }
         let s = pelage_sim_step(
             sim.sim,
             handle.0,
@@ -151,7 +158,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
     let mut saved = vec![];
     let mut worst_inside = 0;
     let mut moved_most = 0.0f32;
-    run(&shot, &sim, 0..FRAMES, 2, |f, mesh, posed, caps| {
+    run(&shot, &sim, 0..FRAMES, 2, false, |f, mesh, posed, caps| {
         let m = mesh_view(mesh);
         let mut body_memory = vec![0u8; Body::required_bytes(&m).unwrap()];
         let body = Body::new(&m, &mut Arena::new(&mut body_memory)).unwrap();
@@ -202,12 +209,12 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
     assert_eq!(worst_inside, 0, "guides left in a collider");
     assert!(moved_most > 0.01, "the fur never moved ({moved_most})");
 
-    // one thread: the same bits
+    // one thread, colliding with the body each frame built: the same bits
     let single = SimHandle::new(&shot, &params);
-    run(&shot, &single, 0..FRAMES, 1, |f, _, posed, _| {
+    run(&shot, &single, 0..FRAMES, 1, true, |f, _, posed, _| {
         assert!(
             posed == shot_bits[f as usize].as_slice(),
-            "frame {f} differs on one thread"
+            "frame {f} differs on one thread with the frame's body"
         );
     });
     // restored mid-shot in a new simulation: the same bits from there on
@@ -216,7 +223,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
         pelage_sim_restore(resumed.sim, saved.as_ptr().cast(), saved.len()),
         PelageStatus::Ok
     );
-    run(&shot, &resumed, 41..FRAMES, 2, |f, _, posed, _| {
+    run(&shot, &resumed, 41..FRAMES, 2, false, |f, _, posed, _| {
         assert!(
             posed == shot_bits[f as usize].as_slice(),
             "frame {f} differs after restore"

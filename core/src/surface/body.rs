@@ -197,6 +197,9 @@ pub struct BodyParts<'a> {
 pub struct BodyGrid<'a> {
     shape: Shape,
     triangles: &'a [Stored],
+    /// The cells each triangle's bounds touch (see [`Shape::cell_range`]),
+    /// found once for every stage.
+    spans: &'a [Span],
     caps: &'a [Stored],
     loops: &'a [CapBall],
 }
@@ -246,13 +249,13 @@ impl<'a> BodyParts<'a> {
 }
 
 impl BodyGrid<'_> {
-    /// Visits the cells of layers `layers` that triangle `t`'s bounds
-    /// touch, by their index within those layers.
+    /// Visits the cells of layers `layers` that a triangle's bounds
+    /// touch (its `span`), by their index within those layers.
     #[inline]
-    fn each_cell(&self, t: &Stored, layers: &Range<usize>, mut visit: impl FnMut(usize)) {
+    fn each_cell(&self, span: &Span, layers: &Range<usize>, mut visit: impl FnMut(usize)) {
         let shape = &self.shape;
-        let [.., lo, hi] = *t;
-        let (a, b) = shape.cell_range(lo.into(), hi.into());
+        let [a0, a1, a2, b0, b1, b2] = span.map(usize::from);
+        let (a, b) = ([a0, a1, a2], [b0, b1, b2]);
         let skip = layers.start * shape.layer_cells();
         for z in a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1)) {
             for y in a[1]..=b[1] {
@@ -271,8 +274,8 @@ impl BodyGrid<'_> {
         if layers.is_empty() {
             return 0;
         }
-        for t in self.triangles {
-            self.each_cell(t, &layers, |c| start[c] += 1);
+        for span in self.spans {
+            self.each_cell(span, &layers, |c| start[c] += 1);
         }
         let mut sum = 0u32;
         for s in start.iter_mut() {
@@ -291,8 +294,8 @@ impl BodyGrid<'_> {
             return;
         }
         // filled backwards from each cell's end, so each ends at its start
-        for (t, tri) in self.triangles.iter().enumerate() {
-            self.each_cell(tri, &layers, |c| {
+        for (t, span) in self.spans.iter().enumerate() {
+            self.each_cell(span, &layers, |c| {
                 start[c] -= 1;
                 refs[start[c] as usize] = t as u32;
             });
@@ -457,6 +460,7 @@ impl BodyPlan {
             .add::<u32>(cells + 1)
             .add::<u32>(shape.refs)
             .add::<Stored>(shape.triangles)
+            .add::<Span>(shape.triangles)
             .add::<Stored>(cap_triangles)
             .add::<CapBall>(loops)
             .add::<u8>(cells);
@@ -516,18 +520,22 @@ impl<'a> Body<'a> {
         let start = arena.alloc::<u32>(cells + 1)?;
         let refs = arena.alloc::<u32>(shape.refs)?;
         let triangles = arena.alloc::<Stored>(shape.triangles)?;
+        let spans = arena.alloc::<Span>(shape.triangles)?;
         let caps = arena.alloc::<Stored>(plan.cap_triangles)?;
         let loops = arena.alloc::<CapBall>(plan.loops)?;
         let class = arena.alloc::<u8>(cells)?;
 
         let mut solid = (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f));
-        for t in triangles.iter_mut() {
+        for (t, span) in triangles.iter_mut().zip(spans.iter_mut()) {
             let [a, b, c] = mesh.corners(solid.next().ok_or(another)?);
             let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
             if !(lo.cmpge(shape.lo).all() && hi.cmple(shape.hi).all()) {
                 return Err(another);
             }
             *t = [a, b, c, lo, hi].map(Into::into);
+            let (a, b) = shape.cell_range(lo, hi);
+            // at most MAX_DIM + 4 cells a side
+            *span = [a[0], a[1], a[2], b[0], b[1], b[2]].map(|c| c as u16);
         }
         if solid.next().is_some() {
             return Err(another);
@@ -537,6 +545,7 @@ impl<'a> Body<'a> {
             grid: BodyGrid {
                 shape,
                 triangles,
+                spans,
                 caps,
                 loops,
             },
@@ -567,12 +576,10 @@ impl<'a> Body<'a> {
         Ok(parts.finish())
     }
 
-    /// The triangles listed in cell `c`.
+    /// The references of the triangles listed in cell `c`.
     #[inline]
-    fn listed(&self, c: usize) -> impl Iterator<Item = &Stored> {
-        self.refs[self.start[c] as usize..self.start[c + 1] as usize]
-            .iter()
-            .map(|&t| &self.triangles[t as usize])
+    fn listed(&self, c: usize) -> Range<usize> {
+        self.start[c] as usize..self.start[c + 1] as usize
     }
 
     /// The centre of cell `(x, y, z)`.
@@ -583,10 +590,29 @@ impl<'a> Body<'a> {
     /// True when `p` is inside the body: its generalized winding number is
     /// above [`INSIDE_WINDING`].
     pub fn contains(&self, p: Vec3) -> bool {
-        match self.capped(p) {
-            (w, false) => w >= 1,
-            (w, true) => self.caps_decide(w, p),
+        self.decide(p, self.capped(p))
+    }
+
+    /// [`contains`](Self::contains) from `p`'s [`capped`](Self::capped) answer.
+    fn decide(&self, p: Vec3, (w, near_cap): (i32, bool)) -> bool {
+        match near_cap {
+            false => w >= 1,
+            true => self.caps_decide(w, p),
         }
+    }
+
+    /// The cell of `p` (its index and coordinates) and its class, or none
+    /// outside the grid.
+    #[inline]
+    fn locate(&self, p: Vec3) -> Option<(usize, [usize; 3], u8)> {
+        let c = self.shape.cell_of(p);
+        let inside = (0..3).all(|k| c[k] >= 0 && (c[k] as usize) < self.shape.dims[k]);
+        if !inside {
+            return None;
+        }
+        let cell = [c[0] as usize, c[1] as usize, c[2] as usize];
+        let c = self.shape.index(cell[0], cell[1], cell[2]);
+        Some((c, cell, self.class[c]))
     }
 
     /// The winding number at `p` of the mesh with its holes closed by the
@@ -601,15 +627,16 @@ impl<'a> Body<'a> {
     /// [`capped_winding`](Self::capped_winding), and whether a cap may
     /// decide [`contains`](Self::contains) at `p`.
     fn capped(&self, p: Vec3) -> (i32, bool) {
-        let c = self.shape.cell_of(p);
-        let inside = (0..3).all(|k| c[k] >= 0 && (c[k] as usize) < self.shape.dims[k]);
-        if !inside {
-            return (0, false);
+        match self.locate(p) {
+            None => (0, false),
+            Some((c, cell, class)) => self.capped_in(p, cell, class, self.listed(c)),
         }
-        let cell = [c[0] as usize, c[1] as usize, c[2] as usize];
-        let c = self.shape.index(cell[0], cell[1], cell[2]);
-        let class = self.class[c];
-        let mut w = ((class as i8) >> WINDING_SHIFT) as i32;
+    }
+
+    /// [`capped`](Self::capped) for `p` in the cell at `cell`, of class
+    /// `class` and triangle references `list`.
+    fn capped_in(&self, p: Vec3, cell: [usize; 3], class: u8, list: Range<usize>) -> (i32, bool) {
+        let mut w = winding_of(class);
         let near_cap = class & NEAR_CAP != 0;
         if class & (SURFACE | NEAR_CAP) == 0 {
             return (w, false);
@@ -650,27 +677,15 @@ impl<'a> Body<'a> {
         let caps: &[Stored] = if spill { self.caps } else { &[] };
         let met = &met[..if spill { 0 } else { listed }];
         // the path centre -> (p.x, centre.y, centre.z) -> (p.x, p.y,
-        // centre.z) -> p, a leg per axis; a crossing h of a leg from `from`
-        // to `to` counts when from < h <= to, and counts negated when
-        // to < h <= from (as the sweep counts them)
-        let mut leg = |axis: usize, hit: &Crossing| {
-            let (from, to) = (at[axis], p[axis]);
-            let (lo, hi, sign) = if from <= to {
-                (from, to, 1)
-            } else {
-                (to, from, -1)
-            };
-            let near = met.iter().map(|&t| &self.caps[t as usize]);
-            for t in self.listed(c).chain(caps).chain(near) {
-                if let Some((h, step)) = hit(t, at) {
-                    w += if lo < h && h <= hi { sign * step } else { 0 };
-                }
-            }
-            at[axis] = p[axis];
+        // centre.z) -> p, a leg per axis
+        let legs = Legs {
+            body: self,
+            listed: &self.refs[list],
+            caps,
+            met,
+            to: p,
         };
-        leg(0, &crossing::<0>);
-        leg(1, &crossing::<1>);
-        leg(2, &crossing::<2>);
+        w += legs.leg::<0>(&mut at) + legs.leg::<1>(&mut at) + legs.leg::<2>(&mut at);
         (w, near_cap)
     }
 
@@ -813,12 +828,61 @@ fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)).then_some(along)
 }
 
+/// The capped surface's winding number at the centre of a cell of class
+/// `class`.
+#[inline]
+fn winding_of(class: u8) -> i32 {
+    ((class as i8) >> WINDING_SHIFT) as i32
+}
+
 /// A triangle as stored: its three corners, then the low and the high
 /// corner of its bounds.
 type Stored = [[f32; 3]; 5];
 
-/// [`crossing`] along one axis.
-type Crossing = dyn Fn(&Stored, Vec3) -> Option<(f32, i32)>;
+/// The cells a triangle's bounds touch: the first and the last along x, y
+/// and z.
+type Span = [u16; 6];
+
+/// The path of [`Body::capped`] from a cell's centre to a point in it, and
+/// the triangles it may cross: the cell's, and the caps that meet it
+/// (`met`) or, when too many do, every cap (`caps`).
+struct Legs<'b> {
+    body: &'b Body<'b>,
+    /// The cell's triangle references.
+    listed: &'b [u32],
+    caps: &'b [Stored],
+    met: &'b [u32],
+    to: Vec3,
+}
+
+impl Legs<'_> {
+    /// The change of winding number along the leg from `at` to `to`'s
+    /// coordinate on `AXIS`, and moves `at` there. A crossing h counts
+    /// when from < h <= to, and counts negated when to < h <= from (as the
+    /// sweep counts them).
+    #[inline]
+    fn leg<const AXIS: usize>(&self, at: &mut Vec3) -> i32 {
+        let (from, to) = (at[AXIS], self.to[AXIS]);
+        let (lo, hi, sign) = if from <= to {
+            (from, to, 1)
+        } else {
+            (to, from, -1)
+        };
+        let near = self.met.iter().map(|&t| &self.body.caps[t as usize]);
+        let listed = self
+            .listed
+            .iter()
+            .map(|&t| &self.body.triangles[t as usize]);
+        let mut w = 0;
+        for t in listed.chain(self.caps).chain(near) {
+            if let Some((h, step)) = crossing::<AXIS>(t, *at) {
+                w += if lo < h && h <= hi { sign * step } else { 0 };
+            }
+        }
+        at[AXIS] = self.to[AXIS];
+        w
+    }
+}
 
 /// Where the line through `p` along axis `AXIS` crosses triangle `t` (that
 /// coordinate), if it passes through it, and how the winding number changes
