@@ -75,11 +75,13 @@ struct Shape {
 }
 
 impl Shape {
-    fn of(mesh: &Mesh) -> Result<Shape, Error> {
+    /// The grid over the triangles of `mesh` that `solid` keeps (those
+    /// not degenerate).
+    fn of(mesh: &Mesh, solid: impl Fn(usize) -> bool) -> Result<Shape, Error> {
         mesh.check()?;
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         let mut triangles = 0;
-        for f in (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f)) {
+        for f in (0..mesh.triangle_count()).filter(|&f| solid(f)) {
             for c in mesh.corners(f) {
                 (lo, hi) = (lo.min(c), hi.max(c));
             }
@@ -109,7 +111,7 @@ impl Shape {
             lo,
             hi,
         };
-        for f in (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f)) {
+        for f in (0..mesh.triangle_count()).filter(|&f| solid(f)) {
             let [a, b, c] = mesh.corners(f);
             let (a, b) = shape.cell_range(a.min(b).min(c), a.max(b).max(c));
             shape.refs += (0..3).map(|k| b[k] - a[k] + 1).product::<usize>();
@@ -437,7 +439,7 @@ impl BodyPlan {
     /// (see [`Rim`] for when it must be found again).
     pub fn of(mesh: &Mesh, rim: &Rim) -> Result<Self, Error> {
         rim.check_mesh(mesh)?;
-        let shape = Shape::of(mesh)?;
+        let shape = Shape::of(mesh, |f| rim.is_solid(f))?;
         if shape.refs >= u32::MAX as usize {
             return Err(Error::InvalidArgument("body grid is too large"));
         }
@@ -472,7 +474,7 @@ impl<'a> Body<'a> {
     /// Arena bytes [`Body::new`] needs for `mesh` (validates it): its rim's
     /// and its body's, for the most boundary edges the mesh could have.
     pub fn required_bytes(mesh: &Mesh) -> Result<usize, Error> {
-        let shape = Shape::of(mesh)?;
+        let shape = Shape::of(mesh, |f| !mesh.is_degenerate(f))?;
         // a loop has three edges or more
         let edges = 3 * mesh.triangle_count();
         let body = BodyPlan::bytes_with(&shape, edges, edges / 3);
@@ -525,7 +527,7 @@ impl<'a> Body<'a> {
         let loops = arena.alloc::<CapBall>(plan.loops)?;
         let class = arena.alloc::<u8>(cells)?;
 
-        let mut solid = (0..mesh.triangle_count()).filter(|&f| !mesh.is_degenerate(f));
+        let mut solid = (0..mesh.triangle_count()).filter(|&f| rim.is_solid(f));
         for (t, span) in triangles.iter_mut().zip(spans.iter_mut()) {
             let [a, b, c] = mesh.corners(solid.next().ok_or(another)?);
             let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));

@@ -31,6 +31,9 @@ pub struct Rim<'a> {
     edges: &'a [[u32; 2]],
     /// Loop `k` is `edges[starts[k]..starts[k + 1]]`.
     starts: &'a [u32],
+    /// 1 for each triangle that is not degenerate (the rim's and the
+    /// body's triangles), 0 for the others.
+    solid: &'a [u8],
     /// Vertices and triangles of the mesh it was found on.
     vertices: usize,
     triangles: usize,
@@ -82,7 +85,8 @@ impl<'a> Rim<'a> {
             .add::<[u32; 4]>(edges)
             .add::<u32>(vertices + 1)
             .add::<[u32; 2]>(edges)
-            .add::<u32>(edges / 3 + 2);
+            .add::<u32>(edges / 3 + 2)
+            .add::<u8>(mesh.triangle_count());
         layout.bytes()
     }
 
@@ -116,8 +120,10 @@ impl<'a> Rim<'a> {
         // each edge keyed by its ends in increasing order, with its
         // direction: after sorting, an edge's copies are adjacent
         let mut n = 0;
+        let solid = arena.alloc::<u8>(mesh.triangle_count())?;
         for (f, t) in mesh.triangles.iter().enumerate() {
-            if mesh.is_degenerate(f) {
+            solid[f] = !mesh.is_degenerate(f) as u8;
+            if solid[f] == 0 {
                 continue;
             }
             let [a, b, c] = t.map(|v| weld[v as usize]);
@@ -188,6 +194,7 @@ impl<'a> Rim<'a> {
             weld,
             edges: &edges[..written],
             starts: &starts[..=loops],
+            solid,
             vertices: mesh.positions.len(),
             triangles: mesh.triangle_count(),
         })
@@ -226,6 +233,13 @@ impl<'a> Rim<'a> {
             .map(|e| at(e[0]).distance(mean))
             .fold(0.0f32, f32::max);
         (mean, radius)
+    }
+
+    /// True when triangle `f` of the rim's mesh is not degenerate (it was
+    /// found so once, here).
+    #[inline]
+    pub(crate) fn is_solid(&self, f: usize) -> bool {
+        self.solid[f] != 0
     }
 
     /// The welded index of vertex `v`: the lowest index at its position.
