@@ -1141,6 +1141,9 @@ void pelage_sim_free(PelageSim sim);
 // neutral pose (the rest shape carried by the root frame), the tip spring,
 // the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
 // `thread_count` threads (0: all cores); the bits do not depend on it.
+// The body collider (`colliders->body`) is the frame's mesh: the body
+// `pelage_frame_set_colliders` built for the frame when it has one (the
+// same solid, built once per frame), else built here, every step.
 // `external_points` (NULL: none) holds another simulator's curves, float3
 // world points `external_stride` bytes apart, points_per_guide per guide:
 // the guides `params.external` selects take their shape from them
