@@ -21,7 +21,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 8
+#define PELAGE_VERSION_MINOR 9
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
@@ -823,7 +823,8 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // Sets the colliders that render strands selected by a push mask
 // (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
 // frame: `colliders` is copied (its body, when set, is this frame's mesh,
-// built once here); NULL clears them. A distance callback is kept: it and
+// built once here on the calling thread; `pelage_sim_step` on this frame
+// collides with it rather than building its own); NULL clears them. A distance callback is kept: it and
 // its user data must stay valid until the colliders are replaced or the
 // frame is freed.
 // On failure the frame keeps the colliders it had.

@@ -10,7 +10,7 @@
 use pelage::*;
 use pelage_core::interp::groom::{GroomMaps, StrandGroom};
 use pelage_core::interp::posed::PosedFrame;
-use pelage_core::surface::body::Body;
+use pelage_core::surface::body::{Body, BodyPlan, Rim};
 use pelage_core::{Arena, ArenaLayout, Root, ScalarMap};
 use pelage_tests::animated::{capsules, colliders, pose, ShotSim, FRAMES};
 use pelage_tests::creature::default_creature;
@@ -56,21 +56,48 @@ fn main() {
         bytes as f64 / 1e6,
         t_new * 1e3
     );
-    let body_build = median(
-        meshes
-            .iter()
-            .map(|m| {
-                let view = mesh_view(m);
-                let mut memory = vec![0u8; Body::required_bytes(&view).unwrap()];
-                let t = Instant::now();
-                black_box(Body::new(&view, &mut Arena::new(&mut memory)).unwrap());
-                t.elapsed().as_secs_f64()
-            })
-            .collect(),
-    );
+    // the body's build stage by stage, on one thread
+    let mut stages = vec![vec![]; 6];
+    for m in &meshes {
+        let view = mesh_view(m);
+        let mut rim_memory = vec![0u8; Rim::required_bytes(&view)];
+        let mut memory = vec![0u8; Body::required_bytes(&view).unwrap()];
+        let mut lap = {
+            let mut t = Instant::now();
+            move |k: usize, stages: &mut Vec<Vec<f64>>| {
+                stages[k].push(t.elapsed().as_secs_f64());
+                t = Instant::now();
+            }
+        };
+        let rim = Rim::new(&view, &mut Arena::new(&mut rim_memory)).unwrap();
+        lap(0, &mut stages);
+        let plan = BodyPlan::of(&view, &rim).unwrap();
+        lap(1, &mut stages);
+        let mut parts = Body::parts(&plan, &view, &rim, &mut Arena::new(&mut memory)).unwrap();
+        lap(2, &mut stages);
+        let layers = 0..parts.layers();
+        let (grid, start, _, _) = parts.split();
+        let cells = start.len() - 1;
+        let total = grid.count(layers.clone(), &mut start[..cells]);
+        parts.set_total(u64::from(total)).unwrap();
+        lap(3, &mut stages);
+        let (grid, start, refs, class) = parts.split();
+        grid.fill(layers.clone(), 0, &mut start[..cells], refs);
+        lap(4, &mut stages);
+        grid.classify(layers, start, class);
+        black_box(parts.finish());
+        lap(5, &mut stages);
+    }
+    let stages: Vec<f64> = stages.into_iter().map(median).collect();
     println!(
-        "the body's grid, built per step for the body collider: {:.1} ms (one thread)",
-        body_build * 1e3
+        "the body, built per step for the body collider: {:.1} ms (one thread): rim {:.1}, placement {:.1}, triangles copied {:.1}, grid counted {:.1}, listed {:.1}, classified {:.1}",
+        stages.iter().sum::<f64>() * 1e3,
+        stages[0] * 1e3,
+        stages[1] * 1e3,
+        stages[2] * 1e3,
+        stages[3] * 1e3,
+        stages[4] * 1e3,
+        stages[5] * 1e3
     );
     println!(
         "{:>34} {:>7} | {:>9} {:>9} | {:>8}",
