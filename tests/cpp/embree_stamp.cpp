@@ -14,12 +14,17 @@
 //
 //   embree_stamp <mesh.obj> [<density.png>] [--roots N[,N...]] [--resolution R]
 //                [--length L] [--radius R] [--tilt DEGREES]   (strands; defaults 0.06, 0.0015, 60)
-//                [--min-mean-multiple X] [--min-p99-multiple Y]
+//                [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]
 //
 // Without a density map the density is constant 1 (pelage's default) and (b)
 // is skipped. The --min-*-multiple options fail the run when a count's
 // random-equivalent falls below them; without them (d) only checks that
-// stamped roots beat random ones at equal count.
+// stamped roots beat random ones at equal count. --reference names the
+// reference roots of each count, `PREFIX_<count>.bin` (PelageRoot records,
+// little-endian, as `make_darts` writes a plain dart-throwing Poisson set of
+// the same count): (d) measures them too, and the stamp's random-equivalents
+// must come within 0.05x (mean) and 0.10x (worst patches, a noisier
+// percentile) of theirs.
 #include "check.h"
 #include "creature_io.h"
 
@@ -116,11 +121,14 @@ struct Options {
   int resolution = 512;
   creature::StrandParams strands;  // 0.06 long, radius 0.0015, 60 degrees toward world -y
   std::optional<double> min_mean_multiple, min_p99_multiple;
+  // Reference roots per count, `<reference>_<count>.bin` (make_darts):
+  // measured beside the stamp, which must cover the skin about as well.
+  std::string reference;
 };
 
 const char* const kUsage =
     "usage: embree_stamp <mesh.obj> [<density.png>] [--roots N[,N...]] [--resolution R] [--length L] "
-    "[--radius R] [--tilt DEGREES] [--min-mean-multiple X] [--min-p99-multiple Y]";
+    "[--radius R] [--tilt DEGREES] [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]";
 
 std::vector<uint32_t> parse_counts(const std::string& list) {
   std::vector<uint32_t> counts;
@@ -155,6 +163,8 @@ Options parse(int argc, char** argv) {
       opt.roots = parse_counts(argv[++i]);
     } else if (!std::strcmp(argv[i], "--resolution") && i + 1 < argc) {
       opt.resolution = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc) {
+      opt.reference = argv[++i];
     } else if (!std::strcmp(argv[i], "--length") && i + 1 < argc) {
       opt.strands.length = std::strtof(argv[++i], nullptr);
     } else if (!std::strcmp(argv[i], "--radius") && i + 1 < argc) {
@@ -325,6 +335,24 @@ void curves(creature::Device& device, const creature::Mesh& mesh, const creature
 }
 
 // --- (d) skin coverage: stamped vs. random roots -------------------------
+// The reference roots of `count` from `PREFIX_<count>.bin` (see the top).
+std::vector<PelageRoot> load_reference(const std::string& prefix, size_t count, size_t triangles) {
+  const std::string path = fmt("%s_%zu.bin", prefix.c_str(), count);
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw std::runtime_error("cannot open " + path);
+  std::vector<PelageRoot> roots(count + 1);
+  const size_t got = std::fread(roots.data(), sizeof(PelageRoot), roots.size(), f);
+  std::fclose(f);
+  if (got != count) throw std::runtime_error(fmt("%s holds %zu roots, not %zu", path.c_str(), got, count));
+  roots.resize(count);
+  for (const PelageRoot& r : roots) {
+    if (r.face >= triangles || !(r.u >= 0.0f && r.v >= 0.0f && r.u + r.v <= 1.0001f)) {
+      throw std::runtime_error(path + " holds a root off the mesh");
+    }
+  }
+  return roots;
+}
+
 // The random-equivalents of one count's stamped roots.
 struct Equivalents {
   size_t count;
@@ -358,24 +386,42 @@ Equivalents coverage(creature::Device& device, const creature::Mesh& mesh, const
   };
   std::vector<Row> rows;
   rows.push_back({"pelage stamp (Poisson)", 1.0, n, measure(roots)});
+  std::optional<Row> reference;
+  if (!opt.reference.empty()) {
+    reference = Row{"darts (reference)", 1.0, n, measure(load_reference(opt.reference, n, mesh.triangle_count()))};
+  }
   for (double m : kMultiples) {
     const size_t count = size_t(std::llround(m * double(n)));
     rows.push_back(
         {fmt("uniform random, %.2fx", m), m, count, measure(random_roots(cdf, count, 1000 + uint64_t(100 * m)))});
   }
   std::printf("  %-26s %10s %14s %14s %14s\n", "roots", "count", "skin visible", "worst (p99)", "bald patches");
-  for (const Row& r : rows) {
+  auto print = [](const Row& r) {
     std::printf("  %-26s %10zu %12.2f %% %12.2f %% %12.2f %%\n", r.name.c_str(), r.count, 100.0 * r.seen.skin,
                 100.0 * r.seen.worst, 100.0 * r.seen.patches);
-  }
-  auto match = [&](double Coverage::Seen::*metric) {
+  };
+  for (const Row& r : rows) print(r);
+  if (reference) print(*reference);
+  auto match = [&](const Row& of, double Coverage::Seen::*metric) {
     std::vector<std::pair<double, double>> random;
     for (size_t k = 1; k < rows.size(); ++k) random.emplace_back(rows[k].multiple, rows[k].seen.*metric);
-    return check::matching_multiple(rows[0].seen.*metric, random);
+    return check::matching_multiple(of.seen.*metric, random);
   };
-  const Equivalents eq{n, match(&Coverage::Seen::skin), match(&Coverage::Seen::worst)};
+  const Equivalents eq{n, match(rows[0], &Coverage::Seen::skin), match(rows[0], &Coverage::Seen::worst)};
   std::printf("  %-26s %10s %14s %14s %14s\n", "random-equivalent", "", eq.mean.text().c_str(),
-              eq.worst.text().c_str(), match(&Coverage::Seen::patches).text().c_str());
+              eq.worst.text().c_str(), match(rows[0], &Coverage::Seen::patches).text().c_str());
+  if (reference) {
+    const check::Multiple mean = match(*reference, &Coverage::Seen::skin);
+    const check::Multiple worst = match(*reference, &Coverage::Seen::worst);
+    std::printf("  %-26s %10s %14s %14s %14s\n", "  of the reference", "", mean.text().c_str(), worst.text().c_str(),
+                match(*reference, &Coverage::Seen::patches).text().c_str());
+    expect(eq.mean.at_least(mean.value - 0.05),
+           fmt("mean skin visible: the stamp's random-equivalent %s within 0.05x of the darts' %s",
+               eq.mean.text().c_str(), mean.text().c_str()));
+    expect(eq.worst.at_least(worst.value - 0.10),
+           fmt("worst patches (p99): the stamp's random-equivalent %s within 0.10x of the darts' %s",
+               eq.worst.text().c_str(), worst.text().c_str()));
+  }
   std::printf("  (%.1f s)\n", clock.seconds());
 
   const size_t tiles = rows[0].seen.tiles;
