@@ -14,7 +14,7 @@
 //
 //   embree_stamp <mesh.obj> [<density.png>] [--roots N[,N...]] [--resolution R]
 //                [--length L] [--radius R] [--tilt DEGREES]   (strands; defaults 0.06, 0.0015, 60)
-//                [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]
+//                [--relative] [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]
 //
 // Without a density map the density is constant 1 (pelage's default) and (b)
 // is skipped. The --min-*-multiple options fail the run when a count's
@@ -24,7 +24,8 @@
 // little-endian, as `make_darts` writes a plain dart-throwing Poisson set of
 // the same count): (d) measures them too, and the stamp's random-equivalents
 // must come within 0.05x (mean) and 0.10x (worst patches, a noisier
-// percentile) of theirs.
+// percentile) of theirs. --relative makes --length and --radius multiples
+// of each count's disk radius.
 #include "check.h"
 #include "creature_io.h"
 
@@ -124,11 +125,14 @@ struct Options {
   // Reference roots per count, `<reference>_<count>.bin` (make_darts):
   // measured beside the stamp, which must cover the skin about as well.
   std::string reference;
+  // --length and --radius as multiples of each count's disk radius (fur as
+  // short as the roots are apart: where their spacing shows most)
+  bool relative = false;
 };
 
 const char* const kUsage =
     "usage: embree_stamp <mesh.obj> [<density.png>] [--roots N[,N...]] [--resolution R] [--length L] "
-    "[--radius R] [--tilt DEGREES] [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]";
+    "[--radius R] [--tilt DEGREES] [--relative] [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]";
 
 std::vector<uint32_t> parse_counts(const std::string& list) {
   std::vector<uint32_t> counts;
@@ -163,6 +167,8 @@ Options parse(int argc, char** argv) {
       opt.roots = parse_counts(argv[++i]);
     } else if (!std::strcmp(argv[i], "--resolution") && i + 1 < argc) {
       opt.resolution = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--relative")) {
+      opt.relative = true;
     } else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc) {
       opt.reference = argv[++i];
     } else if (!std::strcmp(argv[i], "--length") && i + 1 < argc) {
@@ -503,8 +509,9 @@ int main(int argc, char** argv) try {
   for (size_t v = 0; v < cov.views.size(); ++v) std::printf("%s%s", v ? ", " : "", cov.views[v].name);
   std::printf(") of %dx%d rays (%.4f apart); %zu rays hit furred skin (density texel > 0) when there is no fur.\n",
               cov.resolution, cov.resolution, double(2.0f * cov.half / float(cov.resolution)), cov.furred_rays);
-  std::printf("  Strands: straight, length %.3f, radius %.4f, %.0f degrees from the normal, combed toward -y.\n",
-              double(sp.length), double(sp.root_radius), double(sp.tilt_root_deg));
+  std::printf("  Strands: straight, length %.3f, radius %.4f%s, %.0f degrees from the normal, combed toward -y.\n",
+              double(sp.length), double(sp.root_radius), opt.relative ? " (times the disk radius)" : "",
+              double(sp.tilt_root_deg));
   std::printf("  Random roots: area x density-scale^2 weighted, bald triangles excluded (pelage's rule).\n");
   std::printf("  skin visible: share of those rays whose first hit is the skin, not a strand.\n");
   std::printf("  Tiles: %dx%d rays of one view, all on furred skin. worst (p99): the 99th percentile over tiles\n"
@@ -537,8 +544,15 @@ int main(int argc, char** argv) try {
     } else {
       std::printf("\n(b) bald regions: none (constant density)\n");
     }
-    curves(device, mesh, creature::grow_strands(positions, normals, sp), sp);
-    summary.push_back(coverage(device, mesh, cov, roots, cdf, opt));
+    Options here = opt;
+    if (opt.relative) {
+      here.strands.length = sp.length * info.radius;
+      here.strands.root_radius = here.strands.tip_radius = sp.root_radius * info.radius;
+      std::printf("strands: length %.4f, radius %.4f\n", double(here.strands.length),
+                  double(here.strands.root_radius));
+    }
+    curves(device, mesh, creature::grow_strands(positions, normals, here.strands), here.strands);
+    summary.push_back(coverage(device, mesh, cov, roots, cdf, here));
     spacing(mesh, roots, positions, cdf, info.radius);
   }
 
