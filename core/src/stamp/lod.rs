@@ -1,5 +1,6 @@
 //! LOD levels across triangles and the ranks they give.
 
+use super::eliminate::ELIMINATION_LIMIT;
 use super::near::Near;
 use super::{face_frame, Candidate, Scratch, Stamper, GRID_CELL};
 use crate::rng::{self, Purpose};
@@ -24,7 +25,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// Assigns LOD levels across triangles, ranks the candidates, and writes
     /// the [`output_count`](Self::output_count) lowest-ranked ones (any rank
     /// prefix is evenly spread, so the trim keeps the Poisson property) in
-    /// candidate order, with ids `0..n`.
+    /// candidate order, with ids `0..n`; up to 65,536 of them are then
+    /// ranked again by sample elimination.
     pub fn finish(
         &self,
         cands: &[Candidate],
@@ -99,6 +101,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 };
                 id += 1;
             }
+        }
+        if m <= ELIMINATION_LIMIT {
+            self.rank_by_elimination(&mut out[..m], scratch);
         }
         Ok(())
     }

@@ -38,7 +38,10 @@
 //!    earlier triangle); the rule reads tile steps only, so it needs one
 //!    query per point and no re-checking. The rank is a counting sort by
 //!    (step, place in the step, hash of the index); the surplus of the
-//!    count leaves from the end, the points nearest to others.
+//!    count leaves from the end, the points nearest to others. A stamp of
+//!    up to 65,536 roots, whose charts are narrow next to the coarse steps'
+//!    spacing, then takes its ranks again from weighted sample elimination
+//!    over the whole mesh (the `eliminate` module).
 //!
 //! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
 //! spread it over threads; the result is bitwise identical for any split.
@@ -49,6 +52,7 @@
 // and ranks), with the records and buffers the passes share in `near` and
 // `scratch`.
 pub mod chart;
+mod eliminate;
 mod fill;
 mod lod;
 mod near;

@@ -1,5 +1,6 @@
 //! Working memory of the edge and LOD passes.
 
+use super::eliminate::{BUCKETS_PER_ROOT, ELIMINATION_LIMIT};
 use super::lod::RANK_KEYS;
 use super::near::{Gathered, Near};
 use crate::arena::{Arena, ArenaLayout};
@@ -22,6 +23,23 @@ pub struct Scratch<'a> {
     /// Counters of the rank sort.
     pub(super) counts: &'a mut [u32],
     pub(super) gathered: Gathered<'a>,
+    /// The rank elimination's records, for up to
+    /// [`ELIMINATION_LIMIT`] roots.
+    pub(super) elimination: Elimination<'a>,
+}
+
+/// Per root, what [`Stamper::rank_by_elimination`](super::Stamper) keeps:
+/// its weight, its place in the heap and the heap, the mark of the last
+/// query that met it, and its record: position, density scale, face
+/// normal.
+pub(super) struct Elimination<'a> {
+    /// Bucket heads of the elimination's grid.
+    pub(super) heads: &'a mut [u32],
+    pub(super) weight: &'a mut [f64],
+    pub(super) heap: &'a mut [u32],
+    pub(super) slot: &'a mut [u32],
+    pub(super) mark: &'a mut [u32],
+    pub(super) at: &'a mut [[f32; 8]],
 }
 
 impl<'a> Scratch<'a> {
@@ -34,6 +52,12 @@ impl<'a> Scratch<'a> {
             .add::<Near>(candidates)
             .add::<u32>(RANK_KEYS);
         Gathered::layout(layout);
+        let roots = candidates.min(ELIMINATION_LIMIT);
+        layout
+            .add::<u32>((BUCKETS_PER_ROOT * roots).next_power_of_two())
+            .add::<f64>(roots)
+            .add::<u32>(3 * roots)
+            .add::<[f32; 8]>(roots);
     }
 
     /// Takes scratch for up to `candidates` candidates from `arena`.
@@ -45,6 +69,21 @@ impl<'a> Scratch<'a> {
             near: arena.alloc::<Near>(candidates)?,
             counts: arena.alloc::<u32>(RANK_KEYS)?,
             gathered: Gathered::new(arena)?,
+            elimination: {
+                let roots = candidates.min(ELIMINATION_LIMIT);
+                let heads = arena.alloc::<u32>((BUCKETS_PER_ROOT * roots).next_power_of_two())?;
+                let weight = arena.alloc::<f64>(roots)?;
+                let (heap, rest) = arena.alloc::<u32>(3 * roots)?.split_at_mut(roots);
+                let (slot, mark) = rest.split_at_mut(roots);
+                Elimination {
+                    heads,
+                    weight,
+                    heap,
+                    slot,
+                    mark,
+                    at: arena.alloc::<[f32; 8]>(roots)?,
+                }
+            },
         })
     }
 

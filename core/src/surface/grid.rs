@@ -97,6 +97,15 @@ impl<'a> HashGrid<'a> {
         self.inv_cell = 1.0 / cell;
     }
 
+    /// [`reset`](Self::reset) with `buckets` buckets (a power of two;
+    /// within the storage).
+    pub fn reset_buckets(&mut self, cell: f32, buckets: usize) {
+        debug_assert!(buckets.is_power_of_two());
+        self.buckets = buckets.min(self.heads.len());
+        self.heads[..self.buckets].fill(EMPTY);
+        self.inv_cell = 1.0 / cell;
+    }
+
     /// Integer cell of `p`.
     #[inline]
     pub fn cell_of(&self, p: Vec3) -> [i32; 3] {
