@@ -47,7 +47,10 @@ pub type PelageProgressFn =
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PelageStampInfo {
-    /// Disk radius: no two roots (on the same side of a surface) are closer.
+    /// Disk radius: no two roots (on the same side of a surface) are closer,
+    /// save by at most 0.1% across the bends of under 5 degrees that one
+    /// piece of the stamp spans (measured: 1-3 pairs at 0.9998 of it in a
+    /// million roots).
     pub radius: f32,
     /// Points taken from the stamp in the final pass.
     pub candidates: u32,
