@@ -827,9 +827,9 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
 // frame: `colliders` is copied (its body, when set, is this frame's mesh,
 // built once here on the calling thread; `pelage_sim_step` on this frame
-// collides with it rather than building its own); NULL clears them. A distance callback is kept: it and
-// its user data must stay valid until the colliders are replaced or the
-// frame is freed.
+// collides with it rather than building its own); NULL clears them. A
+// distance callback is kept: it and its user data must stay valid until
+// the colliders are replaced or the frame is freed.
 // On failure the frame keeps the colliders it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
