@@ -41,11 +41,20 @@ pub(crate) fn split_over_threads<T: Send, R: Send>(
     if threads == 1 {
         return Ok(vec![work(0..n, out)]);
     }
+    run_parts(even_parts(n, threads, out, per), |(range, mine)| {
+        work(range, mine)
+    })
+}
+
+/// `0..n` cut into `k` contiguous ranges as even as they come, each with
+/// its part of `out` (`per` elements per item; the last part takes the
+/// rest).
+fn even_parts<T>(n: usize, k: usize, out: &mut [T], per: usize) -> Vec<(Range<usize>, &mut [T])> {
     let mut rest = out;
-    let mut parts = Vec::with_capacity(threads);
-    for t in 0..threads {
-        let range = t * n / threads..(t + 1) * n / threads;
-        let take = if t + 1 == threads {
+    let mut parts = Vec::with_capacity(k);
+    for t in 0..k {
+        let range = t * n / k..(t + 1) * n / k;
+        let take = if t + 1 == k {
             rest.len()
         } else {
             range.len() * per
@@ -54,7 +63,7 @@ pub(crate) fn split_over_threads<T: Send, R: Send>(
         rest = tail;
         parts.push((range, mine));
     }
-    run_parts(parts, |(range, mine)| work(range, mine))
+    parts
 }
 
 /// Runs `check` on the ranges [`split_over_threads`] would use, in parallel,
@@ -125,16 +134,7 @@ pub(crate) fn split_with_progress<T: Send, R: Send>(
     progress.report(0.0)?;
     let rounds = PROGRESS_ROUNDS.min(n.max(1));
     let mut results = Vec::with_capacity(rounds);
-    let mut rest = out;
-    for r in 0..rounds {
-        let range = r * n / rounds..(r + 1) * n / rounds;
-        let take = if r + 1 == rounds {
-            rest.len()
-        } else {
-            range.len() * per
-        };
-        let (part, tail) = std::mem::take(&mut rest).split_at_mut(take);
-        rest = tail;
+    for (range, part) in even_parts(n, rounds, out, per) {
         let start = range.start;
         results.extend(split_over_threads(
             range.len(),

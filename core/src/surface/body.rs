@@ -580,8 +580,8 @@ impl<'a> Body<'a> {
 
     /// The references of the triangles listed in cell `c`.
     #[inline]
-    fn listed(&self, c: usize) -> Range<usize> {
-        self.start[c] as usize..self.start[c + 1] as usize
+    fn listed(&self, c: usize) -> &[u32] {
+        &self.refs[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
     /// The centre of cell `(x, y, z)`.
@@ -592,29 +592,10 @@ impl<'a> Body<'a> {
     /// True when `p` is inside the body: its generalized winding number is
     /// above [`INSIDE_WINDING`].
     pub fn contains(&self, p: Vec3) -> bool {
-        self.decide(p, self.capped(p))
-    }
-
-    /// [`contains`](Self::contains) from `p`'s [`capped`](Self::capped) answer.
-    fn decide(&self, p: Vec3, (w, near_cap): (i32, bool)) -> bool {
-        match near_cap {
-            false => w >= 1,
-            true => self.caps_decide(w, p),
+        match self.capped(p) {
+            (w, false) => w >= 1,
+            (w, true) => self.caps_decide(w, p),
         }
-    }
-
-    /// The cell of `p` (its index and coordinates) and its class, or none
-    /// outside the grid.
-    #[inline]
-    fn locate(&self, p: Vec3) -> Option<(usize, [usize; 3], u8)> {
-        let c = self.shape.cell_of(p);
-        let inside = (0..3).all(|k| c[k] >= 0 && (c[k] as usize) < self.shape.dims[k]);
-        if !inside {
-            return None;
-        }
-        let cell = [c[0] as usize, c[1] as usize, c[2] as usize];
-        let c = self.shape.index(cell[0], cell[1], cell[2]);
-        Some((c, cell, self.class[c]))
     }
 
     /// The winding number at `p` of the mesh with its holes closed by the
@@ -629,16 +610,15 @@ impl<'a> Body<'a> {
     /// [`capped_winding`](Self::capped_winding), and whether a cap may
     /// decide [`contains`](Self::contains) at `p`.
     fn capped(&self, p: Vec3) -> (i32, bool) {
-        match self.locate(p) {
-            None => (0, false),
-            Some((c, cell, class)) => self.capped_in(p, cell, class, self.listed(c)),
+        let c = self.shape.cell_of(p);
+        let inside = (0..3).all(|k| c[k] >= 0 && (c[k] as usize) < self.shape.dims[k]);
+        if !inside {
+            return (0, false);
         }
-    }
-
-    /// [`capped`](Self::capped) for `p` in the cell at `cell`, of class
-    /// `class` and triangle references `list`.
-    fn capped_in(&self, p: Vec3, cell: [usize; 3], class: u8, list: Range<usize>) -> (i32, bool) {
-        let mut w = winding_of(class);
+        let cell = [c[0] as usize, c[1] as usize, c[2] as usize];
+        let c = self.shape.index(cell[0], cell[1], cell[2]);
+        let class = self.class[c];
+        let mut w = ((class as i8) >> WINDING_SHIFT) as i32;
         let near_cap = class & NEAR_CAP != 0;
         if class & (SURFACE | NEAR_CAP) == 0 {
             return (w, false);
@@ -682,7 +662,7 @@ impl<'a> Body<'a> {
         // centre.z) -> p, a leg per axis
         let legs = Legs {
             body: self,
-            listed: &self.refs[list],
+            listed: self.listed(c),
             caps,
             met,
             to: p,
@@ -790,7 +770,7 @@ impl<'a> Body<'a> {
         // a straight walk crosses each wall at most once
         for _ in 0..dims.iter().sum::<i32>() {
             let c = shape.index(cell[0] as usize, cell[1] as usize, cell[2] as usize);
-            let refs = &self.refs[self.start[c] as usize..self.start[c + 1] as usize];
+            let refs = self.listed(c);
             let k = if next[0] <= next[1] && next[0] <= next[2] {
                 0
             } else if next[1] <= next[2] {
@@ -828,13 +808,6 @@ fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
     let v = d.dot(w);
     let along = e2.dot(w);
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)).then_some(along)
-}
-
-/// The capped surface's winding number at the centre of a cell of class
-/// `class`.
-#[inline]
-fn winding_of(class: u8) -> i32 {
-    ((class as i8) >> WINDING_SHIFT) as i32
 }
 
 /// A triangle as stored: its three corners, then the low and the high
