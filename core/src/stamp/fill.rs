@@ -127,7 +127,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             let corners = [a, a + e1, a + e2];
             let twice_area = e1.cross(e2).length();
             let lift = super::place::BURY_LIFT * r;
-            let whole_face = self.shells.face_buried(&self.mesh, f, lift);
+            let whole_face = self.shells.face_buried(f);
             if whole_face == Some(true) {
                 continue;
             }

@@ -59,7 +59,7 @@ mod near;
 mod place;
 mod prune;
 mod scratch;
-mod shell;
+pub mod shell;
 mod sizing;
 pub mod tile;
 
@@ -444,7 +444,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let [a, b, c] = self.mesh.corners(f);
                 let normal = Vec3::from(self.faces[f].normal);
                 self.shells
-                    .face_buried(&self.mesh, f, lift)
+                    .face_buried(f)
                     .unwrap_or_else(|| self.shells.buried((a + b + c) / 3.0, normal, lift))
             })
             .map(|f| {
@@ -633,7 +633,7 @@ pub fn stamp_with_progress(
         built => built?,
     };
     let bound = sums.bound(&mesh, params)?;
-    if available < bytes_for(&mesh, bound) {
+    if arena.remaining() < passes_bytes(bound) {
         return Err(too_small(bound));
     }
     let Some(mut stamper) = stamper else {
@@ -1180,7 +1180,8 @@ mod tests {
         let mut out = vec![Root::default(); 100];
         // too small for the stamper itself, and big enough for it but not
         // for the passes: both report the whole need
-        for size in [100, need - 1] {
+        let passes = passes_bytes(candidates_bound(&mesh, &params(100)).unwrap());
+        for size in [100, need - passes] {
             let mut buf = vec![0u8; size];
             let mut arena = Arena::new(&mut buf);
             let err = stamp(mesh, &params(100), &mut arena, &mut out).unwrap_err();

@@ -357,7 +357,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             }
         }
         let lift = BURY_LIFT * self.local_radius(f as u32);
-        match shells.face_buried(&self.mesh, f, lift) {
+        match shells.face_buried(f) {
             Some(false) => return out.len(),
             Some(true) => return first,
             None => {}

@@ -15,18 +15,27 @@
 //!   shell (the part of the head a horn passes through, the horn's base
 //!   inside the head, an eyeball behind the rim of its socket) grows no
 //!   hair. A mesh of one closed shell has no buried skin and skips the
-//!   test; a face no other shell comes near is decided at its centroid.
+//!   test. The winding number changes only across a surface, so the faces
+//!   no other shell and no cap comes near are decided a patch at a time
+//!   (faces joined by shared corners), at the centroid of the patch's first
+//!   face; skin buried by its own shell passing through itself is not
+//!   looked for, as on a mesh of one closed shell.
 
 use crate::arena::{Arena, ArenaLayout};
+use super::place::BURY_LIFT;
 use crate::surface::body::{Body, BodyPlan, Rim};
 use crate::surface::grid::floor_i32;
 use crate::{Error, Mesh};
+use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 /// Per-face bit: the face comes within its reach of another shell.
 const NEAR_OTHER: u8 = 1;
 /// Per-face bit: the face comes within its reach of a hole's cap.
 const NEAR_CAP: u8 = 2;
+/// Per-face bit, on a face neither near bit is set on: its skin is buried
+/// as a whole.
+const BURIED: u8 = 4;
 
 /// What the stamp knows of a mesh's shells.
 pub(super) struct Shells<'a> {
@@ -40,6 +49,29 @@ pub(super) struct Shells<'a> {
 /// correction moves the radius by a few percent.
 pub(super) const REACH_MARGIN: f32 = 1.5;
 
+/// A cell of the grid [`mark_near_other_shells`] hashes the faces into,
+/// and the shell of every face whose box meets it ([`MIXED`] for several).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Cell {
+    key: [i32; 3],
+    shell: u32,
+}
+
+/// [`Cell::shell`] of a free slot.
+const EMPTY: u32 = u32::MAX;
+/// [`Cell::shell`] of a cell faces of several shells meet.
+const MIXED: u32 = u32::MAX - 1;
+/// Slots a cell may take from its hash on.
+const PROBES: usize = 16;
+
+/// Slots of the cell table for a mesh of `faces` faces: a power of two.
+/// The cells are about a face's size and reach, so most faces share their
+/// cells with others and the table stays under half full.
+fn cell_slots(faces: usize) -> usize {
+    (2 * faces).next_power_of_two()
+}
+
 impl<'a> Shells<'a> {
     /// Adds the bytes [`Shells::new`] may take for `mesh` (validated).
     pub(super) fn layout(layout: &mut ArenaLayout, mesh: &Mesh) {
@@ -47,7 +79,8 @@ impl<'a> Shells<'a> {
         layout
             .add::<u32>(mesh.positions.len())
             .add::<u8>(faces)
-            .add::<u32>(2 * faces + 1)
+            .add::<u8>(mesh.positions.len())
+            .add::<Cell>(cell_slots(faces))
             .add::<u8>(Rim::required_bytes(mesh))
             .add::<u8>(Body::required_bytes(mesh).unwrap_or(0));
     }
@@ -106,12 +139,46 @@ impl<'a> Shells<'a> {
             mark_near_other_shells(mesh, &shell_of, &reach, near, arena)?;
         }
         mark_near_caps(mesh, &rim, &reach, near);
-        let body = if shells > 1 || !rim.is_closed() {
-            Some(Body::build(&BodyPlan::of(mesh, &rim)?, mesh, &rim, arena)?)
-        } else {
-            None
-        };
-        Ok(Shells { flags: near, body })
+        if shells == 1 && rim.is_closed() {
+            return Ok(Shells {
+                flags: near,
+                body: None,
+            });
+        }
+        let body = Body::build(&BodyPlan::of(mesh, &rim)?, mesh, &rim, arena)?;
+        // patches of the faces with roots that nothing comes near, by
+        // union-find over their welded corners as above
+        let free = |near: &[u8], f: usize| near[f] == 0 && reach(f) > 0.0;
+        for (i, p) in parent.iter_mut().enumerate() {
+            *p = rim.welded(i as u32);
+        }
+        for (f, [a, b, c]) in mesh.triangles.iter().enumerate() {
+            if free(near, f) {
+                for other in [b, c] {
+                    let (ra, rb) = (root(parent, a), root(parent, other));
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+        const UNDECIDED: u8 = u8::MAX;
+        let decided = arena.alloc::<u8>(mesh.positions.len())?;
+        decided.fill(UNDECIDED);
+        for (f, [a, ..]) in mesh.triangles.iter().enumerate() {
+            if free(near, f) {
+                let patch = root(parent, a) as usize;
+                if decided[patch] == UNDECIDED {
+                    let lift = BURY_LIFT * reach(f) / REACH_MARGIN;
+                    let [a, b, c] = mesh.corners(f);
+                    let p = (a + b + c) / 3.0 + mesh.face_normal(f) * lift;
+                    decided[patch] = (body.capped_winding(p) >= 1) as u8 * BURIED;
+                }
+                near[f] = decided[patch];
+            }
+        }
+        Ok(Shells {
+            flags: near,
+            body: Some(body),
+        })
     }
 
     /// Whether face `f` comes within its reach of another shell.
@@ -129,20 +196,20 @@ impl<'a> Shells<'a> {
             .is_some_and(|b| b.capped_winding(p + n * lift) >= 1)
     }
 
-    /// Whether all of face `f` is buried (`Some`), or `None` when its
-    /// points must be tested one by one. The capped winding number changes
-    /// only across a surface, so on a face no other shell and no cap comes
-    /// near, the skin a hair off it is all buried or all free (up to `lift`
-    /// at a crease): its centroid decides.
-    pub(super) fn face_buried(&self, mesh: &Mesh, f: usize, lift: f32) -> Option<bool> {
+    /// Whether all of face `f` (with roots) is buried (`Some`), or `None`
+    /// when its points must be tested one by one: on a face no other shell
+    /// and no cap comes near, the skin a hair off it is all buried or all
+    /// free (up to the lift at a crease), as is its whole patch.
+    #[inline]
+    pub(super) fn face_buried(&self, f: usize) -> Option<bool> {
         if self.body.is_none() {
             return Some(false);
         }
-        if self.flags[f] != 0 {
-            return None;
+        match self.flags[f] {
+            0 => Some(false),
+            BURIED => Some(true),
+            _ => None,
         }
-        let [a, b, c] = mesh.corners(f);
-        Some(self.buried((a + b + c) / 3.0, mesh.face_normal(f), lift))
     }
 }
 
@@ -163,10 +230,12 @@ fn mark_near_caps(mesh: &Mesh, rim: &Rim, reach: &dyn Fn(usize) -> f32, near: &m
 }
 
 /// Flags the faces whose box, widened by their reach, shares a cell of a
-/// hashed grid with the box of a face of another shell (bald ones
-/// included). A face within reach of another always shares one; a shared
-/// bucket of unrelated cells only flags more faces than needed (their
-/// points then take part in the edge pass for nothing).
+/// grid with the box of a face of another shell (bald ones included). A
+/// face within reach of another always shares one. The cells live in a
+/// hash table keyed by their coordinates; a cell that finds no slot within
+/// [`PROBES`] of its hash counts as shared by two shells, which only flags
+/// more faces than needed (their points then take part in the edge pass
+/// for nothing).
 fn mark_near_other_shells(
     mesh: &Mesh,
     shell_of: &dyn Fn(usize) -> u32,
@@ -175,10 +244,11 @@ fn mark_near_other_shells(
     arena: &mut Arena,
 ) -> Result<(), Error> {
     let faces = mesh.triangle_count();
-    const EMPTY: u32 = u32::MAX;
-    const MIXED: u32 = u32::MAX - 1;
-    let table = arena.alloc::<u32>(2 * faces + 1)?;
-    table.fill(EMPTY);
+    let table = arena.alloc::<Cell>(cell_slots(faces))?;
+    table.fill(Cell {
+        key: [0; 3],
+        shell: EMPTY,
+    });
     // cells about the size of a face and its reach
     let mut extent = 0.0f64;
     let mut counted = 0usize;
@@ -209,19 +279,22 @@ fn mark_near_other_shells(
         let cell = |p: Vec3| (p * inv_cell as f32).to_array().map(floor_i32);
         (cell(a.min(b).min(c) - pad), cell(a.max(b).max(c) + pad))
     };
-    let slots = table.len();
-    let slot = |x: i32, y: i32, z: i32| {
-        let h = (x as u32).wrapping_mul(0x9E37_79B1)
-            ^ (y as u32).wrapping_mul(0x85EB_CA77)
-            ^ (z as u32).wrapping_mul(0xC2B2_AE3D);
-        h as usize % slots
+    let mask = table.len() - 1;
+    let slots = |key: [i32; 3]| {
+        let [x, y, z] = key.map(|k| k as u32);
+        let mut h = x.wrapping_mul(0x9E37_79B1)
+            ^ y.wrapping_mul(0x85EB_CA77)
+            ^ z.wrapping_mul(0xC2B2_AE3D);
+        h = (h ^ (h >> 15)).wrapping_mul(0x2C1B_3C6D);
+        let h = (h ^ (h >> 13)) as usize;
+        (0..PROBES).map(move |k| (h + k) & mask)
     };
-    let cells = |f: usize, visit: &mut dyn FnMut(usize)| {
+    let cells = |f: usize, visit: &mut dyn FnMut([i32; 3])| {
         let (lo, hi) = boxed(f);
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
-                    visit(slot(x, y, z));
+                    visit([x, y, z]);
                 }
             }
         }
@@ -230,18 +303,32 @@ fn mark_near_other_shells(
     // be flagged (its skin is partly buried)
     for f in (0..faces).filter(|&f| !mesh.is_degenerate(f)) {
         let s = shell_of(f);
-        cells(f, &mut |c| {
-            table[c] = match table[c] {
-                EMPTY => s,
-                t if t == s => s,
-                _ => MIXED,
+        cells(f, &mut |key| {
+            for i in slots(key) {
+                let cell = &mut table[i];
+                if cell.shell == EMPTY {
+                    *cell = Cell { key, shell: s };
+                    return;
+                }
+                if cell.key == key {
+                    cell.shell = if cell.shell == s { s } else { MIXED };
+                    return;
+                }
             }
         });
     }
+    let mixed = |key: [i32; 3]| {
+        for i in slots(key) {
+            if table[i].key == key && table[i].shell != EMPTY {
+                return table[i].shell == MIXED;
+            }
+        }
+        true
+    };
     for f in (0..faces).filter(|&f| reach(f) > 0.0) {
-        let mut mixed = false;
-        cells(f, &mut |c| mixed |= table[c] == MIXED);
-        near[f] = mixed as u8 * NEAR_OTHER;
+        let mut any = false;
+        cells(f, &mut |key| any |= mixed(key));
+        near[f] = any as u8 * NEAR_OTHER;
     }
     Ok(())
 }

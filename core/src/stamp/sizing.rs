@@ -178,6 +178,13 @@ pub fn required_bytes(mesh: &Mesh, params: &StampParams) -> Result<usize, Error>
 pub(super) fn bytes_for(mesh: &Mesh, bound: usize) -> usize {
     let mut layout = ArenaLayout::new();
     Stamper::layout(&mut layout, mesh);
+    layout.bytes() + passes_bytes(bound)
+}
+
+/// Arena bytes the passes take after the [`Stamper`], for `bound`
+/// candidates (its own part costs a walk over the mesh to size).
+pub(super) fn passes_bytes(bound: usize) -> usize {
+    let mut layout = ArenaLayout::new();
     Scratch::layout(&mut layout, bound);
     layout.add::<Candidate>(bound);
     layout.bytes()
