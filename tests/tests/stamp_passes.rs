@@ -45,3 +45,23 @@ fn the_first_pass_lands_near_the_target_on_dense_stamps() {
         }
     }
 }
+
+/// Sparse stamps, where the fill wins back more than the edge pass removed
+/// (more cut edge per root): the first radius counts with it, so they too
+/// land in the count band in one pass, on the creature and on the head.
+#[test]
+fn sparse_stamps_land_in_one_pass() {
+    let meshes = [default_creature(), pelage_tests::head::head()];
+    for m in &meshes {
+        for target in [3_000u32, 10_000, 30_000] {
+            let params = StampParams {
+                target_count: target,
+                seed: 1,
+                ..StampParams::default()
+            };
+            let (roots, report) = stamp_vec(mesh_view(m), &params);
+            assert_eq!(roots.len(), target as usize);
+            assert_eq!(report.passes, 1, "{target}: {report:?}");
+        }
+    }
+}

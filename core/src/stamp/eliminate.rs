@@ -12,29 +12,46 @@
 //! the spacing a Poisson set of the halved count would have there, by the
 //! local density), then halve what is left, and so on; the roots removed
 //! from a set of `m` take the ranks below `m`, the first removed the
-//! highest. Every prefix is then a set thinned evenly from the one above
+//! highest. A pass that lands above the count leaves its surplus the same
+//! way first, down to the count (the spacing of the count's set). Every prefix is then a set thinned evenly from the one above
 //! it. Sequential and exact in its order (ties go to the higher index), so
 //! the same stamp gives the same ranks on any machine.
 
-use super::{Scratch, Stamper};
+use super::{Candidate, Scratch, Stamper};
 use crate::surface::grid::HashGrid;
-use crate::Root;
+use crate::Error;
 use glam::Vec3;
 
 /// Largest stamp whose ranks are made by elimination; larger stamps keep
 /// the tile's order, whose prefixes are even there (a chart holds many
 /// coarse points) and whose cost does not grow with a heap.
 pub(super) const ELIMINATION_LIMIT: usize = 1 << 16;
+/// Candidates the elimination takes at most: the limit and its surplus (a
+/// pass lands at most a few percent above the count).
+pub(super) const ELIMINATION_ROOM: usize = 2 * ELIMINATION_LIMIT;
 /// The heap place of a root that has left.
 const GONE: u32 = u32::MAX;
 /// Grid buckets per root in the elimination.
 pub(super) const BUCKETS_PER_ROOT: usize = 8;
 
 impl Stamper<'_, '_> {
-    /// Ranks `roots` (at most [`ELIMINATION_LIMIT`], the stamp's output) by
-    /// weighted sample elimination, in `scratch`.
-    pub(super) fn rank_by_elimination(&self, roots: &mut [Root], scratch: &mut Scratch) {
-        let n = roots.len();
+    /// Ranks the `n` candidates `cands` (at most [`ELIMINATION_ROOM`]) by
+    /// weighted sample elimination into `scratch.elimination.rank`: the
+    /// surplus over `target` leaves first, where the candidates crowd each
+    /// other most, and takes the ranks from `target` on; the `target` left
+    /// are then halved as the module docs say. Calls `done` with the share
+    /// of the work done after each step; an error from it ends the call.
+    pub(super) fn rank_by_elimination(
+        &self,
+        cands: &[Candidate],
+        target: usize,
+        scratch: &mut Scratch,
+        done: &mut dyn FnMut(f32) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        let n = cands.len();
+        if n == 0 {
+            return Ok(());
+        }
         let Scratch {
             next,
             elimination: e,
@@ -46,10 +63,10 @@ impl Stamper<'_, '_> {
             &mut e.slot[..n],
             &mut e.mark[..n],
         );
-        let at = &mut e.at[..n];
-        for (i, r) in roots.iter().enumerate() {
-            let f = r.face as usize;
-            let (p, normal) = (self.mesh.point(f, r.u, r.v), self.faces[f].normal);
+        let (at, ranks) = (&mut e.at[..n], &mut e.rank[..n]);
+        for (i, c) in cands.iter().enumerate() {
+            let f = c.face as usize;
+            let (p, normal) = (self.mesh.point(f, c.uv[0], c.uv[1]), self.faces[f].normal);
             let scale = self.faces[f].scale;
             at[i] = [p.x, p.y, p.z, scale, normal[0], normal[1], normal[2], 0.0];
         }
@@ -72,12 +89,21 @@ impl Stamper<'_, '_> {
             .next_power_of_two()
             .min(e.heads.len());
         let mut grid = HashGrid::new(&mut e.heads[..buckets], next, 1.0).in_blocks();
-        let (mut m, mut query) = (n, 0u32);
-        while m > 1 {
-            let kept = m / 2;
+        let (mut m, mut kept, mut query) = (n, target.min(n), 0u32);
+        let mut spent = 0;
+        loop {
+            if kept == m {
+                if m <= 1 {
+                    break;
+                }
+                kept = m / 2;
+            }
             // Yuksel's r_max: the spacing of `kept` points in hexagons
             let reach = 2.0 * libm::sqrt(area / (2.0 * libm::sqrt(3.0) * kept as f64)) as f32;
-            grid.reset_buckets(reach / smallest, (BUCKETS_PER_ROOT * m).next_power_of_two());
+            grid.reset_buckets(
+                2.0 * reach / smallest,
+                (BUCKETS_PER_ROOT * m).next_power_of_two(),
+            );
             for (i, &place) in slot.iter().enumerate() {
                 grid.insert_if(place != GONE, i as u32, point(at, i));
             }
@@ -128,7 +154,7 @@ impl Stamper<'_, '_> {
             h.build();
             for rank in (kept..m).rev() {
                 let i = h.pop();
-                roots[i].rank = rank as u32;
+                ranks[i] = rank as u32;
                 h.slot[i] = GONE;
                 query += 1;
                 grid.any_within(point(at, i), around(i), |j| {
@@ -143,11 +169,16 @@ impl Stamper<'_, '_> {
                     false
                 });
             }
+            // a step's work goes with the roots it starts from: all of
+            // them, then the target, its half and so on
+            spent += m;
+            done(spent as f32 / (n + 2 * target) as f32)?;
             m = kept;
         }
         if let Some(last) = slot.iter().position(|&s| s != GONE) {
-            roots[last].rank = 0;
+            ranks[last] = 0;
         }
+        Ok(())
     }
 }
 

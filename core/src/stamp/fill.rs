@@ -25,12 +25,14 @@ pub(super) const DARTS_PER_ROOT: f32 = 6.0;
 /// Share of the edge pass's loss the fill wins back, as `REFILLED +
 /// REFILL_SLOPE * loss / target`: where the loss is a larger share of the
 /// roots (fewer roots, so more cut edge per root) the darts also fill gaps
-/// the tile left along cut edges, and win back more than the loss. A fit
-/// on the creature and the head from 10K to 1M roots: the radius is first
-/// predicted with the rest of the loss.
+/// the tile left along cut edges, and win back more than the loss. The
+/// radius is first predicted with the rest of the loss; with these values
+/// the first pass lands in the count band on the creature and the head at
+/// every count from 3K to 1M (seeds 1 and 2; a slope of 2 missed at 10K
+/// and below, which cost a second pass).
 pub(super) const REFILLED: f32 = 0.82;
 /// See [`REFILLED`].
-pub(super) const REFILL_SLOPE: f32 = 2.0;
+pub(super) const REFILL_SLOPE: f32 = 1.4;
 /// Darts of one face tested together (a face with more takes them in runs).
 const RUN: usize = 256;
 /// Barycentric `(u, v)` of each corner.
@@ -105,6 +107,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
         // the face's own kept points: a run of the face-ordered candidates
         let mut own = 0;
         let mut darts = [Near::default(); RUN];
+        let mut gathering = [Near::default(); RUN];
+        let mut alive = [0u8; RUN];
         let mut uvs = [[0.0f32; 2]; RUN];
         for f in 0..self.faces.len() {
             while own < kept && (cands[own].face as usize) < f {
@@ -161,7 +165,26 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     uvs[d] = [u, uv[1].clamp(0.0, 1.0 - u)];
                     darts[d] = Near::new(&dart(f, uvs[d]), 0, &frame);
                 }
-                let group = &darts[..m];
+                // this face's kept points are tested first, and only the
+                // darts they leave gather the points of other faces
+                let r2 = r * r;
+                let clash = |near: &[Near], j: usize, at: Vec3| {
+                    Vec3::from(near[j].position).distance_squared(at) < r2
+                };
+                let mut left = 0;
+                for d in 0..m {
+                    let at = Vec3::from(darts[d].position);
+                    let blocked = (own..own_end).any(|j| close(&cands[j]) && clash(near, j, at));
+                    alive[left] = d as u8;
+                    left += !blocked as usize;
+                }
+                if left == 0 {
+                    continue;
+                }
+                for (k, &d) in alive[..left].iter().enumerate() {
+                    gathering[k] = darts[d as usize];
+                }
+                let group = &gathering[..left];
                 let mut clashed = [false; RUN];
                 let buf = &mut scratch.gathered;
                 Self::gather(&grid, near, group, r * 1.0001, buf, |buf| {
@@ -174,15 +197,13 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     }
                 });
                 // the gathered points are other faces' only: this face's
-                // kept points and darts are tested here
-                let r2 = r * r;
-                for d in 0..m {
-                    let at = Vec3::from(group[d].position);
-                    let clash = |j: usize| Vec3::from(near[j].position).distance_squared(at) < r2;
-                    if clashed[d]
+                // darts are tested here
+                for (k, &d) in alive[..left].iter().enumerate() {
+                    let d = d as usize;
+                    let at = Vec3::from(group[k].position);
+                    if clashed[k]
                         || n == room
-                        || (own..own_end).any(|j| close(&cands[j]) && clash(j))
-                        || (first_dart..n).any(clash)
+                        || (first_dart..n).any(|j| clash(near, j, at))
                         || (whole_face.is_none() && self.shells.buried(at, normal, lift))
                     {
                         continue;
@@ -190,7 +211,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     cands[n] = dart(f, uvs[d]);
                     near[n] = Near {
                         index: n as u32,
-                        ..group[d]
+                        ..group[k]
                     };
                     grid.insert(n as u32, at);
                     n += 1;

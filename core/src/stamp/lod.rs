@@ -25,8 +25,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// Assigns LOD levels across triangles, ranks the candidates, and writes
     /// the [`output_count`](Self::output_count) lowest-ranked ones (any rank
     /// prefix is evenly spread, so the trim keeps the Poisson property) in
-    /// candidate order, with ids `0..n`; up to 65,536 of them are then
-    /// ranked again by sample elimination.
+    /// candidate order, with ids `0..n`. Up to 65,536 roots are ranked by
+    /// sample elimination instead, and their surplus leaves by it (where
+    /// the candidates crowd each other most).
     pub fn finish(
         &self,
         cands: &[Candidate],
@@ -55,6 +56,25 @@ impl<'m, 'a> Stamper<'m, 'a> {
             });
         }
         scratch.check(n)?;
+        if m <= ELIMINATION_LIMIT && n <= scratch.elimination.rank.len() {
+            self.rank_by_elimination(cands, m, scratch, done)?;
+            done(1.0)?;
+            let ranks = &scratch.elimination.rank[..n];
+            let kept = cands
+                .iter()
+                .zip(ranks)
+                .filter(|(_, &rank)| (rank as usize) < m);
+            for (id, (c, &rank)) in kept.enumerate() {
+                out[id] = Root {
+                    face: c.face,
+                    u: c.uv[0],
+                    v: c.uv[1],
+                    id: id as u32,
+                    rank,
+                };
+            }
+            return Ok(());
+        }
         self.assign_levels(cands, scratch, done)?;
         // a stable counting sort by (step, order in the step, hash): the
         // slot a candidate takes in it is its rank
@@ -102,9 +122,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 id += 1;
             }
         }
-        if m <= ELIMINATION_LIMIT {
-            self.rank_by_elimination(&mut out[..m], scratch);
-        }
         Ok(())
     }
 
@@ -133,7 +150,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// puts the records of coarser levels whose disk reaches a boundary into
     /// a grid, then tests each step's records against it one triangle at a
     /// time, adding each triangle's records after its test.
-    fn assign_levels(
+    pub(super) fn assign_levels(
         &self,
         cands: &[Candidate],
         scratch: &mut Scratch,

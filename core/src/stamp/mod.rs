@@ -837,8 +837,10 @@ mod tests {
         with_candidates(mesh, &graded(&values), |stamper, scratch, mut cands| {
             let kept = stamper.prune(&mut cands, scratch).unwrap();
             let cands = &cands[..kept];
-            let mut out = vec![Root::default(); kept];
-            stamper.finish(cands, scratch, &mut out).unwrap();
+            // the tile's levels, which rank stamps too large for elimination
+            stamper
+                .assign_levels(cands, scratch, &mut |_| Ok(()))
+                .unwrap();
             let raised = check_lod_spacing(stamper, cands, &scratch.level[..kept]);
             assert!(raised > 0, "no level was raised: nothing to check");
         });
@@ -1302,9 +1304,11 @@ mod tests {
             }
             assert_eq!(chunked, cands, "chunks at {bounds:?}");
             let kept = stamper.prune(&mut cands, scratch).unwrap();
-            let mut out = vec![Root::default(); kept];
-            stamper.finish(&cands[..kept], scratch, &mut out).unwrap();
-            check_lod_spacing(stamper, &cands[..kept], &scratch.level[..kept]);
+            let cands = &cands[..kept];
+            stamper
+                .assign_levels(cands, scratch, &mut |_| Ok(()))
+                .unwrap();
+            check_lod_spacing(stamper, cands, &scratch.level[..kept]);
         });
         Ok(())
     }

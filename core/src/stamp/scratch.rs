@@ -1,6 +1,6 @@
 //! Working memory of the edge and LOD passes.
 
-use super::eliminate::{BUCKETS_PER_ROOT, ELIMINATION_LIMIT};
+use super::eliminate::{BUCKETS_PER_ROOT, ELIMINATION_ROOM};
 use super::lod::RANK_KEYS;
 use super::near::{Gathered, Near};
 use crate::arena::{Arena, ArenaLayout};
@@ -24,14 +24,14 @@ pub struct Scratch<'a> {
     pub(super) counts: &'a mut [u32],
     pub(super) gathered: Gathered<'a>,
     /// The rank elimination's records, for up to
-    /// [`ELIMINATION_LIMIT`] roots.
+    /// [`ELIMINATION_ROOM`] candidates.
     pub(super) elimination: Elimination<'a>,
 }
 
 /// Per root, what [`Stamper::rank_by_elimination`](super::Stamper) keeps:
 /// its weight, its place in the heap and the heap, the mark of the last
-/// query that met it, and its record: position, density scale, face
-/// normal.
+/// query that met it, its record (position, density scale, face
+/// normal), and in the end its rank.
 pub(super) struct Elimination<'a> {
     /// Bucket heads of the elimination's grid.
     pub(super) heads: &'a mut [u32],
@@ -40,6 +40,7 @@ pub(super) struct Elimination<'a> {
     pub(super) slot: &'a mut [u32],
     pub(super) mark: &'a mut [u32],
     pub(super) at: &'a mut [[f32; 8]],
+    pub(super) rank: &'a mut [u32],
 }
 
 impl<'a> Scratch<'a> {
@@ -52,11 +53,11 @@ impl<'a> Scratch<'a> {
             .add::<Near>(candidates)
             .add::<u32>(RANK_KEYS);
         Gathered::layout(layout);
-        let roots = candidates.min(ELIMINATION_LIMIT);
+        let roots = candidates.min(ELIMINATION_ROOM);
         layout
             .add::<u32>((BUCKETS_PER_ROOT * roots).next_power_of_two())
             .add::<f64>(roots)
-            .add::<u32>(3 * roots)
+            .add::<u32>(4 * roots)
             .add::<[f32; 8]>(roots);
     }
 
@@ -70,11 +71,12 @@ impl<'a> Scratch<'a> {
             counts: arena.alloc::<u32>(RANK_KEYS)?,
             gathered: Gathered::new(arena)?,
             elimination: {
-                let roots = candidates.min(ELIMINATION_LIMIT);
+                let roots = candidates.min(ELIMINATION_ROOM);
                 let heads = arena.alloc::<u32>((BUCKETS_PER_ROOT * roots).next_power_of_two())?;
                 let weight = arena.alloc::<f64>(roots)?;
-                let (heap, rest) = arena.alloc::<u32>(3 * roots)?.split_at_mut(roots);
-                let (slot, mark) = rest.split_at_mut(roots);
+                let (heap, rest) = arena.alloc::<u32>(4 * roots)?.split_at_mut(roots);
+                let (slot, rest) = rest.split_at_mut(roots);
+                let (mark, rank) = rest.split_at_mut(roots);
                 Elimination {
                     heads,
                     weight,
@@ -82,6 +84,7 @@ impl<'a> Scratch<'a> {
                     slot,
                     mark,
                     at: arena.alloc::<[f32; 8]>(roots)?,
+                    rank,
                 }
             },
         })

@@ -21,8 +21,8 @@
 //!   face; skin buried by its own shell passing through itself is not
 //!   looked for, as on a mesh of one closed shell.
 
-use crate::arena::{Arena, ArenaLayout};
 use super::place::BURY_LIFT;
+use crate::arena::{Arena, ArenaLayout};
 use crate::surface::body::{Body, BodyPlan, Rim};
 use crate::surface::grid::floor_i32;
 use crate::{Error, Mesh};
@@ -282,9 +282,8 @@ fn mark_near_other_shells(
     let mask = table.len() - 1;
     let slots = |key: [i32; 3]| {
         let [x, y, z] = key.map(|k| k as u32);
-        let mut h = x.wrapping_mul(0x9E37_79B1)
-            ^ y.wrapping_mul(0x85EB_CA77)
-            ^ z.wrapping_mul(0xC2B2_AE3D);
+        let mut h =
+            x.wrapping_mul(0x9E37_79B1) ^ y.wrapping_mul(0x85EB_CA77) ^ z.wrapping_mul(0xC2B2_AE3D);
         h = (h ^ (h >> 15)).wrapping_mul(0x2C1B_3C6D);
         let h = (h ^ (h >> 13)) as usize;
         (0..PROBES).map(move |k| (h + k) & mask)
