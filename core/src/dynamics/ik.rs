@@ -10,7 +10,8 @@
 //! joint take only part of its turn, so artists choose where the bend goes:
 //! a stiff tip and a supple root sway the whole strand.
 
-use glam::{Quat, Vec3};
+use glam::Vec3;
+use wide::{f32x4, CmpEq, CmpGt, CmpLt};
 
 /// IK parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,83 +53,314 @@ impl IkParams {
 /// Most joints a chain may have.
 pub const MAX_JOINTS: usize = 64;
 
-/// Turns the chain `joints` (`joints[0]` the root, which stays) so that
-/// its last point approaches `target`; `lengths[i]` is the length segment
-/// `i` keeps. `reach` scales the tolerance (the strand length).
-pub fn solve(joints: &mut [Vec3], lengths: &[f32], target: Vec3, reach: f32, params: &IkParams) {
-    let n = joints.len().min(MAX_JOINTS);
-    if n < 2 {
-        return;
-    }
-    let tolerance = params.tolerance * reach;
-    let total: f32 = lengths[..n - 1].iter().sum();
-    let out = target - joints[0];
-    if out.length_squared() >= total * total {
-        // out of reach: the closest pose is the chain stretched toward it
-        let direction = out.normalize_or_zero();
-        for i in 0..n - 1 {
-            joints[i + 1] = joints[i] + direction * lengths[i];
-        }
-        return;
-    }
-    let mut turns = [Quat::IDENTITY; MAX_JOINTS];
-    let last = (n - 2).max(1) as f32;
-    for _ in 0..params.max_iterations {
-        if joints[n - 1].distance(target) <= tolerance {
-            break;
-        }
-        // within a sweep a turn about joint i moves only the joints past
-        // it: joint i is where the sweep found it, and only the tip moves
-        let mut tip = joints[n - 1];
-        for i in (0..n - 1).rev() {
-            let stiffness = params.root_stiffness
-                + (params.tip_stiffness - params.root_stiffness) * (i as f32 / last);
-            let turn = partial_arc(tip - joints[i], target - joints[i], 1.0 - stiffness);
-            tip = joints[i] + turn * (tip - joints[i]);
-            turns[i] = turn;
-        }
-        // segment i turned by every turn about joints 0..=i, the nearest
-        // the root last (rotations keep lengths to rounding; the lengths
-        // are made exact once, below)
-        let mut turned = Quat::IDENTITY;
-        let mut before = joints[0];
-        for i in 0..n - 1 {
-            turned *= turns[i];
-            let segment = joints[i + 1] - before;
-            before = joints[i + 1];
-            joints[i + 1] = joints[i] + turned * segment;
+/// Chains solved together, one per SIMD lane.
+pub const LANES: usize = 4;
+
+type F = f32x4;
+
+/// Points of [`LANES`] chains, one per lane.
+#[derive(Clone, Copy)]
+struct V {
+    x: F,
+    y: F,
+    z: F,
+}
+
+impl V {
+    const ZERO: V = V {
+        x: F::ZERO,
+        y: F::ZERO,
+        z: F::ZERO,
+    };
+
+    #[inline]
+    fn add(self, o: V) -> V {
+        V {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
         }
     }
-    let mut before = joints[0];
-    for i in 0..n - 1 {
-        let segment = joints[i + 1] - before;
-        before = joints[i + 1];
-        joints[i + 1] = joints[i] + segment.normalize_or_zero() * lengths[i];
+
+    #[inline]
+    fn sub(self, o: V) -> V {
+        V {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+
+    #[inline]
+    fn scale(self, s: F) -> V {
+        V {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+
+    #[inline]
+    fn dot(self, o: V) -> F {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    #[inline]
+    fn cross(self, o: V) -> V {
+        V {
+            x: self.y * o.z - self.z * o.y,
+            y: self.z * o.x - self.x * o.z,
+            z: self.x * o.y - self.y * o.x,
+        }
+    }
+
+    /// `t` where `mask` is set, `self` elsewhere.
+    #[inline]
+    fn unless(self, mask: F, t: V) -> V {
+        V {
+            x: mask.blend(t.x, self.x),
+            y: mask.blend(t.y, self.y),
+            z: mask.blend(t.z, self.z),
+        }
+    }
+
+    fn set(&mut self, lane: usize, p: Vec3) {
+        self.x.as_array_mut()[lane] = p.x;
+        self.y.as_array_mut()[lane] = p.y;
+        self.z.as_array_mut()[lane] = p.z;
+    }
+
+    fn get(&self, lane: usize) -> Vec3 {
+        Vec3::new(
+            self.x.as_array_ref()[lane],
+            self.y.as_array_ref()[lane],
+            self.z.as_array_ref()[lane],
+        )
     }
 }
 
-/// The rotation that turns `from` toward `to`, taken by the share `amount`
-/// (normalized linear interpolation from no turn): two square roots and
-/// no trigonometry, without normalizing either vector first.
-#[inline]
-fn partial_arc(from: Vec3, to: Vec3, amount: f32) -> Quat {
-    let lengths = libm::sqrtf(from.length_squared() * to.length_squared());
-    if lengths == 0.0 {
-        return Quat::IDENTITY;
+/// Rotations of [`LANES`] chains, one per lane.
+#[derive(Clone, Copy)]
+struct Q {
+    v: V,
+    w: F,
+}
+
+impl Q {
+    const IDENTITY: Q = Q {
+        v: V::ZERO,
+        w: F::ONE,
+    };
+
+    /// The Hamilton product `self * o`: `o` turns first.
+    #[inline]
+    fn mul(self, o: Q) -> Q {
+        Q {
+            w: self.w * o.w - self.v.dot(o.v),
+            v: o.v
+                .scale(self.w)
+                .add(self.v.scale(o.w))
+                .add(self.v.cross(o.v)),
+        }
     }
+
+    /// `p` turned by the (unit) rotation.
+    #[inline]
+    fn rotate(self, p: V) -> V {
+        let b = self.v;
+        let w = self.w;
+        p.scale(w * w - b.dot(b))
+            .add(b.scale(p.dot(b) * F::splat(2.0)))
+            .add(b.cross(p).scale(w * F::splat(2.0)))
+    }
+}
+
+/// [`LANES`] chains of the same joint count, one per lane, for
+/// [`Chains::solve`]: a lane is loaded with [`Chains::load`] and read with
+/// [`Chains::joint`]; lanes not loaded are left alone.
+pub struct Chains {
+    joints: [V; MAX_JOINTS],
+    lengths: [F; MAX_JOINTS],
+    target: V,
+    reach: F,
+    /// All bits set on a loaded lane.
+    live: F,
+}
+
+impl Default for Chains {
+    fn default() -> Self {
+        Chains {
+            joints: [V::ZERO; MAX_JOINTS],
+            lengths: [F::ZERO; MAX_JOINTS],
+            target: V::ZERO,
+            reach: F::ZERO,
+            live: F::ZERO,
+        }
+    }
+}
+
+impl Chains {
+    /// Empties every lane.
+    pub fn clear(&mut self) {
+        self.live = F::ZERO;
+    }
+
+    /// Puts a chain (as [`solve`] takes it, in reach of its target: see
+    /// [`stretch_if_unreachable`]) into `lane`.
+    pub fn load(
+        &mut self,
+        lane: usize,
+        joints: &[Vec3],
+        lengths: &[f32],
+        target: Vec3,
+        reach: f32,
+    ) {
+        for (k, p) in joints.iter().enumerate().take(MAX_JOINTS) {
+            self.joints[k].set(lane, *p);
+        }
+        for (k, l) in lengths.iter().enumerate().take(MAX_JOINTS) {
+            self.lengths[k].as_array_mut()[lane] = *l;
+        }
+        self.target.set(lane, target);
+        self.reach.as_array_mut()[lane] = reach;
+        self.live.as_array_mut()[lane] = f32::from_bits(u32::MAX);
+    }
+
+    /// Joint `k` of the chain in `lane`.
+    pub fn joint(&self, lane: usize, k: usize) -> Vec3 {
+        self.joints[k].get(lane)
+    }
+
+    /// [`solve`] on every loaded lane, each chain of `n` joints on its own:
+    /// a lane's result does not depend on the others. The sweeps run until
+    /// every lane is within its tolerance or they run out; a lane that is
+    /// done keeps its joints.
+    pub fn solve(&mut self, n: usize, params: &IkParams) {
+        let n = n.min(MAX_JOINTS);
+        if n < 2 {
+            return;
+        }
+        let tolerance = F::splat(params.tolerance) * self.reach;
+        let target = self.target;
+        let mut turns = [Q::IDENTITY; MAX_JOINTS];
+        let last = (n - 2).max(1) as f32;
+        let mut active = self.live;
+        for _ in 0..params.max_iterations {
+            let off = self.joints[n - 1].sub(target);
+            active = active & off.dot(off).sqrt().cmp_gt(tolerance);
+            if active.none() {
+                break;
+            }
+            // within a sweep a turn about joint i moves only the joints past
+            // it: joint i is where the sweep found it, and only the tip moves
+            let mut tip = self.joints[n - 1];
+            for i in (0..n - 1).rev() {
+                let stiffness = params.root_stiffness
+                    + (params.tip_stiffness - params.root_stiffness) * (i as f32 / last);
+                let at = self.joints[i];
+                let turn = partial_arc(tip.sub(at), target.sub(at), 1.0 - stiffness);
+                tip = at.add(turn.rotate(tip.sub(at)));
+                turns[i] = turn;
+            }
+            // segment i turned by every turn about joints 0..=i, the nearest
+            // the root last (rotations keep lengths to rounding; the lengths
+            // are made exact once, below)
+            let mut turned = Q::IDENTITY;
+            let mut before = self.joints[0];
+            for i in 0..n - 1 {
+                turned = turned.mul(turns[i]);
+                let segment = self.joints[i + 1].sub(before);
+                before = self.joints[i + 1];
+                let moved = self.joints[i].add(turned.rotate(segment));
+                self.joints[i + 1] = self.joints[i + 1].unless(active, moved);
+            }
+        }
+        let mut before = self.joints[0];
+        for i in 0..n - 1 {
+            let segment = self.joints[i + 1].sub(before);
+            before = self.joints[i + 1];
+            let length = segment.dot(segment).sqrt();
+            let recip = F::ONE / length;
+            let unit = recip.is_finite() & recip.cmp_gt(F::ZERO);
+            let exact =
+                self.joints[i].add(segment.scale(unit.blend(recip, F::ZERO) * self.lengths[i]));
+            self.joints[i + 1] = self.joints[i + 1].unless(self.live, exact);
+        }
+    }
+}
+
+/// Poses `joints` stretched toward `target` when it lies beyond the
+/// chain's reach (the closest pose: CCD only creeps toward it) and returns
+/// true; returns false and leaves them when it is in reach.
+pub fn stretch_if_unreachable(joints: &mut [Vec3], lengths: &[f32], target: Vec3) -> bool {
+    let n = joints.len().min(MAX_JOINTS);
+    if n < 2 {
+        return true;
+    }
+    let total: f32 = lengths[..n - 1].iter().sum();
+    let out = target - joints[0];
+    if out.length_squared() < total * total {
+        return false;
+    }
+    let direction = out.normalize_or_zero();
+    for i in 0..n - 1 {
+        joints[i + 1] = joints[i] + direction * lengths[i];
+    }
+    true
+}
+
+/// Turns the chain `joints` (`joints[0]` the root, which stays) so that
+/// its last point approaches `target`; `lengths[i]` is the length segment
+/// `i` keeps. `reach` scales the tolerance (the strand length). One chain
+/// through [`Chains`]: the same bits as when it shares them with others.
+pub fn solve(joints: &mut [Vec3], lengths: &[f32], target: Vec3, reach: f32, params: &IkParams) {
+    let n = joints.len().min(MAX_JOINTS);
+    if stretch_if_unreachable(&mut joints[..n], lengths, target) {
+        return;
+    }
+    let mut chains = Chains::default();
+    chains.load(0, &joints[..n], &lengths[..n - 1], target, reach);
+    chains.solve(n, params);
+    for (k, p) in joints[..n].iter_mut().enumerate() {
+        *p = chains.joint(0, k);
+    }
+}
+
+/// The rotations that turn `from` toward `to`, taken by the share `amount`
+/// (normalized linear interpolation from no turn): square roots and no
+/// trigonometry, without normalizing either vector first; no turn where
+/// either is zero.
+#[inline]
+fn partial_arc(from: V, to: V, amount: f32) -> Q {
+    let lengths = (from.dot(from) * to.dot(to)).sqrt();
     let d = from.dot(to);
     // (|a||b| + a.b, a x b) is the half-angle quaternion scaled by 2 |a||b| cos(angle / 2)
-    let (w, v) = if d < -0.9999 * lengths {
-        // opposite: half a turn about any axis across them
-        (0.0, from.any_orthonormal_vector())
-    } else {
-        (lengths + d, from.cross(to))
+    let opposite = d.cmp_lt(F::splat(-0.9999) * lengths);
+    // opposite: half a turn about any axis across them (glam's
+    // any_orthonormal_vector)
+    let sign = F::ONE.copysign(from.z);
+    let a = F::splat(-1.0) / (sign + from.z);
+    let across = V {
+        x: F::ONE + sign * from.x * from.x * a,
+        y: sign * from.x * from.y * a,
+        z: -(sign * from.x),
     };
+    let w = opposite.blend(F::ZERO, lengths + d);
+    let v = from.cross(to).unless(opposite, across);
     // the share of the turn: blend with no turn, both at the same scale
-    let scale = libm::sqrtf(w * w + v.length_squared());
-    let (w, v) = ((1.0 - amount) * scale + amount * w, v * amount);
-    let norm = libm::sqrtf(w * w + v.length_squared());
-    Quat::from_xyzw(v.x / norm, v.y / norm, v.z / norm, w / norm)
+    let scale = (w * w + v.dot(v)).sqrt();
+    let amount = F::splat(amount);
+    let (w, v) = ((F::ONE - amount) * scale + amount * w, v.scale(amount));
+    let recip = F::ONE / (w * w + v.dot(v)).sqrt();
+    let turn = Q {
+        v: v.scale(recip),
+        w: w * recip,
+    };
+    let none = lengths.cmp_eq(F::ZERO);
+    Q {
+        v: turn.v.unless(none, V::ZERO),
+        w: none.blend(F::ONE, turn.w),
+    }
 }
 
 #[cfg(test)]
