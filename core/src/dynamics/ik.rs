@@ -11,7 +11,7 @@
 //! a stiff tip and a supple root sway the whole strand.
 
 use glam::Vec3;
-use wide::{f32x4, CmpEq, CmpGt, CmpLt};
+use wide::{f32x8, CmpEq, CmpGt, CmpLt};
 
 /// IK parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,9 +54,9 @@ impl IkParams {
 pub const MAX_JOINTS: usize = 64;
 
 /// Chains solved together, one per SIMD lane.
-pub const LANES: usize = 4;
+pub const LANES: usize = 8;
 
-type F = f32x4;
+type F = f32x8;
 
 /// Points of [`LANES`] chains, one per lane.
 #[derive(Clone, Copy)]
