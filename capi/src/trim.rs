@@ -201,10 +201,12 @@ pub extern "C" fn pelage_trim_shortest(
 /// count) becomes the shorter of itself and where the strand's own curve
 /// first meets `cloth` (NULL: none) or enters one of `colliders` (NULL:
 /// none; the body is the frame's mesh). Exact where
-/// `pelage_trim_shortest` estimates from the guides' records, so no cut
-/// hair crosses the cloth on any frame of the shot, at the cost of an
-/// expansion and a walk of every segment through the cloth per frame.
-/// Store the result with `pelage_trim_lengths_write` as the shot's (or one
+/// `pelage_trim_shortest` estimates from the guides' records, at the cost
+/// of an expansion and a walk of every segment through the cloth per
+/// frame. A cut is checked on the frame that makes it and the ones after
+/// it, so go over the shot's frames again until no length changes (one
+/// more pass that changes some, then one that changes none, on the test
+/// shot): then no cut hair crosses the cloth on any frame. Store the result with `pelage_trim_lengths_write` as the shot's (or one
 /// frame's, to reduce later) lengths. On failure `lengths` is unchanged.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
