@@ -247,7 +247,7 @@ impl Chains {
         let mut active = self.live;
         for _ in 0..params.max_iterations {
             let off = self.joints[n - 1].sub(target);
-            active = active & off.dot(off).sqrt().cmp_gt(tolerance);
+            active &= off.dot(off).sqrt().cmp_gt(tolerance);
             if active.none() {
                 break;
             }
@@ -267,8 +267,8 @@ impl Chains {
             // are made exact once, below)
             let mut turned = Q::IDENTITY;
             let mut before = self.joints[0];
-            for i in 0..n - 1 {
-                turned = turned.mul(turns[i]);
+            for (i, &turn) in turns[..n - 1].iter().enumerate() {
+                turned = turned.mul(turn);
                 let segment = self.joints[i + 1].sub(before);
                 before = self.joints[i + 1];
                 let moved = self.joints[i].add(turned.rotate(segment));

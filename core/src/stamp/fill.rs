@@ -172,8 +172,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     Vec3::from(near[j].position).distance_squared(at) < r2
                 };
                 let mut left = 0;
-                for d in 0..m {
-                    let at = Vec3::from(darts[d].position);
+                for (d, dart) in darts[..m].iter().enumerate() {
+                    let at = Vec3::from(dart.position);
                     let blocked = (own..own_end).any(|j| close(&cands[j]) && clash(near, j, at));
                     alive[left] = d as u8;
                     left += !blocked as usize;
