@@ -21,7 +21,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 9
+#define PELAGE_VERSION_MINOR 10
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
