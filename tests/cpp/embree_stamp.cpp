@@ -15,6 +15,7 @@
 //   embree_stamp <mesh.obj> [<density.png>] [--roots N[,N...]] [--resolution R]
 //                [--length L] [--radius R] [--tilt DEGREES]   (strands; defaults 0.06, 0.0015, 60)
 //                [--relative] [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]
+//                [--seed S]
 //
 // Without a density map the density is constant 1 (pelage's default) and (b)
 // is skipped. The --min-*-multiple options fail the run when a count's
@@ -23,9 +24,10 @@
 // reference roots of each count, `PREFIX_<count>.bin` (PelageRoot records,
 // little-endian, as `make_darts` writes a plain dart-throwing Poisson set of
 // the same count): (d) measures them too, and the stamp's random-equivalents
-// must come within 0.05x (mean) and 0.10x (worst patches, a noisier
-// percentile) of theirs. --relative makes --length and --radius multiples
-// of each count's disk radius.
+// must come within 0.05x (mean) and 0.15x (worst patches, a percentile
+// that moves by 0.12x between stamp seeds) of theirs. --relative makes
+// --length and --radius multiples of each count's disk radius; --seed sets
+// the stamp's seed (1).
 #include "check.h"
 #include "creature_io.h"
 
@@ -128,11 +130,13 @@ struct Options {
   // --length and --radius as multiples of each count's disk radius (fur as
   // short as the roots are apart: where their spacing shows most)
   bool relative = false;
+  // the stamp's seed (the reference and the random roots keep theirs)
+  uint64_t seed = 1;
 };
 
 const char* const kUsage =
     "usage: embree_stamp <mesh.obj> [<density.png>] [--roots N[,N...]] [--resolution R] [--length L] "
-    "[--radius R] [--tilt DEGREES] [--relative] [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX]";
+    "[--radius R] [--tilt DEGREES] [--relative] [--min-mean-multiple X] [--min-p99-multiple Y] [--reference PREFIX] [--seed S]";
 
 std::vector<uint32_t> parse_counts(const std::string& list) {
   std::vector<uint32_t> counts;
@@ -167,6 +171,8 @@ Options parse(int argc, char** argv) {
       opt.roots = parse_counts(argv[++i]);
     } else if (!std::strcmp(argv[i], "--resolution") && i + 1 < argc) {
       opt.resolution = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) {
+      opt.seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (!std::strcmp(argv[i], "--relative")) {
       opt.relative = true;
     } else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc) {
@@ -424,8 +430,10 @@ Equivalents coverage(creature::Device& device, const creature::Mesh& mesh, const
     expect(eq.mean.at_least(mean.value - 0.05),
            fmt("mean skin visible: the stamp's random-equivalent %s within 0.05x of the darts' %s",
                eq.mean.text().c_str(), mean.text().c_str()));
-    expect(eq.worst.at_least(worst.value - 0.10),
-           fmt("worst patches (p99): the stamp's random-equivalent %s within 0.10x of the darts' %s",
+    // the 99th percentile of ~1,000 tiles is its ten worst: stamps of
+    // seeds 1-4 of the creature at 100K give 1.26x-1.38x with long strands
+    expect(eq.worst.at_least(worst.value - 0.15),
+           fmt("worst patches (p99): the stamp's random-equivalent %s within 0.15x of the darts' %s",
                eq.worst.text().c_str(), worst.text().c_str()));
   }
   std::printf("  (%.1f s)\n", clock.seconds());
@@ -489,7 +497,7 @@ int main(int argc, char** argv) try {
   if (mesh.uvs.empty() || mesh.normals.empty()) throw std::runtime_error("the mesh needs vt and vn");
 
   PelageStampParams params = pelage_stamp_params_defaults();
-  params.seed = 1;
+  params.seed = opt.seed;
   if (has_map) params.density = density.map();
   params.black_scale = 0.5f;
   const std::vector<double> cdf = random_root_cdf(mesh, density, params);

@@ -291,7 +291,10 @@ impl Chains {
 
 /// Poses `joints` stretched toward `target` when it lies beyond the
 /// chain's reach (the closest pose: CCD only creeps toward it) and returns
-/// true; returns false and leaves them when it is in reach.
+/// true; returns false and leaves them when it is in reach. A chain of
+/// fewer than two joints has nothing to solve (true); a NaN target counts
+/// as out of reach and folds every joint onto the root (finite, where CCD
+/// would give NaN).
 pub fn stretch_if_unreachable(joints: &mut [Vec3], lengths: &[f32], target: Vec3) -> bool {
     let n = joints.len().min(MAX_JOINTS);
     if n < 2 {
@@ -336,14 +339,15 @@ fn partial_arc(from: V, to: V, amount: f32) -> Q {
     let d = from.dot(to);
     // (|a||b| + a.b, a x b) is the half-angle quaternion scaled by 2 |a||b| cos(angle / 2)
     let opposite = d.cmp_lt(F::splat(-0.9999) * lengths);
-    // opposite: half a turn about any axis across them (glam's
-    // any_orthonormal_vector)
-    let sign = F::ONE.copysign(from.z);
-    let a = F::splat(-1.0) / (sign + from.z);
+    // opposite: half a turn about an axis across them, made from the unit
+    // `from` (the first of glam's any_orthonormal_pair)
+    let unit = from.scale(F::ONE / from.dot(from).sqrt());
+    let sign = F::ONE.copysign(unit.z);
+    let a = F::splat(-1.0) / (sign + unit.z);
     let across = V {
-        x: F::ONE + sign * from.x * from.x * a,
-        y: sign * from.x * from.y * a,
-        z: -(sign * from.x),
+        x: F::ONE + sign * unit.x * unit.x * a,
+        y: sign * unit.x * unit.y * a,
+        z: -(sign * unit.x),
     };
     let w = opposite.blend(F::ZERO, lengths + d);
     let v = from.cross(to).unless(opposite, across);

@@ -6,7 +6,7 @@
 //! across triangles, where a root can only move to a finer step: the 50%
 //! and 25% rank prefixes come out less even than a Poisson set of their own
 //! size. Up to [`ELIMINATION_LIMIT`] roots the ranks are therefore made
-//! again from the finished stamp, over the whole mesh: halve the set by
+//! from the finished candidates instead, over the whole mesh: halve the set by
 //! removing, one at a time, the root whose neighbours crowd it most (each
 //! same-side neighbour `j` closer than `2 r` weighs `(1 - d / 2r)^8`, `r`
 //! the spacing a Poisson set of the halved count would have there, by the
@@ -27,7 +27,8 @@ use glam::Vec3;
 /// coarse points) and whose cost does not grow with a heap.
 pub(super) const ELIMINATION_LIMIT: usize = 1 << 16;
 /// Candidates the elimination takes at most: the limit and its surplus (a
-/// pass lands at most a few percent above the count).
+/// pass lands a few percent above the count; a stamp accepted with more
+/// after the last radius correction keeps the tile's order).
 pub(super) const ELIMINATION_ROOM: usize = 2 * ELIMINATION_LIMIT;
 /// The heap place of a root that has left.
 const GONE: u32 = u32::MAX;

@@ -38,8 +38,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
     }
 
     /// [`finish`](Self::finish), calling `done` with the share of the work
-    /// done after each LOD level and once more before `out` is written; an
-    /// error from `done` ends the call there.
+    /// done after each LOD level (or elimination step) and once more before
+    /// `out` is written; an error from `done` ends the call there.
     pub(super) fn finish_reporting(
         &self,
         cands: &[Candidate],

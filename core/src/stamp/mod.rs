@@ -40,8 +40,9 @@
 //!    (step, place in the step, hash of the index); the surplus of the
 //!    count leaves from the end, the points nearest to others. A stamp of
 //!    up to 65,536 roots, whose charts are narrow next to the coarse steps'
-//!    spacing, then takes its ranks again from weighted sample elimination
-//!    over the whole mesh (the `eliminate` module).
+//!    spacing, takes its ranks from weighted sample elimination over the
+//!    whole mesh instead (the `eliminate` module), which also removes its
+//!    surplus, where the candidates crowd each other most.
 //!
 //! Triangle stamping takes face ranges ([`Stamper::stamp_faces`]) so a host can
 //! spread it over threads; the result is bitwise identical for any split.
@@ -59,7 +60,7 @@ mod near;
 mod place;
 mod prune;
 mod scratch;
-pub mod shell;
+mod shell;
 mod sizing;
 pub mod tile;
 
@@ -78,7 +79,8 @@ pub use sizing::{max_roots, required_bytes, DENSITY_STEPS};
 
 /// Width of the band above the target where the radius correction stops;
 /// the surplus is trimmed by LOD rank (the end of the last step: the points
-/// nearest to others, so the trim opens no hole).
+/// nearest to others, so the trim opens no hole), or up to 65,536 roots by
+/// sample elimination (the most crowded candidates).
 pub const COUNT_TOLERANCE: f32 = 0.02;
 /// Grid cells of the LOD passes, in disk radii times the level's spacing:
 /// larger cells mean fewer buckets per face's query box but more points per

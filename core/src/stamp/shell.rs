@@ -39,7 +39,8 @@ const BURIED: u8 = 4;
 
 /// What the stamp knows of a mesh's shells.
 pub(super) struct Shells<'a> {
-    /// Per face, [`NEAR_OTHER`] and [`NEAR_CAP`].
+    /// Per face, [`NEAR_OTHER`] and [`NEAR_CAP`], or [`BURIED`] on a face
+    /// neither is set on.
     flags: &'a [u8],
     /// The body, when some skin may be buried (several shells, or holes).
     body: Option<Body<'a>>,
@@ -167,6 +168,8 @@ impl<'a> Shells<'a> {
             if free(near, f) {
                 let patch = root(parent, a) as usize;
                 if decided[patch] == UNDECIDED {
+                    // the lift at the first radius: on a face nothing comes
+                    // near, the lift changes the answer only at a crease
                     let lift = BURY_LIFT * reach(f) / REACH_MARGIN;
                     let [a, b, c] = mesh.corners(f);
                     let p = (a + b + c) / 3.0 + mesh.face_normal(f) * lift;
@@ -286,7 +289,7 @@ fn mark_near_other_shells(
             x.wrapping_mul(0x9E37_79B1) ^ y.wrapping_mul(0x85EB_CA77) ^ z.wrapping_mul(0xC2B2_AE3D);
         h = (h ^ (h >> 15)).wrapping_mul(0x2C1B_3C6D);
         let h = (h ^ (h >> 13)) as usize;
-        (0..PROBES).map(move |k| (h + k) & mask)
+        (0..PROBES).map(move |k| h.wrapping_add(k) & mask)
     };
     let cells = |f: usize, visit: &mut dyn FnMut([i32; 3])| {
         let (lo, hi) = boxed(f);
