@@ -76,13 +76,7 @@ impl Stamper<'_, '_> {
         slot.fill(0);
         mark.fill(u32::MAX);
         // the skin the roots grow on, in units of the spacing at scale 1
-        let area: f64 = (0..self.faces.len())
-            .map(|f| {
-                let s = self.faces[f].scale as f64;
-                self.mesh.area(f) as f64 * s * s
-            })
-            .sum::<f64>()
-            * self.unburied;
+        let area = self.area * self.unburied;
         let smallest = at.iter().fold(f32::INFINITY, |m, a| m.min(a[3]));
         // a table much larger than the roots: a query's cells share their
         // buckets with few roots from elsewhere on the mesh

@@ -65,13 +65,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 .zip(ranks)
                 .filter(|(_, &rank)| (rank as usize) < m);
             for (id, (c, &rank)) in kept.enumerate() {
-                out[id] = Root {
-                    face: c.face,
-                    u: c.uv[0],
-                    v: c.uv[1],
-                    id: id as u32,
-                    rank,
-                };
+                out[id] = c.root(id as u32, rank);
             }
             return Ok(());
         }
@@ -112,13 +106,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             let rank = *next;
             *next += 1;
             if (rank as usize) < m {
-                out[id] = Root {
-                    face: c.face,
-                    u: c.uv[0],
-                    v: c.uv[1],
-                    id: id as u32,
-                    rank,
-                };
+                out[id] = c.root(id as u32, rank);
                 id += 1;
             }
         }

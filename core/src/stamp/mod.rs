@@ -229,6 +229,18 @@ impl Candidate {
     pub fn near_edge(&self) -> bool {
         self.near_levels as usize == LOD_LEVELS
     }
+
+    /// The root this candidate becomes, with its `id` and `rank`.
+    #[inline]
+    pub(super) fn root(&self, id: u32, rank: u32) -> Root {
+        Root {
+            face: self.face,
+            u: self.uv[0],
+            v: self.uv[1],
+            id,
+            rank,
+        }
+    }
 }
 
 /// Corner 0 of face `f` and its edges to corners 1 and 2: a point at
@@ -257,6 +269,8 @@ pub struct Stamper<'m, 'a> {
     places: &'a [TilePlace],
     shells: Shells<'a>,
     first_radius: f32,
+    /// The faces' area weighted by their squared density scale.
+    area: f64,
     /// Share of the scaled area on skin that is not buried (1 on a mesh
     /// without a body): the first pass aims at the skin that grows roots.
     unburied: f64,
@@ -386,6 +400,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             places,
             shells,
             first_radius: radius,
+            area: sums.area,
             unburied: 1.0,
             fixed,
             radius,
@@ -395,7 +410,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
             spacings: core::array::from_fn(level_spacing),
         };
         if !fixed {
-            stamper.unburied = stamper.unburied_share(sums.area);
+            stamper.unburied = stamper.unburied_share();
             stamper.radius = stamper.predicted_radius();
         }
         Ok((Some(stamper), sums))
@@ -433,11 +448,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
         (1.0 - refilled) * gross
     }
 
-    /// Share of `area` (the faces' scaled area) on skin that is not buried,
+    /// Share of [`area`](Self::area) on skin that is not buried,
     /// at the first radius, each face counted by its centroid (one test a
     /// face: the placement tests the points of a face near another shell
     /// one by one, but an estimate for the first radius needs no more).
-    fn unburied_share(&self, area: f64) -> f64 {
+    fn unburied_share(&self) -> f64 {
         let buried: f64 = (0..self.faces.len())
             .filter(|&f| self.faces[f].scale > 0.0)
             .filter(|&f| {
@@ -454,8 +469,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 self.mesh.area(f) as f64 * scale * scale
             })
             .sum();
-        if area > 0.0 {
-            (1.0 - buried / area).clamp(0.0, 1.0)
+        if self.area > 0.0 {
+            (1.0 - buried / self.area).clamp(0.0, 1.0)
         } else {
             1.0
         }

@@ -99,28 +99,8 @@ impl<'a> Shells<'a> {
             return Err(Error::InvalidArgument("over 2^31 vertices"));
         }
         let rim = Rim::new(mesh, arena)?;
-        // union-find over the welded vertices (a UV seam joins its two
-        // sides), each triangle joining its corners; the larger root joins
-        // the smaller, so the labels do not depend on the order of the
-        // unions
         let parent = arena.alloc::<u32>(mesh.positions.len())?;
-        for (i, p) in parent.iter_mut().enumerate() {
-            *p = rim.welded(i as u32);
-        }
-        fn root(parent: &mut [u32], mut v: u32) -> u32 {
-            while parent[v as usize] != v {
-                let up = parent[parent[v as usize] as usize];
-                parent[v as usize] = up;
-                v = up;
-            }
-            v
-        }
-        for [a, b, c] in mesh.triangles.iter() {
-            for other in [b, c] {
-                let (ra, rb) = (root(parent, a), root(parent, other));
-                parent[ra.max(rb) as usize] = ra.min(rb);
-            }
-        }
+        join_corners(mesh, &rim, parent, |_| true);
         for v in 0..parent.len() as u32 {
             let r = root(parent, v);
             parent[v as usize] = r;
@@ -147,20 +127,9 @@ impl<'a> Shells<'a> {
             });
         }
         let body = Body::build(&BodyPlan::of(mesh, &rim)?, mesh, &rim, arena)?;
-        // patches of the faces with roots that nothing comes near, by
-        // union-find over their welded corners as above
+        // patches of the faces with roots that nothing comes near
         let free = |near: &[u8], f: usize| near[f] == 0 && reach(f) > 0.0;
-        for (i, p) in parent.iter_mut().enumerate() {
-            *p = rim.welded(i as u32);
-        }
-        for (f, [a, b, c]) in mesh.triangles.iter().enumerate() {
-            if free(near, f) {
-                for other in [b, c] {
-                    let (ra, rb) = (root(parent, a), root(parent, other));
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                }
-            }
-        }
+        join_corners(mesh, &rim, parent, |f| free(near, f));
         const UNDECIDED: u8 = u8::MAX;
         let decided = arena.alloc::<u8>(mesh.positions.len())?;
         decided.fill(UNDECIDED);
@@ -214,6 +183,34 @@ impl<'a> Shells<'a> {
             _ => None,
         }
     }
+}
+
+/// Union-find over the welded vertices of `mesh` (a UV seam joins its two
+/// sides) into `parent`, each face `joins` accepts joining its corners; the
+/// larger root joins the smaller, so the labels do not depend on the order
+/// of the unions.
+fn join_corners(mesh: &Mesh, rim: &Rim, parent: &mut [u32], joins: impl Fn(usize) -> bool) {
+    for (i, p) in parent.iter_mut().enumerate() {
+        *p = rim.welded(i as u32);
+    }
+    for (f, [a, b, c]) in mesh.triangles.iter().enumerate() {
+        if joins(f) {
+            for other in [b, c] {
+                let (ra, rb) = (root(parent, a), root(parent, other));
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+    }
+}
+
+/// The root of vertex `v` in the union-find `parent`, halving the path.
+fn root(parent: &mut [u32], mut v: u32) -> u32 {
+    while parent[v as usize] != v {
+        let up = parent[parent[v as usize] as usize];
+        parent[v as usize] = up;
+        v = up;
+    }
+    v
 }
 
 /// Flags the faces whose box, widened by their reach, meets the ball around
