@@ -231,7 +231,10 @@ fn mark_near_caps(mesh: &Mesh, rim: &Rim, reach: &dyn Fn(usize) -> f32, near: &m
 
 /// Flags the faces whose box, widened by their reach, shares a cell of a
 /// grid with the box of a face of another shell (bald ones included). A
-/// face within reach of another always shares one. The cells live in a
+/// face within reach of another always shares one. Only the asking face's
+/// box is widened: two points of different shells clash within the
+/// smaller of their faces' radii, so within the reach of both faces, and
+/// both are flagged. The cells live in a
 /// hash table keyed by their coordinates; a cell that finds no slot within
 /// [`PROBES`] of its hash counts as shared by two shells, which only flags
 /// more faces than needed (their points then take part in the edge pass
@@ -273,9 +276,9 @@ fn mark_near_other_shells(
         })
         .fold(0.0f32, f32::max);
     let inv_cell = (counted as f64 / extent).min(16.0 / largest as f64);
-    let boxed = |f: usize| {
+    let boxed = |f: usize, pad: f32| {
         let [a, b, c] = mesh.corners(f);
-        let pad = Vec3::splat(reach(f));
+        let pad = Vec3::splat(pad);
         let cell = |p: Vec3| (p * inv_cell as f32).to_array().map(floor_i32);
         (cell(a.min(b).min(c) - pad), cell(a.max(b).max(c) + pad))
     };
@@ -288,8 +291,8 @@ fn mark_near_other_shells(
         let h = (h ^ (h >> 13)) as usize;
         (0..PROBES).map(move |k| h.wrapping_add(k) & mask)
     };
-    let cells = |f: usize, visit: &mut dyn FnMut([i32; 3])| {
-        let (lo, hi) = boxed(f);
+    let cells = |f: usize, pad: f32, visit: &mut dyn FnMut([i32; 3])| {
+        let (lo, hi) = boxed(f, pad);
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
@@ -302,7 +305,7 @@ fn mark_near_other_shells(
     // be flagged (its skin is partly buried)
     for f in (0..faces).filter(|&f| !mesh.is_degenerate(f)) {
         let s = shell_of(f);
-        cells(f, &mut |key| {
+        cells(f, 0.0, &mut |key| {
             for i in slots(key) {
                 let cell = &mut table[i];
                 if cell.shell == EMPTY {
@@ -316,9 +319,14 @@ fn mark_near_other_shells(
             }
         });
     }
+    // a free slot ends the probe: the cell holds no face; a cell whose
+    // probe finds neither may have found no slot, and counts as shared
     let mixed = |key: [i32; 3]| {
         for i in slots(key) {
-            if table[i].key == key && table[i].shell != EMPTY {
+            if table[i].shell == EMPTY {
+                return false;
+            }
+            if table[i].key == key {
                 return table[i].shell == MIXED;
             }
         }
@@ -326,7 +334,7 @@ fn mark_near_other_shells(
     };
     for f in (0..faces).filter(|&f| reach(f) > 0.0) {
         let mut any = false;
-        cells(f, &mut |key| any |= mixed(key));
+        cells(f, reach(f), &mut |key| any |= mixed(key));
         near[f] = any as u8 * NEAR_OTHER;
     }
     Ok(())
