@@ -623,7 +623,7 @@ impl<'a> Body<'a> {
         if class & (SURFACE | NEAR_CAP) == 0 {
             return (w, false);
         }
-        let mut at = self.centre(cell[0], cell[1], cell[2]);
+        let at = self.centre(cell[0], cell[1], cell[2]);
         // the cap triangles whose bounds meet the cell (the legs stay in it),
         // from the caps whose ball reaches it
         let half = 0.5 / self.shape.inv_cell;
@@ -667,7 +667,7 @@ impl<'a> Body<'a> {
             met,
             to: p,
         };
-        w += legs.leg::<0>(&mut at) + legs.leg::<1>(&mut at) + legs.leg::<2>(&mut at);
+        w += legs.crossings(at);
         (w, near_cap)
     }
 
@@ -831,18 +831,33 @@ struct Legs<'b> {
 }
 
 impl Legs<'_> {
-    /// The change of winding number along the leg from `at` to `to`'s
-    /// coordinate on `AXIS`, and moves `at` there. A crossing h counts
-    /// when from < h <= to, and counts negated when to < h <= from (as the
-    /// sweep counts them).
+    /// The change of winding number along the three legs from the cell's
+    /// centre `centre` to `to`. A crossing h of a leg counts when from < h
+    /// <= to, and counts negated when to < h <= from (as the sweep counts
+    /// them).
+    ///
+    /// One pass over the triangles serves the three legs: a triangle's
+    /// bounds say at once which legs' lines may pass through it (most miss
+    /// all three), where a pass per leg branched on every triangle thrice.
+    /// The sum is of integers, so the order does not change it.
     #[inline]
-    fn leg<const AXIS: usize>(&self, at: &mut Vec3) -> i32 {
-        let (from, to) = (at[AXIS], self.to[AXIS]);
-        let (lo, hi, sign) = if from <= to {
-            (from, to, 1)
-        } else {
-            (to, from, -1)
+    fn crossings(&self, centre: Vec3) -> i32 {
+        let p = self.to;
+        // where each leg starts: it runs along its axis from there
+        let starts = [
+            centre,
+            Vec3::new(p.x, centre.y, centre.z),
+            Vec3::new(p.x, p.y, centre.z),
+        ];
+        let span = |axis: usize| {
+            let (from, to) = (starts[axis][axis], p[axis]);
+            if from <= to {
+                (from, to, 1)
+            } else {
+                (to, from, -1)
+            }
         };
+        let spans = [span(0), span(1), span(2)];
         let near = self.met.iter().map(|&t| &self.body.caps[t as usize]);
         let listed = self
             .listed
@@ -850,12 +865,37 @@ impl Legs<'_> {
             .map(|&t| &self.body.triangles[t as usize]);
         let mut w = 0;
         for t in listed.chain(self.caps).chain(near) {
-            if let Some((h, step)) = crossing::<AXIS>(t, *at) {
-                w += if lo < h && h <= hi { sign * step } else { 0 };
+            let [.., lo, hi] = *t;
+            let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+            let within = |q: Vec3| (lo.cmple(q) & q.cmple(hi)).bitmask();
+            // leg 0's line is (y, z) of starts[1], leg 1's (x, z) of it,
+            // leg 2's (x, y) of starts[2]
+            let (a, b) = (within(starts[1]), within(starts[2]));
+            let legs =
+                (a & 6 == 6) as u32 | ((a & 5 == 5) as u32) << 1 | ((b & 3 == 3) as u32) << 2;
+            if legs == 0 {
+                continue;
+            }
+            if legs & 1 != 0 {
+                w += counted(crossing::<0>(t, starts[0]), spans[0]);
+            }
+            if legs & 2 != 0 {
+                w += counted(crossing::<1>(t, starts[1]), spans[1]);
+            }
+            if legs & 4 != 0 {
+                w += counted(crossing::<2>(t, starts[2]), spans[2]);
             }
         }
-        at[AXIS] = self.to[AXIS];
         w
+    }
+}
+
+/// A leg's share of a crossing `(h, step)` on its span `(lo, hi, sign)`.
+#[inline]
+fn counted(crossing: Option<(f32, i32)>, (lo, hi, sign): (f32, f32, i32)) -> i32 {
+    match crossing {
+        Some((h, step)) if lo < h && h <= hi => sign * step,
+        _ => 0,
     }
 }
 
