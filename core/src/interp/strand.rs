@@ -242,7 +242,7 @@ pub(crate) fn strand_n<const N: usize>(
 /// summed in guide order, so to the same bits on either path.
 ///
 /// For the point counts of known length the sums stay in registers over
-/// the guides (8, 16 or 32 points take 3, 6 or 12 of them): a pass per
+/// the guides (8, 16 or 32 points take 3, 6 or 12 AVX registers): a pass per
 /// guide over `out` stored and reloaded every lane per guide, which cost
 /// more than the arithmetic.
 #[inline(always)]

@@ -839,6 +839,31 @@ mod tests {
         assert!(roots.iter().enumerate().all(|(i, r)| r.id == i as u32));
     }
 
+    #[test]
+    fn shells_closer_than_the_radius_keep_the_spacing_between_them() {
+        // two parallel sheets facing the same way, a grid cell's boundary
+        // (z = 0) between them: no cell holds both sheets' faces
+        let sheet = graded_plane(6, 1.0);
+        let mut m = sheet.clone();
+        let offset = sheet.p.len() as u32;
+        m.p.iter_mut().for_each(|p| p[2] = -0.005);
+        m.p.extend(sheet.p.iter().map(|p| [p[0], p[1], 0.005]));
+        m.t.extend(sheet.t.iter().map(|t| t.map(|v| v + offset)));
+        m.uv.extend(&sheet.uv);
+        let mesh = m.mesh();
+        let (roots, report) = run(mesh, &params(2000));
+        assert!(
+            report.radius > 0.01,
+            "the sheets are closer than the radius: {report:?}"
+        );
+        let min = min_spacing(&mesh, &roots);
+        assert!(
+            min >= report.radius * 0.999,
+            "min {min} < r {}",
+            report.radius
+        );
+    }
+
     /// Every pair of kept points, on any two triangles, is at least the
     /// spacing of the finer of their two LOD levels apart (in units of the
     /// pair's clash distance, up to the bend of linked edges), on a curved

@@ -6,7 +6,9 @@
 //! - **Spacing across shells.** Points of a face that comes within its disk
 //!   radius of a face of another shell take part in the edge pass and every
 //!   LOD level (as points near a cut edge do), so the spacing holds between
-//!   the shells as it holds across cuts.
+//!   the shells as it holds across cuts. A face is looked at within
+//!   [`REACH_MARGIN`] of its radius, so a coarser LOD level's points of two
+//!   shells farther apart than that are not compared.
 //! - **Buried skin.** A point is dropped when the spot just outside the
 //!   skin there (a thousandth of the local disk radius along the face
 //!   normal) is inside the body with its holes closed by caps (fans from
@@ -235,10 +237,10 @@ fn mark_near_caps(mesh: &Mesh, rim: &Rim, reach: &dyn Fn(usize) -> f32, near: &m
 /// box is widened: two points of different shells clash within the
 /// smaller of their faces' radii, so within the reach of both faces, and
 /// both are flagged. The cells live in a
-/// hash table keyed by their coordinates; a cell that finds no slot within
-/// [`PROBES`] of its hash counts as shared by two shells, which only flags
-/// more faces than needed (their points then take part in the edge pass
-/// for nothing).
+/// hash table keyed by their coordinates, each with the shell of its faces
+/// or [`MIXED`]; a cell that finds no slot within [`PROBES`] of its hash
+/// counts as holding another shell, which only flags more faces than
+/// needed (their points then take part in the edge pass for nothing).
 fn mark_near_other_shells(
     mesh: &Mesh,
     shell_of: &dyn Fn(usize) -> u32,
@@ -319,22 +321,24 @@ fn mark_near_other_shells(
             }
         });
     }
-    // a free slot ends the probe: the cell holds no face; a cell whose
-    // probe finds neither may have found no slot, and counts as shared
-    let mixed = |key: [i32; 3]| {
+    // whether the cell holds a face of a shell other than `s`: a free slot
+    // ends the probe (the cell holds no face); a cell whose probe finds
+    // neither may have found no slot, and counts as holding one
+    let other = |key: [i32; 3], s: u32| {
         for i in slots(key) {
             if table[i].shell == EMPTY {
                 return false;
             }
             if table[i].key == key {
-                return table[i].shell == MIXED;
+                return table[i].shell != s;
             }
         }
         true
     };
     for f in (0..faces).filter(|&f| reach(f) > 0.0) {
         let mut any = false;
-        cells(f, reach(f), &mut |key| any |= mixed(key));
+        let s = shell_of(f);
+        cells(f, reach(f), &mut |key| any |= other(key, s));
         near[f] = any as u8 * NEAR_OTHER;
     }
     Ok(())
