@@ -112,6 +112,23 @@ fn the_stamp_leaves_no_wide_hole_and_its_prefixes_are_even() {
     meets_the_quality_targets(&creature, &vec![0; creature.triangle_count()]);
 }
 
+/// At 1M roots the head's widest hole was on its skin beside an eyeball
+/// that passes through it, where the buried points were dropped and
+/// nothing refilled the skin beside them (1.16 r_hex before the fill
+/// threw darts on the faces the edge of buried skin crosses).
+#[test]
+fn a_million_roots_leave_no_wide_hole_beside_buried_skin() {
+    let (head, parts) = head_with_parts();
+    let mesh = mesh_view(&head);
+    let shells = parts.shells();
+    let mut memory = vec![0u8; Body::required_bytes(&mesh).unwrap()];
+    let body = Body::new(&mesh, &mut Arena::new(&mut memory)).unwrap();
+    let skin = Skin::unburied(mesh, &shells, |_| true, &body);
+    let roots = stamp_roots(mesh, 1_000_000, 1);
+    let e = empty_space(&skin, &roots, 8, 7);
+    assert!(e.p999 <= 0.85 && e.max <= 1.1, "{e:?}");
+}
+
 #[test]
 fn settle_leaves_no_point_inside_an_open_head_with_shells() {
     let (m, _) = head_with_parts();

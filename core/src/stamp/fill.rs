@@ -4,7 +4,11 @@
 //! pass drops one point of each pair that comes too close; nothing refills
 //! the room either leaves. After the edge pass, each cut edge takes darts
 //! at random in the strip of its face within the local disk radius of it,
-//! [`DARTS_PER_ROOT`] for each root such a strip holds on average. A dart
+//! [`DARTS_PER_ROOT`] for each root such a strip holds on average. Where
+//! the edge of buried skin crosses a face (another shell passes through
+//! it), the placement dropped the points on the buried side and nothing
+//! refilled the skin beside them: such a face takes its darts anywhere on
+//! it, as many per root it holds. A dart
 //! stays when it is at least its face's local disk radius from every point
 //! kept so far (points of opposed faces never clash) and its skin is not
 //! buried, as the finest LOD level. Faces go in order, and each face's edges and darts in order, so
@@ -116,7 +120,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
             }
             let face = &self.faces[f];
             let cut = !self.places[f].edges & 7;
-            if face.scale == 0.0 || cut == 0 {
+            let anywhere = self.shells.burial_edge(f);
+            if face.scale == 0.0 || (cut == 0 && !anywhere) {
                 continue;
             }
             let own_end = own
@@ -137,30 +142,46 @@ impl<'m, 'a> Stamper<'m, 'a> {
             }
             let first_dart = n;
             // each cut edge's strip reaches `r` from the edge, or the far
-            // corner; its darts are numbered on after the last edge's
+            // corner; its darts are numbered on after the last edge's. A
+            // face the edge of buried skin crosses takes its darts anywhere.
             let mut strips = [(0usize, 0.0f32); 3];
             let mut total = 0;
-            for i in (0..3).filter(|&i| cut & (1 << i) != 0) {
-                let length = corners[i].distance(corners[(i + 1) % 3]);
-                let height = twice_area / length;
-                let strip_roots = length * r.min(height) * TILE.density() / (r * r);
-                total += libm::ceilf(DARTS_PER_ROOT * strip_roots) as usize;
-                strips[i] = (total, (r / height).min(1.0));
+            if anywhere {
+                let face_roots = 0.5 * twice_area * TILE.density() / (r * r);
+                total = libm::ceilf(DARTS_PER_ROOT * face_roots) as usize;
+            } else {
+                for i in (0..3).filter(|&i| cut & (1 << i) != 0) {
+                    let length = corners[i].distance(corners[(i + 1) % 3]);
+                    let height = twice_area / length;
+                    let strip_roots = length * r.min(height) * TILE.density() / (r * r);
+                    total += libm::ceilf(DARTS_PER_ROOT * strip_roots) as usize;
+                    strips[i] = (total, (r / height).min(1.0));
+                }
             }
             for start in (0..total).step_by(RUN) {
                 let m = RUN.min(total - start);
                 for d in 0..m {
                     let g = start + d;
-                    let i = strips.iter().position(|s| g < s.0).unwrap_or(2);
-                    let (p, q, o) = (i, (i + 1) % 3, (i + 2) % 3);
                     let key = (f as u64) << 24 | g as u64;
                     let t = rng::unit(self.seed, key, Purpose::FillDart, 0);
-                    let w = strips[i].1 * rng::unit(self.seed, key, Purpose::FillDart, 1);
-                    // on the edge at t, then w of the way to the far corner
-                    let uv = [0, 1].map(|k| {
-                        let on = BARY[p][k] + (BARY[q][k] - BARY[p][k]) * t;
-                        on + (BARY[o][k] - on) * w
-                    });
+                    let w = rng::unit(self.seed, key, Purpose::FillDart, 1);
+                    let uv = if anywhere {
+                        // uniform on the face: the unit square folded onto it
+                        if t + w > 1.0 {
+                            [1.0 - t, 1.0 - w]
+                        } else {
+                            [t, w]
+                        }
+                    } else {
+                        let i = strips.iter().position(|s| g < s.0).unwrap_or(2);
+                        let (p, q, o) = (i, (i + 1) % 3, (i + 2) % 3);
+                        let w = strips[i].1 * w;
+                        // on the edge at t, then w of the way to the far corner
+                        [0, 1].map(|k| {
+                            let on = BARY[p][k] + (BARY[q][k] - BARY[p][k]) * t;
+                            on + (BARY[o][k] - on) * w
+                        })
+                    };
                     let u = uv[0].clamp(0.0, 1.0);
                     uvs[d] = [u, uv[1].clamp(0.0, 1.0 - u)];
                     darts[d] = Near::new(&dart(f, uvs[d]), 0, &frame);

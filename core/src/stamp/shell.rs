@@ -38,6 +38,9 @@ const NEAR_CAP: u8 = 2;
 /// Per-face bit, on a face neither near bit is set on: its skin is buried
 /// as a whole.
 const BURIED: u8 = 4;
+/// Per-face bit, on a face a near bit is set on: the edge of buried skin
+/// crosses it (some corners' skin is buried, some not).
+const BURIAL_EDGE: u8 = 8;
 
 /// What the stamp knows of a mesh's shells.
 pub(super) struct Shells<'a> {
@@ -149,10 +152,43 @@ impl<'a> Shells<'a> {
                 near[f] = decided[patch];
             }
         }
+        // the faces near something whose corners' skin is partly buried,
+        // each corner tested once (lifted along the normal of its first such
+        // face: only where the fill looks depends on it, and each dart is
+        // tested on its own)
+        decided.fill(UNDECIDED);
+        for (f, corners) in mesh.triangles.iter().enumerate() {
+            if near[f] & (NEAR_OTHER | NEAR_CAP) == 0 || reach(f) <= 0.0 {
+                continue;
+            }
+            let lift = BURY_LIFT * reach(f) / REACH_MARGIN;
+            let normal = mesh.face_normal(f);
+            let mut seen = 0u8;
+            for v in corners {
+                let state = &mut decided[v as usize];
+                if *state == UNDECIDED {
+                    let p = Vec3::from(mesh.positions.get(v as usize)) + normal * lift;
+                    *state = (body.capped_winding(p) >= 1) as u8;
+                }
+                seen |= 1 << *state;
+            }
+            if seen == 3 {
+                near[f] |= BURIAL_EDGE;
+            }
+        }
         Ok(Shells {
             flags: near,
             body: Some(body),
         })
+    }
+
+    /// Whether the edge of buried skin crosses face `f` (a face another
+    /// shell or a cap comes near, whose corners' skin is partly buried):
+    /// the placement dropped its points on one side, and the fill throws
+    /// darts all over it to refill the skin beside them.
+    #[inline]
+    pub(super) fn burial_edge(&self, f: usize) -> bool {
+        self.flags[f] & BURIAL_EDGE != 0
     }
 
     /// Whether face `f` comes within its reach of another shell.
