@@ -127,6 +127,10 @@ fn a_million_roots_leave_no_wide_hole_beside_buried_skin() {
     let roots = stamp_roots(mesh, 1_000_000, 1);
     let e = empty_space(&skin, &roots, 8, 7);
     assert!(e.p999 <= 0.85 && e.max <= 1.1, "{e:?}");
+    // the darts there are spaced from every point, not only those near a
+    // cut edge
+    let n = neighbours(&skin, &roots, 0.0);
+    assert!(n.min >= 0.70 && n.mean >= 0.78, "{n:?}");
 }
 
 #[test]

@@ -86,8 +86,11 @@ impl<'m, 'a> Stamper<'m, 'a> {
         // a dart lies within the disk radius of a cut edge, so only points
         // within twice the radius of one can clash with it: those whose
         // spacing of two radii (level LOD_LEVELS - 3) reaches past it; the
-        // grid holds only those (and the darts), in a table sized for them
-        let close = |c: &Candidate| c.near_levels as usize >= LOD_LEVELS - 2;
+        // grid holds only those (and the darts), in a table sized for them.
+        // A dart anywhere on a face the edge of buried skin crosses may
+        // clash with any point: on such a mesh the grid holds them all.
+        let anywhere = self.shells.has_burial_edges();
+        let close = |c: &Candidate| anywhere || c.near_levels as usize >= LOD_LEVELS - 2;
         let in_grid = cands[..kept].iter().filter(|c| close(c)).count();
         let buckets = HashGrid::buckets_for(2 * in_grid + 1).min(scratch.heads.len());
         let mut grid = HashGrid::new(
