@@ -86,22 +86,33 @@ fn the_stamp_keeps_its_spacing_across_shells_and_skips_buried_skin() {
 /// empty space (buried skin left out), the spacing, and the 50% and 25%
 /// rank prefixes, in units of r_hex.
 fn meets_the_quality_targets(m: &pelage_tests::creature::CreatureMesh, shells: &[u32]) {
+    with_unburied_skin(m, shells, |mesh, skin| {
+        // 10K takes its ranks from sample elimination, 100K from the tile
+        for count in [10_000, 100_000] {
+            let roots = stamp_roots(mesh, count, 1);
+            let e = empty_space(skin, &roots, 32, 7);
+            assert!(e.p999 <= 0.85 && e.max <= 1.1, "{count}: {e:?}");
+            let n = neighbours(skin, &roots, 0.0);
+            assert!(n.min >= 0.70 && n.mean >= 0.78, "{count}: {n:?}");
+            for fraction in [0.5, 0.25] {
+                let p = prefix(skin, &roots, fraction);
+                assert!(p.cv <= 0.12 && p.min >= 0.5, "{count}, {fraction}: {p:?}");
+            }
+        }
+    });
+}
+
+/// Runs `f` with `m`'s mesh and its skin with `shells`, buried skin left
+/// out.
+fn with_unburied_skin<R>(
+    m: &pelage_tests::creature::CreatureMesh,
+    shells: &[u32],
+    f: impl FnOnce(pelage_core::Mesh, &Skin) -> R,
+) -> R {
     let mesh = mesh_view(m);
     let mut memory = vec![0u8; Body::required_bytes(&mesh).unwrap()];
     let body = Body::new(&mesh, &mut Arena::new(&mut memory)).unwrap();
-    let skin = Skin::unburied(mesh, shells, |_| true, &body);
-    // 10K takes its ranks from sample elimination, 100K from the tile
-    for count in [10_000, 100_000] {
-        let roots = stamp_roots(mesh, count, 1);
-        let e = empty_space(&skin, &roots, 32, 7);
-        assert!(e.p999 <= 0.85 && e.max <= 1.1, "{count}: {e:?}");
-        let n = neighbours(&skin, &roots, 0.0);
-        assert!(n.min >= 0.70 && n.mean >= 0.78, "{count}: {n:?}");
-        for fraction in [0.5, 0.25] {
-            let p = prefix(&skin, &roots, fraction);
-            assert!(p.cv <= 0.12 && p.min >= 0.5, "{count}, {fraction}: {p:?}");
-        }
-    }
+    f(mesh, &Skin::unburied(mesh, shells, |_| true, &body))
 }
 
 #[test]
@@ -119,18 +130,15 @@ fn the_stamp_leaves_no_wide_hole_and_its_prefixes_are_even() {
 #[test]
 fn a_million_roots_leave_no_wide_hole_beside_buried_skin() {
     let (head, parts) = head_with_parts();
-    let mesh = mesh_view(&head);
-    let shells = parts.shells();
-    let mut memory = vec![0u8; Body::required_bytes(&mesh).unwrap()];
-    let body = Body::new(&mesh, &mut Arena::new(&mut memory)).unwrap();
-    let skin = Skin::unburied(mesh, &shells, |_| true, &body);
-    let roots = stamp_roots(mesh, 1_000_000, 1);
-    let e = empty_space(&skin, &roots, 8, 7);
-    assert!(e.p999 <= 0.85 && e.max <= 1.1, "{e:?}");
-    // the darts there are spaced from every point, not only those near a
-    // cut edge
-    let n = neighbours(&skin, &roots, 0.0);
-    assert!(n.min >= 0.70 && n.mean >= 0.78, "{n:?}");
+    with_unburied_skin(&head, &parts.shells(), |mesh, skin| {
+        let roots = stamp_roots(mesh, 1_000_000, 1);
+        let e = empty_space(skin, &roots, 8, 7);
+        assert!(e.p999 <= 0.85 && e.max <= 1.1, "{e:?}");
+        // the darts there are spaced from every point, not only those near
+        // a cut edge
+        let n = neighbours(skin, &roots, 0.0);
+        assert!(n.min >= 0.70 && n.mean >= 0.78, "{n:?}");
+    });
 }
 
 #[test]

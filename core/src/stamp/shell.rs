@@ -49,8 +49,6 @@ pub(super) struct Shells<'a> {
     flags: &'a [u8],
     /// The body, when some skin may be buried (several shells, or holes).
     body: Option<Body<'a>>,
-    /// Whether some face has [`BURIAL_EDGE`].
-    burial_edges: bool,
 }
 
 /// How far past its disk radius a face looks for other shells: the radius
@@ -131,7 +129,6 @@ impl<'a> Shells<'a> {
             return Ok(Shells {
                 flags: near,
                 body: None,
-                burial_edges: false,
             });
         }
         let body = Body::build(&BodyPlan::of(mesh, &rim)?, mesh, &rim, arena)?;
@@ -160,7 +157,6 @@ impl<'a> Shells<'a> {
         // face: only where the fill looks depends on it, and each dart is
         // tested on its own)
         decided.fill(UNDECIDED);
-        let mut burial_edges = false;
         for (f, corners) in mesh.triangles.iter().enumerate() {
             if near[f] & (NEAR_OTHER | NEAR_CAP) == 0 || reach(f) <= 0.0 {
                 continue;
@@ -178,13 +174,11 @@ impl<'a> Shells<'a> {
             }
             if seen == 3 {
                 near[f] |= BURIAL_EDGE;
-                burial_edges = true;
             }
         }
         Ok(Shells {
             flags: near,
             body: Some(body),
-            burial_edges,
         })
     }
 
@@ -192,7 +186,7 @@ impl<'a> Shells<'a> {
     /// [`burial_edge`](Self::burial_edge)).
     #[inline]
     pub(super) fn has_burial_edges(&self) -> bool {
-        self.burial_edges
+        self.flags.iter().any(|&f| f & BURIAL_EDGE != 0)
     }
 
     /// Whether the edge of buried skin crosses face `f` (a face another
