@@ -159,8 +159,6 @@ pub(crate) fn strand_n<const N: usize>(
     // x lanes, then y, then z, as a prepared guide stores its points: the
     // weighted sum is one flat loop over both
     let local = &mut lanes.local[..3 * n];
-    // the tip is summed again in scalars, in the same order (so to the same
-    // bits): read back from the vector sums, it would wait for their stores
     let tip = if bind.count == 0 {
         local[..2 * n].fill(0.0);
         for (z, tj) in local[2 * n..].iter_mut().zip(t) {
@@ -169,14 +167,7 @@ pub(crate) fn strand_n<const N: usize>(
         Vec3::new(0.0, 0.0, local[3 * n - 1])
     } else {
         let guide = |k: usize| &guides.local(bind.guides[k] as usize)[..3 * n];
-        let mut sum = Vec3::ZERO;
-        for k in 0..bind.count as usize {
-            let (g, w) = (guide(k), bind.weights[k]);
-            let tip = Vec3::new(g[n - 1], g[2 * n - 1], g[3 * n - 1]) * w;
-            sum = if k == 0 { tip } else { sum + tip };
-        }
-        weigh_guides::<N>(guide, &bind.weights[..bind.count as usize], local);
-        sum
+        weigh_guides::<N>(guide, &bind.weights[..bind.count as usize], local)
     };
     let (ax, rest) = local.split_at_mut(n);
     let (ay, az) = rest.split_at_mut(n);
@@ -239,7 +230,9 @@ pub(crate) fn strand_n<const N: usize>(
 }
 
 /// `out = sum over k of guide(k) * weights[k]` (at least one weight),
-/// summed in guide order, so to the same bits on either path.
+/// summed in guide order, so to the same bits on either path; returns the
+/// sum's last point (the tip), taken from the sums where they are still
+/// in registers.
 ///
 /// For the point counts of known length the sums stay in registers over
 /// the guides (8, 16 or 32 points take 3, 6 or 12 AVX registers): a pass per
@@ -250,39 +243,58 @@ fn weigh_guides<'g, const N: usize>(
     guide: impl Fn(usize) -> &'g [f32],
     weights: &[f32],
     out: &mut [f32],
-) {
-    const LANE: usize = 8;
-    const ACCUMULATORS: usize = 12;
-    let (first, w) = (guide(0), weights[0]);
-    if N != 0 && (3 * N) % LANE == 0 && 3 * N <= LANE * ACCUMULATORS {
-        let chunks = 3 * N / LANE;
-        let mut acc = [[0.0f32; LANE]; ACCUMULATORS];
-        for (c, a) in acc[..chunks].iter_mut().enumerate() {
-            for (l, x) in a.iter_mut().enumerate() {
-                *x = first[c * LANE + l] * w;
+) -> Vec3 {
+    match N {
+        8 => weigh_lanes::<3>(guide, weights, out),
+        16 => weigh_lanes::<6>(guide, weights, out),
+        32 => weigh_lanes::<12>(guide, weights, out),
+        _ => {
+            let w = weights[0];
+            for (a, g) in out.iter_mut().zip(guide(0)) {
+                *a = g * w;
             }
-        }
-        for (k, &w) in weights.iter().enumerate().skip(1) {
-            let g = guide(k);
-            for (c, a) in acc[..chunks].iter_mut().enumerate() {
-                for (l, x) in a.iter_mut().enumerate() {
-                    *x += g[c * LANE + l] * w;
+            for (k, &w) in weights.iter().enumerate().skip(1) {
+                for (a, g) in out.iter_mut().zip(guide(k)) {
+                    *a += g * w;
                 }
             }
+            let n = out.len() / 3;
+            Vec3::new(out[n - 1], out[2 * n - 1], out[3 * n - 1])
         }
-        for (o, a) in out.chunks_exact_mut(LANE).zip(&acc[..chunks]) {
-            o.copy_from_slice(a);
-        }
-    } else {
-        for (a, g) in out.iter_mut().zip(first) {
-            *a = g * w;
-        }
-        for (k, &w) in weights.iter().enumerate().skip(1) {
-            for (a, g) in out.iter_mut().zip(guide(k)) {
-                *a += g * w;
+    }
+}
+
+/// Floats per [`weigh_lanes`] accumulator: one AVX register.
+const LANE: usize = 8;
+
+/// [`weigh_guides`] for `C` whole lanes: each accumulator a fixed-size
+/// array, so that each becomes one register.
+#[inline(always)]
+fn weigh_lanes<'g, const C: usize>(
+    guide: impl Fn(usize) -> &'g [f32],
+    weights: &[f32],
+    out: &mut [f32],
+) -> Vec3 {
+    let lane = |g: &'g [f32], c: usize| -> &'g [f32; LANE] {
+        g[c * LANE..(c + 1) * LANE].try_into().unwrap()
+    };
+    let (first, w) = (guide(0), weights[0]);
+    let mut acc: [[f32; LANE]; C] = core::array::from_fn(|c| lane(first, c).map(|x| x * w));
+    for (k, &w) in weights.iter().enumerate().skip(1) {
+        let g = guide(k);
+        for (c, a) in acc.iter_mut().enumerate() {
+            let g = lane(g, c);
+            for l in 0..LANE {
+                a[l] += g[l] * w;
             }
         }
     }
+    for (o, a) in out.chunks_exact_mut(LANE).zip(&acc) {
+        o.copy_from_slice(a);
+    }
+    // x, y and z take a third of the lanes each
+    let last = |third: usize| acc[third * C / 3 - 1][LANE - 1];
+    Vec3::new(last(1), last(2), last(3))
 }
 
 /// Stand-in clump centre for a strand without one (its pull is 0).

@@ -169,7 +169,8 @@ impl FaceBasis {
 /// root, each chain stalls the next; done lane by lane over the block, the
 /// chains of different roots overlap and the divisions vectorize.
 /// `basis` caches the last face's basis across calls (roots come in face
-/// order).
+/// order). Inlined whole, so that the AVX2 expansion compiles it for AVX2.
+#[inline(always)]
 pub(crate) fn frames(
     mesh: &Mesh,
     tangents: &[[f32; 3]],
