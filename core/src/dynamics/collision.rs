@@ -129,8 +129,9 @@ pub(crate) struct Near<'c, 'r> {
 }
 
 /// Most shapes of each kind kept per strand; when more of a kind are
-/// near, the strand is tested against every shape of that kind.
-const MAX_NEAR: usize = 64;
+/// near, the strand is tested against every shape of that kind. Few: the
+/// lists are made (and zeroed) for every strand.
+const MAX_NEAR: usize = 16;
 
 impl<'c, 'r> Near<'c, 'r> {
     pub(crate) fn new(all: &'c Colliders<'r>, root: Vec3, reach: f32) -> Self {
@@ -154,8 +155,16 @@ impl<'c, 'r> Near<'c, 'r> {
                 keep(&mut near.spheres, &mut near.counts[0], i);
             }
         }
+        // outside a capsule's axis box widened by `within` and more than
+        // the rounding of the box's sides near the root, the root is
+        // farther than that from the axis: most capsules of a creature are,
+        // and skip the distance's division and root
+        let rounding = root.abs().max_element() * 8.0 * f32::EPSILON;
         for (i, c) in all.capsules.iter().enumerate() {
-            if segment_distance(root, c.a.into(), c.b.into()) < c.radius + reach {
+            let (a, b, within) = (Vec3::from(c.a), Vec3::from(c.b), c.radius + reach);
+            let wide = Vec3::splat(within * (1.0 + 1e-4) + rounding);
+            let boxed = root.cmpge(a.min(b) - wide).all() && root.cmple(a.max(b) + wide).all();
+            if boxed && segment_distance(root, a, b) < within {
                 keep(&mut near.capsules, &mut near.counts[1], i);
             }
         }
