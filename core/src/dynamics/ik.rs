@@ -339,18 +339,22 @@ fn partial_arc(from: V, to: V, amount: f32) -> Q {
     let d = from.dot(to);
     // (|a||b| + a.b, a x b) is the half-angle quaternion scaled by 2 |a||b| cos(angle / 2)
     let opposite = d.cmp_lt(F::splat(-0.9999) * lengths);
-    // opposite: half a turn about an axis across them, made from the unit
-    // `from` (the first of glam's any_orthonormal_pair)
-    let unit = from.scale(F::ONE / from.dot(from).sqrt());
-    let sign = F::ONE.copysign(unit.z);
-    let a = F::splat(-1.0) / (sign + unit.z);
-    let across = V {
-        x: F::ONE + sign * unit.x * unit.x * a,
-        y: sign * unit.x * unit.y * a,
-        z: -(sign * unit.x),
-    };
-    let w = opposite.blend(F::ZERO, lengths + d);
-    let v = from.cross(to).unless(opposite, across);
+    let (mut w, mut v) = (lengths + d, from.cross(to));
+    // rare, and a root and two divisions: made only when a lane needs it
+    if opposite.any() {
+        // opposite: half a turn about an axis across them, made from the
+        // unit `from` (the first of glam's any_orthonormal_pair)
+        let unit = from.scale(F::ONE / from.dot(from).sqrt());
+        let sign = F::ONE.copysign(unit.z);
+        let a = F::splat(-1.0) / (sign + unit.z);
+        let across = V {
+            x: F::ONE + sign * unit.x * unit.x * a,
+            y: sign * unit.x * unit.y * a,
+            z: -(sign * unit.x),
+        };
+        w = opposite.blend(F::ZERO, w);
+        v = v.unless(opposite, across);
+    }
     // the share of the turn: blend with no turn, both at the same scale
     let scale = (w * w + v.dot(v)).sqrt();
     let amount = F::splat(amount);
