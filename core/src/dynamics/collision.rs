@@ -388,3 +388,48 @@ pub enum PushOut {
     /// No tried rotation freed it; it was turned fully toward the normal.
     Stuck,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+        /// The axis box only skips work: the capsules kept near a root are
+        /// exactly those the distance keeps, at any offset from the origin
+        /// (a creature teleported far away, coordinates up to 1e9). Short
+        /// capsules around the root: many boxes leave it out, some barely.
+        #[test]
+        fn near_keeps_exactly_the_capsules_in_reach(
+            offset in prop::sample::select(vec![0.0f32, 1.0, 100.0, -3e4, 1e6, -1e9]),
+            ends in prop::collection::vec(
+                (prop::array::uniform3(-1.0f32..1.0), prop::array::uniform3(-0.2f32..0.2)),
+                1..12,
+            ),
+            radius in 0.0f32..0.3,
+            reach in 0.0f32..0.5,
+        ) {
+            let shift = |p: Vec3| p + Vec3::splat(offset);
+            let capsules: Vec<Capsule> = ends
+                .iter()
+                .map(|&(a, d)| {
+                    let a = Vec3::from(a);
+                    Capsule { a: shift(a).into(), b: shift(a + Vec3::from(d)).into(), radius }
+                })
+                .collect();
+            let colliders = Colliders { capsules: &capsules, ..Colliders::default() };
+            let root = shift(Vec3::ZERO);
+            let near = Near::new(&colliders, root, reach);
+            let want: Vec<usize> = capsules
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| segment_distance(root, c.a.into(), c.b.into()) < c.radius + reach)
+                .map(|(i, _)| i)
+                .collect();
+            let kept: Vec<usize> = near.shapes(1, &near.capsules, capsules.len()).collect();
+            prop_assert_eq!(near.counts[1], want.len());
+            prop_assert_eq!(kept, want);
+        }
+    }
+}
