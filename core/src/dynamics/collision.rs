@@ -15,7 +15,7 @@ use crate::trim::length::{cut, WHOLE};
 use crate::Error;
 use bytemuck::{Pod, Zeroable};
 use core::f32::consts::FRAC_PI_2;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 
 /// A solid sphere.
 #[repr(C)]
@@ -155,16 +155,19 @@ impl<'c, 'r> Near<'c, 'r> {
                 keep(&mut near.spheres, &mut near.counts[0], i);
             }
         }
-        // outside a capsule's axis box widened by `within` and more than
-        // the rounding of the box's sides near the root, the root is
-        // farther than that from the axis: most capsules of a creature are,
-        // and skip the distance's division and root
-        let rounding = root.abs().max_element() * 8.0 * f32::EPSILON;
+        // outside a capsule's axis box widened by `within` and by more
+        // than the rounding of the distance (per axis: a few units in the
+        // last place of the largest coordinate there, a floor where the
+        // squares underflow), the distance could only say farther: most
+        // capsules of a creature are, and skip its division and root
+        let root4 = Vec3A::from(root);
         for (i, c) in all.capsules.iter().enumerate() {
-            let (a, b, within) = (Vec3::from(c.a), Vec3::from(c.b), c.radius + reach);
-            let wide = Vec3::splat(within * (1.0 + 1e-4) + rounding);
-            let boxed = root.cmpge(a.min(b) - wide).all() && root.cmple(a.max(b) + wide).all();
-            if boxed && segment_distance(root, a, b) < within {
+            let (a, b, within) = (Vec3A::from(c.a), Vec3A::from(c.b), c.radius + reach);
+            let (lo, hi) = (a.min(b), a.max(b));
+            let size = lo.abs().max(hi.abs()).max(root4.abs());
+            let wide = Vec3A::splat(within * (1.0 + 1e-4) + 1e-18) + size * (8.0 * f32::EPSILON);
+            let boxed = root4.cmpge(lo - wide).all() && root4.cmple(hi + wide).all();
+            if boxed && segment_distance(root, a.into(), b.into()) < within {
                 keep(&mut near.capsules, &mut near.counts[1], i);
             }
         }
@@ -394,42 +397,75 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// Whether `Near::new` keeps exactly the capsules the distance keeps.
+    fn keeps_what_the_distance_keeps(capsules: &[Capsule], root: Vec3, reach: f32) -> bool {
+        let colliders = Colliders {
+            capsules,
+            ..Colliders::default()
+        };
+        let near = Near::new(&colliders, root, reach);
+        let want: Vec<usize> = (0..capsules.len())
+            .filter(|&i| {
+                let c = &capsules[i];
+                segment_distance(root, c.a.into(), c.b.into()) < c.radius + reach
+            })
+            .collect();
+        let kept: Vec<usize> = near.shapes(1, &near.capsules, capsules.len()).collect();
+        near.counts[1] == want.len() && kept == want
+    }
+
+    #[test]
+    fn rounding_at_a_far_end_or_underflow_drops_no_capsule() {
+        let capsule = |a: [f32; 3], b: [f32; 3], radius| Capsule { a, b, radius };
+        // the distance's closest point rounds at the far end's scale
+        let long = capsule([-1000.0, 0.0, 0.0], [24.0445, 0.0, 0.0], 0.06);
+        assert!(keeps_what_the_distance_keeps(
+            &[long],
+            Vec3::new(24.10455, 0.0, 0.0),
+            0.0
+        ));
+        let longer = capsule([-1e9, 0.0, 0.0], [40.0, 0.0, 0.0], 5.0);
+        assert!(keeps_what_the_distance_keeps(
+            &[longer],
+            Vec3::new(60.0, 0.0, 0.0),
+            0.0
+        ));
+        // the squared distance underflows to 0
+        let tiny = capsule([1e-23, 0.0, 0.0], [1e-23, 0.0, 0.0], 1e-30);
+        assert!(keeps_what_the_distance_keeps(&[tiny], Vec3::ZERO, 0.0));
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(2000))]
         /// The axis box only skips work: the capsules kept near a root are
         /// exactly those the distance keeps, at any offset from the origin
-        /// (a creature teleported far away, coordinates up to 1e9). Short
-        /// capsules around the root: many boxes leave it out, some barely.
+        /// (a creature teleported far away, coordinates up to 1e9), for
+        /// short capsules around the root (many boxes leave it out, some
+        /// barely) and long ones with a far end, and past the kept list's
+        /// length.
         #[test]
         fn near_keeps_exactly_the_capsules_in_reach(
             offset in prop::sample::select(vec![0.0f32, 1.0, 100.0, -3e4, 1e6, -1e9]),
             ends in prop::collection::vec(
-                (prop::array::uniform3(-1.0f32..1.0), prop::array::uniform3(-0.2f32..0.2)),
-                1..12,
+                (
+                    prop::array::uniform3(-1.0f32..1.0),
+                    prop::array::uniform3(-0.2f32..0.2),
+                    prop::sample::select(vec![1.0f32, 1.0, 1e3, 1e6, 1e9]),
+                ),
+                1..40,
             ),
-            radius in 0.0f32..0.3,
-            reach in 0.0f32..0.5,
+            radius in prop_oneof![Just(0.0f32), 0.0f32..0.3],
+            reach in prop_oneof![Just(0.0f32), 0.0f32..0.5],
         ) {
             let shift = |p: Vec3| p + Vec3::splat(offset);
             let capsules: Vec<Capsule> = ends
                 .iter()
-                .map(|&(a, d)| {
+                .map(|&(a, d, far)| {
                     let a = Vec3::from(a);
-                    Capsule { a: shift(a).into(), b: shift(a + Vec3::from(d)).into(), radius }
+                    Capsule { a: shift(a).into(), b: shift(a + Vec3::from(d) * far).into(), radius }
                 })
                 .collect();
-            let colliders = Colliders { capsules: &capsules, ..Colliders::default() };
-            let root = shift(Vec3::ZERO);
-            let near = Near::new(&colliders, root, reach);
-            let want: Vec<usize> = capsules
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| segment_distance(root, c.a.into(), c.b.into()) < c.radius + reach)
-                .map(|(i, _)| i)
-                .collect();
-            let kept: Vec<usize> = near.shapes(1, &near.capsules, capsules.len()).collect();
-            prop_assert_eq!(near.counts[1], want.len());
-            prop_assert_eq!(kept, want);
+            prop_assert!(keeps_what_the_distance_keeps(&capsules, shift(Vec3::ZERO), reach));
         }
     }
 }
