@@ -231,8 +231,8 @@ pub(crate) fn strand_n<const N: usize>(
 
 /// `out = sum over k of guide(k) * weights[k]` (at least one weight),
 /// summed in guide order, so to the same bits on either path; returns the
-/// sum's last point (the tip), taken from the sums where they are still
-/// in registers.
+/// sum's last point (the tip), for the counts of known length taken from
+/// the sums while they are still in registers.
 ///
 /// For the point counts of known length the sums stay in registers over
 /// the guides (8, 16 or 32 points take 3, 6 or 12 AVX registers): a pass per
