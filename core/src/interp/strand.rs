@@ -231,13 +231,12 @@ pub(crate) fn strand_n<const N: usize>(
 
 /// `out = sum over k of guide(k) * weights[k]` (at least one weight),
 /// summed in guide order, so to the same bits on either path; returns the
-/// sum's last point (the tip), for the counts of known length taken from
-/// the sums while they are still in registers.
+/// sum's last point (the tip).
 ///
 /// For the point counts of known length the sums stay in registers over
-/// the guides (8, 16 or 32 points take 3, 6 or 12 AVX registers): a pass per
-/// guide over `out` stored and reloaded every lane per guide, which cost
-/// more than the arithmetic.
+/// the guides (8, 16 or 32 points take 3, 6 or 12 AVX registers) and give
+/// the tip from there: a pass per guide over `out` stored and reloaded
+/// every lane per guide, which cost more than the arithmetic.
 #[inline(always)]
 fn weigh_guides<'g, const N: usize>(
     guide: impl Fn(usize) -> &'g [f32],
