@@ -397,7 +397,9 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// Whether `Near::new` keeps exactly the capsules the distance keeps.
+    /// Whether `Near::new` keeps exactly the capsules the distance keeps:
+    /// the count is theirs, and the shapes to test are they, or every
+    /// capsule when more than `MAX_NEAR` are near.
     fn keeps_what_the_distance_keeps(capsules: &[Capsule], root: Vec3, reach: f32) -> bool {
         let colliders = Colliders {
             capsules,
@@ -410,8 +412,44 @@ mod tests {
                 segment_distance(root, c.a.into(), c.b.into()) < c.radius + reach
             })
             .collect();
-        let kept: Vec<usize> = near.shapes(1, &near.capsules, capsules.len()).collect();
-        near.counts[1] == want.len() && kept == want
+        let tested: Vec<usize> = near.shapes(1, &near.capsules, capsules.len()).collect();
+        let listed = want.len().min(MAX_NEAR);
+        let kept: Vec<usize> = near.capsules[..listed]
+            .iter()
+            .map(|&i| i as usize)
+            .collect();
+        let every: Vec<usize> = (0..capsules.len()).collect();
+        near.counts[1] == want.len()
+            && kept == want[..listed]
+            && tested == if want.len() > MAX_NEAR { every } else { want }
+    }
+
+    #[test]
+    fn more_capsules_near_than_kept_tests_every_capsule() {
+        // CI's proptest case: 17 capsules on the root and one just out of
+        // reach, 1e6 from the origin; all 18 are tested
+        let at = |z: f32| Capsule {
+            a: [1e6, 1e6, 1e6 + z],
+            b: [1e6, 1e6, 1e6 + z],
+            radius: 0.231_246_58,
+        };
+        let mut capsules = vec![at(0.0); MAX_NEAR + 1];
+        capsules.push(at(0.739_996_14));
+        assert!(keeps_what_the_distance_keeps(
+            &capsules,
+            Vec3::splat(1e6),
+            0.477_064_3
+        ));
+        let near_all = Colliders {
+            capsules: &capsules,
+            ..Colliders::default()
+        };
+        let near = Near::new(&near_all, Vec3::splat(1e6), 0.477_064_3);
+        assert_eq!(near.counts[1], MAX_NEAR + 1);
+        assert_eq!(
+            near.shapes(1, &near.capsules, capsules.len()).count(),
+            capsules.len()
+        );
     }
 
     #[test]
