@@ -7,7 +7,7 @@
 //! deforming body itself (its inside test), and a host's signed distance
 //! field (a level set, a cloth's distance: anything that answers distances).
 
-use crate::interp::lift::{first_clear, lift, toward_normal, LIFT_STEP, LIFT_STEPS};
+use crate::interp::lift::{first_clear, lift, none_inside, toward_normal, LIFT_STEP, LIFT_STEPS};
 use crate::surface::body::Body;
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
@@ -250,9 +250,10 @@ impl<'c, 'r> Near<'c, 'r> {
         out
     }
 
-    /// True when no point of `points` is inside a shape.
-    fn clear(&self, points: &[Vec3]) -> bool {
-        !points.iter().any(|&p| self.in_shape(p)) && self.field_clear(points)
+    /// True when no point of `points` is inside a shape; `hint` as
+    /// [`none_inside`] takes it.
+    fn clear(&self, points: &[Vec3], hint: &mut usize) -> bool {
+        none_inside(points.len(), hint, |j| self.in_shape(points[j])) && self.field_clear(points)
     }
 }
 
@@ -300,7 +301,8 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
     for (w, l) in world.iter_mut().zip(&local[..n]) {
         *w = frame.to_world(*l);
     }
-    if near.clear(&world[1..n]) {
+    let mut hint = 0;
+    if near.clear(&world[1..n], &mut hint) {
         return PushOut::Clear;
     }
     let mut x = [0.0f32; MAX_POINTS];
@@ -322,7 +324,7 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
         for (p, l) in world.iter_mut().zip(&trial[..n]) {
             *p = frame.to_world(*l);
         }
-        near.clear(&world[1..n])
+        near.clear(&world[1..n], &mut hint)
     };
     let (toward, to_normal) = toward_normal(local[n - 1]);
     let lifted = first_clear(to_normal, 1, |a| clear(toward * a)).map(|a| toward * a);

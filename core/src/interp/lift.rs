@@ -64,3 +64,24 @@ pub(crate) fn first_clear(
         a
     })
 }
+
+/// True when none of the points `0..count` is `inside`. The point `hint`
+/// is tested first, and the point found inside (if any) becomes the hint:
+/// a tried rotation that does not free a strand mostly leaves the same
+/// point inside, and one test then answers. The answer does not depend on
+/// the order.
+pub(crate) fn none_inside(
+    count: usize,
+    hint: &mut usize,
+    mut inside: impl FnMut(usize) -> bool,
+) -> bool {
+    let first = (*hint).min(count.saturating_sub(1));
+    let found = core::iter::once(first)
+        .filter(|&j| j < count)
+        .chain((0..count).filter(|&j| j != first))
+        .find(|&j| inside(j));
+    if let Some(j) = found {
+        *hint = j;
+    }
+    found.is_none()
+}

@@ -15,7 +15,7 @@
 
 use crate::interp::bind::StrandBinding;
 use crate::interp::groom::StrandGroom;
-use crate::interp::lift::{first_clear, toward_normal, LIFT_STEP, LIFT_STEPS};
+use crate::interp::lift::{first_clear, none_inside, toward_normal, LIFT_STEP, LIFT_STEPS};
 use crate::interp::posed::PosedFrame;
 use crate::interp::strand::{strand, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
 use crate::interp::strands::{check_strands, Strands};
@@ -120,6 +120,7 @@ pub fn settle_checked(
         let frame = guides.root_frame(root.face as usize, root.u, root.v);
         // the root itself lies on the surface; every later point must be
         // outside. Gives that, and the tip.
+        let mut hint = 0;
         let mut evaluate = |g: &StrandGroom| {
             strand(
                 &frame,
@@ -130,9 +131,10 @@ pub fn settle_checked(
                 &mut lanes,
                 &mut points[..n],
             );
-            let clear = points[1..n]
-                .iter()
-                .all(|p| !body.contains(Vec3::new(p[0], p[1], p[2])));
+            let later = &points[1..n];
+            let clear = none_inside(later.len(), &mut hint, |j| {
+                body.contains(Vec3::new(later[j][0], later[j][1], later[j][2]))
+            });
             (
                 clear,
                 Vec3::new(points[n - 1][0], points[n - 1][1], points[n - 1][2]),
