@@ -85,3 +85,42 @@ pub(crate) fn none_inside(
     }
     found.is_none()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn none_inside_answers_as_a_scan_and_keeps_the_point_it_found() {
+        // every set of up to 6 points inside, from every hint (past the
+        // end included)
+        for count in 0..=6usize {
+            for set in 0u32..1 << count {
+                for start in 0..=count + 1 {
+                    let is_inside = |j: usize| set & (1 << j) != 0;
+                    let (mut hint, mut tests) = (start, 0);
+                    let clear = none_inside(count, &mut hint, |j| {
+                        tests += 1;
+                        is_inside(j)
+                    });
+                    assert_eq!(clear, set == 0);
+                    assert!(tests <= count, "a point tested twice");
+                    if clear {
+                        assert_eq!((hint, tests), (start, count));
+                    } else {
+                        assert!(is_inside(hint));
+                    }
+                    // asked again, the kept point answers in one test
+                    if !clear {
+                        let mut again = 0;
+                        assert!(!none_inside(count, &mut hint, |j| {
+                            again += 1;
+                            is_inside(j)
+                        }));
+                        assert_eq!(again, 1);
+                    }
+                }
+            }
+        }
+    }
+}
