@@ -4,7 +4,7 @@ use super::eliminate::ELIMINATION_LIMIT;
 use super::near::Near;
 use super::{face_frame, Candidate, Scratch, Stamper, GRID_CELL};
 use crate::rng::{self, Purpose};
-use crate::stamp::tile::{step_spacing, LEVEL_STEPS, LOD_LEVELS};
+use crate::stamp::tile::{step_spacing, LEVEL_STEPS, LOD_LEVELS, TILE_SIDE};
 use crate::surface::grid::HashGrid;
 use crate::{Error, Root};
 use glam::Vec3;
@@ -154,10 +154,16 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let taking = &mut *scratch.next;
         let mut start = [0usize; SUB_LEVELS + 1];
         let mut m = 0;
+        // the steps whose spacing is wider than the tile: a triangle wider
+        // than the tile holds copies of one such point, one tile apart,
+        // which only a test within the triangle finds
+        let tile_square = (TILE_SIDE * TILE_SIDE) as f32;
+        let wider = |t: usize| squares[t] > tile_square;
         for (j, (c, l)) in cands.iter().zip(level.iter_mut()).enumerate() {
             *l = sub_level(c);
             // branch-free: which candidates take part is close to random
-            let takes = (reaches(c, c.level as usize) && (*l as usize) < finest) as usize;
+            let near = reaches(c, c.level as usize) | wider(*l as usize);
+            let takes = (near && (*l as usize) < finest) as usize;
             start[*l as usize + 1] += takes;
             taking[m] = j as u32;
             m += takes;
@@ -216,6 +222,9 @@ impl<'m, 'a> Stamper<'m, 'a> {
                             }
                         }
                     });
+                    if wider(t) {
+                        self.part_copies(group, &squares, level);
+                    }
                     for (i, q) in (first..).zip(group) {
                         grid.insert(i as u32, Vec3::from(q.position));
                     }
@@ -225,6 +234,26 @@ impl<'m, 'a> Stamper<'m, 'a> {
             done((k + 1) as f32 / LOD_LEVELS as f32)?;
         }
         Ok(())
+    }
+
+    /// Raises each point of `group` (one triangle's records of a step
+    /// wider than the tile) that lies closer than its sub-level's spacing
+    /// (`squares`, squared) to an earlier one of the group, to the first
+    /// sub-level whose spacing their distance respects, as
+    /// [`assign_levels`](Self::assign_levels) does across triangles.
+    fn part_copies(&self, group: &[Near], squares: &[f32; SUB_LEVELS], level: &mut [u8]) {
+        let scale = self.faces[group[0].face as usize].scale / self.radius;
+        let finest = SUB_LEVELS - 1;
+        for (k, q) in group.iter().enumerate() {
+            let at = Vec3::from(q.position);
+            for p in &group[..k] {
+                let d = Vec3::from(p.position).distance_squared(at) * (scale * scale);
+                let l = &mut level[q.index as usize];
+                while (*l as usize) < finest && d < squares[*l as usize] {
+                    *l += 1;
+                }
+            }
+        }
     }
 }
 

@@ -888,6 +888,33 @@ mod tests {
         });
     }
 
+    /// A triangle wider than the tile holds copies of the tile's coarsest
+    /// points one tile apart, closer than their steps' spacing (wider than
+    /// the tile): the later copy takes a finer level. (A property test
+    /// found it on a height field of two cells.)
+    #[test]
+    fn copies_of_the_tile_on_one_wide_triangle_part() {
+        let m = graded_plane(1, 1.0);
+        for seed in [11, 12, 13] {
+            let p = StampParams { seed, ..params(6000) };
+            with_candidates(m.mesh(), &p, |stamper, scratch, mut cands| {
+                let side = TILE_SIDE as f32 * stamper.radius;
+                assert!(side < 0.5, "the triangles are not wider than the tile: {side}");
+                let kept = stamper.prune(&mut cands, scratch).unwrap();
+                let cands = &cands[..kept];
+                stamper
+                    .assign_levels(cands, scratch, &mut |_| Ok(()))
+                    .unwrap();
+                let wide = |c: &Candidate| {
+                    let t = c.level as usize * LEVEL_STEPS + c.step as usize;
+                    tile::step_spacing(t / LEVEL_STEPS, t % LEVEL_STEPS) > TILE_SIDE as f32
+                };
+                assert!(cands.iter().filter(|c| wide(c)).count() > 2);
+                check_lod_spacing(stamper, cands, &scratch.level[..kept]);
+            });
+        }
+    }
+
     /// Checks the LOD spacing of every pair of kept candidates (see above):
     /// the spacing of the finer of their steps; returns how many candidates
     /// left their tile step.
