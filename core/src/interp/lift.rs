@@ -66,7 +66,7 @@ pub(crate) fn first_clear(
 }
 
 /// True when none of the points `0..count` is `inside`. The point `hint`
-/// is tested first, and the point found inside (if any) becomes the hint:
+/// (the last, when `hint` is past it) is tested first, and the point found inside (if any) becomes the hint:
 /// a tried rotation that does not free a strand mostly leaves the same
 /// point inside, and one test then answers. The answer does not depend on
 /// the order.
