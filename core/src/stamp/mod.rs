@@ -896,10 +896,16 @@ mod tests {
     fn copies_of_the_tile_on_one_wide_triangle_part() {
         let m = graded_plane(1, 1.0);
         for seed in [11, 12, 13] {
-            let p = StampParams { seed, ..params(6000) };
+            let p = StampParams {
+                seed,
+                ..params(6000)
+            };
             with_candidates(m.mesh(), &p, |stamper, scratch, mut cands| {
                 let side = TILE_SIDE as f32 * stamper.radius;
-                assert!(side < 0.5, "the triangles are not wider than the tile: {side}");
+                assert!(
+                    side < 0.5,
+                    "the triangles are not wider than the tile: {side}"
+                );
                 let kept = stamper.prune(&mut cands, scratch).unwrap();
                 let cands = &cands[..kept];
                 stamper
