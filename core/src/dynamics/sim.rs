@@ -1212,7 +1212,7 @@ mod tests {
     impl SignedDistance for Ball {
         fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
             for (p, d) in points.iter().zip(out) {
-                *d = Vec3::from(*p).distance(Vec3::new(0.0, 1.3, 0.0)) - 0.2;
+                *d = Vec3::from(*p).distance(Vec3::new(0.0, 1.38, 0.0)) - 0.3;
             }
         }
     }
@@ -1226,7 +1226,7 @@ mod tests {
         // guides' way (they are 0.3 long)
         let spheres = [Sphere {
             centre: [1.35, 0.0, 0.0],
-            radius: 0.2,
+            radius: 0.3,
         }];
         let capsules = [Capsule {
             a: [0.0, 0.0, 1.25],
@@ -1243,20 +1243,23 @@ mod tests {
             p: s.rest
                 .p
                 .iter()
-                .map(|&p| (Vec3::from(p) * 0.15 + Vec3::new(-0.8, 0.0, 0.8)).into())
+                .map(|&p| (Vec3::from(p) * 0.3 + Vec3::new(-0.955, 0.0, 0.955)).into())
                 .collect(),
             ..s.rest.clone()
         };
         let ear_mesh = ear.mesh();
         let mut body_buf = vec![0u8; Body::required_bytes(&ear_mesh).unwrap()];
         let body = Body::new(&ear_mesh, &mut Arena::new(&mut body_buf)).unwrap();
-        let inside = |p: Vec3| {
-            p.distance(Vec3::from(spheres[0].centre)) < 0.2
-                || Vec3::new(p.x, p.y - p.y.clamp(0.0, 0.5), p.z - 1.25).length() < 0.12
-                || p.y < -1.1
-                || body.contains(p)
-                || p.distance(Vec3::new(0.0, 1.3, 0.0)) < 0.2
+        // each collider by itself: the sphere, the capsule, the plane, the
+        // body and the field
+        let in_one = |c: usize, p: Vec3| match c {
+            0 => p.distance(Vec3::from(spheres[0].centre)) < 0.3,
+            1 => Vec3::new(p.x, p.y - p.y.clamp(0.0, 0.5), p.z - 1.25).length() < 0.12,
+            2 => p.y < -1.1,
+            3 => body.contains(p),
+            _ => p.distance(Vec3::new(0.0, 1.38, 0.0)) < 0.3,
         };
+        let inside = |p: Vec3| (0..5).any(|c| in_one(c, p));
         let colliders = Colliders {
             spheres: &spheres,
             capsules: &capsules,
@@ -1270,10 +1273,18 @@ mod tests {
                 .filter(|&g| (1..JOINTS).any(|k| inside(sim.posed(g, k))))
                 .count()
         };
-        let before = crossing(&sim);
+        // every collider must hold guides (here 6, 4, 26, 5 and 4), or a
+        // push-out that ignored one would pass
+        let held: Vec<usize> = (0..5)
+            .map(|c| {
+                (0..sim.len())
+                    .filter(|&g| (1..JOINTS).any(|k| in_one(c, sim.posed(g, k))))
+                    .count()
+            })
+            .collect();
         assert!(
-            before > 20,
-            "the scene must put guides in the colliders ({before})"
+            held.iter().all(|&n| n >= 3),
+            "the scene must put guides in every collider: {held:?}"
         );
         step(&mut sim, &s.rest, &colliders, 1.0 / 24.0);
         assert_sound(&sim, "collided");
