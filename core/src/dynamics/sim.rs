@@ -129,9 +129,11 @@ const POSED: usize = 28;
 /// leaves the float range for ordinary motion.
 pub const MIN_DT: f32 = 1e-5;
 
-/// Largest magnitude of a restored state value: a root frame's origin is
-/// within 1e9, the swing within twice a guide's reach.
-const MAX_STATE: f32 = 1e10;
+/// Largest magnitude of a restored state value, above any a step stores:
+/// positions stay within about 1e11 (a root within 1e9, the swing within
+/// twice a reach of at most ~5e10), speeds within about 1e17 (a reach over
+/// the shortest step, times the stiffest spring).
+const MAX_STATE: f32 = 1e18;
 
 /// Save-file magic, "PLGS" (pelage guide state).
 const MAGIC: [u8; 4] = *b"PLGS";
@@ -793,9 +795,13 @@ impl StepContext<'_> {
         if let (Some(curves), true) = (self.external, share > 0.0) {
             blend(&frame, curves, g, share, &mut posed[..m]);
         }
-        if push_out(self.colliders, &frame, &mut posed[..m], reach) == PushOut::Stuck {
-            // bent into a place no rotation leaves (a crease, a landing):
-            // the groomed shape, pushed out in turn
+        // the IK's products overflow for guides and moves near the
+        // coordinate limit (lengths past ~1e9 each way): such a guide takes
+        // its groomed shape rather than a non-finite point
+        let lost = !posed[..m].iter().all(|p| p.is_finite());
+        if lost || push_out(self.colliders, &frame, &mut posed[..m], reach) == PushOut::Stuck {
+            // bent into a place no rotation leaves (a crease, a landing), or
+            // lost: the groomed shape, pushed out in turn
             let mut rest = [Vec3::ZERO; MAX_JOINTS];
             for (k, p) in rest[..j].iter_mut().enumerate() {
                 *p = rest_joint(self.rest, j, g, k);
@@ -1131,6 +1137,61 @@ mod tests {
             step(&mut resumed, m, &Colliders::default(), dt);
             assert!(posed(&resumed) == reference[k], "resumed step {k}");
         }
+    }
+
+    /// A guide as long as the coordinate limit allows, on a triangle that
+    /// jumps across it: the IK's products overflow, and the guide takes
+    /// its groomed shape; the state the step saves restores.
+    #[test]
+    fn guides_at_the_coordinate_limit_stay_finite_and_restore() {
+        let triangle = |off: f32| TestMesh {
+            p: vec![
+                [off, off, off],
+                [off + 1000.0, off, off],
+                [off, off + 1000.0, off],
+            ],
+            t: vec![[0, 1, 2]],
+            uv: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            n: vec![],
+        };
+        let rest = triangle(0.0);
+        let roots = vec![Root {
+            face: 0,
+            u: 0.1,
+            v: 0.1,
+            id: 0,
+            rank: 0,
+        }];
+        let points = vec![[0.1f32, 0.1, 0.0], [1e9, 1e9, 1e9], [-1e9, -1e9, -1e9]];
+        let guides = Guides {
+            roots: &roots,
+            points: Strided::from_slice(&points),
+            layout: CvLayout::Fixed(3),
+        };
+        let p = SimParams {
+            joints: 3,
+            points: 3,
+            frequency: ScalarMap::Constant(0.0),
+            decay: ScalarMap::Constant(0.0),
+            ..SimParams::default()
+        };
+        let mut layout = ArenaLayout::new();
+        Sim::layout(&mut layout, 3, 1, &p);
+        let mut buf = vec![0u8; layout.bytes()];
+        let mut sim = Sim::new(rest.mesh(), &guides, &p, &mut Arena::new(&mut buf)).unwrap();
+        for off in [-9e8f32, 9e8] {
+            step(&mut sim, &triangle(off), &Colliders::default(), 1.0 / 24.0);
+            for k in 0..3 {
+                assert!(
+                    sim.posed(0, k).is_finite(),
+                    "point {k}: {}",
+                    sim.posed(0, k)
+                );
+            }
+        }
+        let mut state = vec![0u8; sim.state_bytes()];
+        sim.save(&mut state).unwrap();
+        sim.restore(&state).unwrap();
     }
 
     #[test]
