@@ -1114,7 +1114,8 @@ struct PelageSimParams pelage_sim_params_defaults(void);
 // `rest_mesh` with `params`.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also a guide count of 0
-// or of u32::MAX and above), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC.
+// or of u32::MAX and above), MISALIGNED, PANIC. The mesh's and the maps'
+// values are not read: pelage_sim_new checks them.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_sim_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, const struct PelageSimParams *params, size_t *memory_bytes);
@@ -1151,12 +1152,15 @@ void pelage_sim_free(PelageSim sim);
 // `external_points` (NULL: none) holds another simulator's curves, float3
 // world points `external_stride` bytes apart, points_per_guide per guide:
 // the guides `params.external` selects take their shape from them
-// (blended, lengths kept). Everything is checked first; on failure the
-// state is unchanged.
+// (blended, lengths kept). Everything is checked first; when a check
+// fails the state is unchanged. PANIC (a worker thread that could not
+// start, or a panic) can leave the step half made: reset or restore the
+// simulation before stepping again.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
-// another mesh), MISALIGNED, CAPACITY_EXCEEDED (the body grid's memory),
-// PANIC.
+// another mesh, the body grid too large, the external curves' count or
+// stride, an external point not finite or beyond 1e9 where
+// `params.external` is above 0), MISALIGNED, PANIC.
 //
 // Thread safety: no other call may use `sim` during this one; the frame
 // may be read by other calls meanwhile.
