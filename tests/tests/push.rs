@@ -99,6 +99,7 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
         push_mask: mask.as_ptr(),
     };
     let (mut inside_before, mut inside_after, mut rooted_inside) = (0usize, 0usize, 0usize);
+    let mut clear_kept = 0usize;
     for f in 0..FRAMES {
         let body = pose(&rest, f);
         let caps = capsules(&rest, &fur.guide_roots, f);
@@ -171,18 +172,25 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
                     rooted_inside += 1;
                     continue;
                 }
-                inside_before += count(&plain, i);
+                let before = count(&plain, i);
+                inside_before += before;
                 inside_after += count(&pushed, i);
                 assert_eq!(a[0], b[0], "frame {f}: hair {i} keeps its root");
+                if before == 0 {
+                    // a masked hair already clear comes back as it was
+                    assert!(a == b, "frame {f}: clear hair {i} was moved");
+                    clear_kept += 1;
+                }
             }
         }
     }
     println!(
         "{masked} of {n} hairs masked; points inside a capsule or the body over {FRAMES} frames: \
          {inside_before} expanded, {inside_after} pushed out ({rooted_inside} hair-frames rooted \
-         inside a capsule left out)"
+         inside a capsule left out; {clear_kept} masked hair-frames clear and unchanged)"
     );
     assert!(inside_before > 0, "interpolation leaves hairs inside");
+    assert!(clear_kept > 0, "no masked hair was clear: nothing checked");
     assert_eq!(inside_after, 0, "no masked hair point is left inside");
     pelage_groom_free(groom);
 }
