@@ -1067,6 +1067,40 @@ mod tests {
         assert!(neutral_distance(&sim, &far) < 1e-4);
     }
 
+    /// A swinging shot that teleports (turned and moved far) ends as the
+    /// same shot played whole in the far place: the swing rides along
+    /// (neither dropped nor whipped). The shot moves at a constant speed,
+    /// which the teleported step carries on.
+    #[test]
+    fn a_teleport_carries_the_swing_as_the_shot_played_in_the_far_place() {
+        let s = Scene::new(40);
+        let pose = |k: usize| {
+            moved(
+                &s.rest,
+                Quat::IDENTITY,
+                Vec3::new(0.06, 0.0, 0.0) * k as f32,
+            )
+        };
+        let far = |m: &TestMesh| moved(m, Quat::from_rotation_x(0.7), Vec3::new(0.0, 100.0, 0.0));
+        let (dt, none) = (1.0 / 24.0, Colliders::default());
+        let (mut buf_a, mut buf_b) = (vec![], vec![]);
+        let mut here = s.sim(&params(), &mut buf_a);
+        let mut there = s.sim(&params(), &mut buf_b);
+        for k in 0..4 {
+            step(&mut here, &pose(k), &none, dt);
+            step(&mut there, &far(&pose(k)), &none, dt);
+        }
+        let swing = neutral_distance(&here, &pose(3));
+        assert!(swing > 0.01, "the tips must swing: {swing}");
+        step(&mut here, &far(&pose(4)), &none, dt);
+        step(&mut there, &far(&pose(4)), &none, dt);
+        let apart = (0..here.len())
+            .flat_map(|g| (0..JOINTS).map(move |k| (g, k)))
+            .map(|(g, k)| here.posed_local(g, k).distance(there.posed_local(g, k)))
+            .fold(0.0f32, f32::max);
+        assert!(apart < 1e-3 * swing, "{apart} apart, swing {swing}");
+    }
+
     #[test]
     fn bits_do_not_depend_on_ranges_or_on_a_save_and_restore() {
         let s = Scene::new(90);
