@@ -216,10 +216,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                         });
                         for q in group {
                             let d = buf.nearest(q.position);
-                            let l = &mut level[q.index as usize];
-                            while (*l as usize) < finest && d < squares[*l as usize] {
-                                *l += 1;
-                            }
+                            respect(&mut level[q.index as usize], d, &squares);
                         }
                     });
                     if wider(t) {
@@ -243,17 +240,24 @@ impl<'m, 'a> Stamper<'m, 'a> {
     /// [`assign_levels`](Self::assign_levels) does across triangles.
     fn part_copies(&self, group: &[Near], squares: &[f32; SUB_LEVELS], level: &mut [u8]) {
         let scale = self.faces[group[0].face as usize].scale / self.radius;
-        let finest = SUB_LEVELS - 1;
         for (k, q) in group.iter().enumerate() {
             let at = Vec3::from(q.position);
-            for p in &group[..k] {
-                let d = Vec3::from(p.position).distance_squared(at) * (scale * scale);
-                let l = &mut level[q.index as usize];
-                while (*l as usize) < finest && d < squares[*l as usize] {
-                    *l += 1;
-                }
-            }
+            let d = group[..k]
+                .iter()
+                .map(|p| Vec3::from(p.position).distance_squared(at))
+                .fold(f32::INFINITY, f32::min);
+            respect(&mut level[q.index as usize], d * (scale * scale), squares);
         }
+    }
+}
+
+/// Moves sub-level `l` to the first (up to the finest) whose spacing,
+/// squared in `squares`, the squared distance `d` to an earlier point
+/// respects.
+#[inline]
+fn respect(l: &mut u8, d: f32, squares: &[f32; SUB_LEVELS]) {
+    while (*l as usize) < SUB_LEVELS - 1 && d < squares[*l as usize] {
+        *l += 1;
     }
 }
 
