@@ -41,6 +41,7 @@ pub mod guides;
 pub mod interp;
 pub mod rng;
 pub mod root;
+mod sqrt;
 pub mod stamp;
 pub mod strided;
 pub mod surface;

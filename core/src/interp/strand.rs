@@ -7,6 +7,7 @@ use crate::interp::bind::{StrandBinding, NO_GUIDE};
 use crate::interp::groom::StrandGroom;
 use crate::interp::lift::lift;
 use crate::interp::posed::PosedFrame;
+use crate::sqrt;
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
 use crate::Error;
@@ -172,7 +173,7 @@ pub(crate) fn strand_n<const N: usize>(
     let (ax, rest) = local.split_at_mut(n);
     let (ay, az) = rest.split_at_mut(n);
     let scale = groom.length;
-    let length = tip.length() * scale;
+    let length = sqrt::length(tip) * scale;
     let bend = groom.bend * length;
     let mut shape = [scale, bend];
     if groom.lift != [0.0; 2] {

@@ -1,5 +1,6 @@
 //! Root frames: the local coordinate system a strand grows in.
 
+use crate::sqrt;
 use crate::{Mesh, Root};
 use glam::{Vec2, Vec3};
 
@@ -76,7 +77,7 @@ pub fn vertex_tangents(mesh: &Mesh, out: &mut [[f32; 3]]) {
 /// `t` made orthogonal to the unit normal `n` and unit length, or zero.
 #[inline]
 fn orthogonal(t: Vec3, n: Vec3) -> Vec3 {
-    (t - n * n.dot(t)).normalize_or_zero()
+    sqrt::normalize_or_zero(t - n * n.dot(t))
 }
 
 /// The tangent where the interpolated vertex tangent is lost (zero, or along
@@ -117,7 +118,7 @@ impl FaceBasis {
             normals: mesh
                 .normals
                 .map(|n| idx.map(|i| Vec3::from(n.get(i as usize)))),
-            face_normal: (p1 - p0).cross(p2 - p0).normalize_or_zero(),
+            face_normal: sqrt::normalize_or_zero((p1 - p0).cross(p2 - p0)),
             tangents: idx.map(vertex_tangent),
             tangent: face_tangent(mesh, face, corners),
         }
@@ -145,7 +146,7 @@ impl FaceBasis {
         let (n, t) = self.sums(u, v);
         // a zero normal sum falls back to the face normal, as in
         // `Mesh::normal`; without vertex normals that is every root
-        let n = match n.normalize_or_zero() {
+        let n = match sqrt::normalize_or_zero(n) {
             Vec3::ZERO => self.face_normal,
             n => n,
         };
@@ -266,7 +267,7 @@ fn normalize_or_zero(v: &mut Lanes3) {
         *r = v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i];
     }
     for r in rcp.iter_mut() {
-        *r = libm::sqrtf(*r);
+        *r = sqrt::sqrtf(*r);
     }
     for r in rcp.iter_mut() {
         *r = 1.0 / *r;
