@@ -24,6 +24,27 @@ pub(crate) fn sqrtf(x: f32) -> f32 {
     }
 }
 
+/// [`sqrtf`] of every value of `v`, four at a time where the CPU has the
+/// instruction for it.
+#[inline]
+pub(crate) fn sqrt_lanes(v: &mut [f32]) {
+    #[cfg(all(target_arch = "x86_64", feature = "hardware-sqrt"))]
+    {
+        let mut quads = v.chunks_exact_mut(4);
+        for q in &mut quads {
+            let r = wide::f32x4::from([q[0], q[1], q[2], q[3]]).sqrt();
+            q.copy_from_slice(&r.to_array());
+        }
+        for x in quads.into_remainder() {
+            *x = sqrtf(*x);
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", feature = "hardware-sqrt")))]
+    for x in v {
+        *x = libm::sqrtf(*x);
+    }
+}
+
 /// `v.length()`, operation for operation.
 #[inline(always)]
 pub(crate) fn length(v: Vec3) -> f32 {
@@ -52,6 +73,10 @@ mod tests {
             x = x.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
             let f = f32::from_bits(x);
             assert_eq!(sqrtf(f).to_bits(), libm::sqrtf(f).to_bits(), "{f}");
+            let mut lanes = [f, f * 0.5, f * 3.0, f + 1.0, f * 7.0];
+            let want = lanes.map(libm::sqrtf);
+            sqrt_lanes(&mut lanes);
+            assert_eq!(lanes.map(f32::to_bits), want.map(f32::to_bits));
             let v = Vec3::new(f, f32::from_bits(x.rotate_left(7)), 1.5);
             assert_eq!(length(v).to_bits(), v.length().to_bits());
             let (a, b) = (normalize_or_zero(v), v.normalize_or_zero());

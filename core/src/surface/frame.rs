@@ -266,9 +266,7 @@ fn normalize_or_zero(v: &mut Lanes3) {
     for (i, r) in rcp.iter_mut().enumerate() {
         *r = v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i];
     }
-    for r in rcp.iter_mut() {
-        *r = sqrt::sqrtf(*r);
-    }
+    sqrt::sqrt_lanes(&mut rcp);
     for r in rcp.iter_mut() {
         *r = 1.0 / *r;
     }
