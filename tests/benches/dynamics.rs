@@ -257,7 +257,7 @@ fn full_frame(
     let mut out = vec![[0.0f32; 4]; hairs.len() * per];
     let mut posed = vec![[0.0f32; 3]; roots.len() * JOINTS];
     assert_eq!(pelage_sim_reset(sim), PelageStatus::Ok);
-    let mut times = vec![];
+    let (mut times, mut stages) = (vec![], [vec![], vec![], vec![]]);
     for (f, handle) in frames.iter().enumerate() {
         let caps = &props[f];
         let colliders = colliders(caps, false);
@@ -274,6 +274,7 @@ fn full_frame(
             ),
             PelageStatus::Ok
         );
+        let stepped = t.elapsed().as_secs_f64();
         assert_eq!(
             pelage_sim_read(sim, posed.as_mut_ptr().cast(), 12, posed.len()),
             PelageStatus::Ok
@@ -283,20 +284,29 @@ fn full_frame(
             pelage_frame_set_guides(handle.0, &simulated, 2),
             PelageStatus::Ok
         );
+        let posing = t.elapsed().as_secs_f64();
         let curves = curves_desc(&mut out, None);
         assert_eq!(
             pelage_groom_expand(groom, handle.0, 0, hairs.len(), &ep, &curves),
             PelageStatus::Ok
         );
         black_box(&out);
-        times.push(t.elapsed().as_secs_f64());
+        let all = t.elapsed().as_secs_f64();
+        times.push(all);
+        for (v, d) in stages.iter_mut().zip([stepped, posing - stepped, all - posing]) {
+            v.push(d);
+        }
     }
     pelage_groom_free(groom);
     let t = median(times);
+    let [step, pose, expand] = stages.map(median);
     println!(
-        "full frame, 2 threads (step with links and capsules, read, pose, expand {} hairs): {:.1} ms, {:.1} frames/s",
+        "full frame, 2 threads (step with links and capsules, read, pose, expand {} hairs): {:.1} ms, {:.1} frames/s (medians: step {:.1}, read and pose {:.1}, expand {:.1} ms)",
         hairs.len(),
         t * 1e3,
-        1.0 / t
+        1.0 / t,
+        step * 1e3,
+        pose * 1e3,
+        expand * 1e3
     );
 }
