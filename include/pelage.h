@@ -61,6 +61,9 @@ typedef enum PelageStatus {
   // An internal error (a bug in pelage, or the system refused a thread);
   // outputs may be partly written.
   PELAGE_STATUS_PANIC = 10,
+  // The system refused memory pelage asked for (the call's own working
+  // memory or a copy it keeps); nothing was written or changed.
+  PELAGE_STATUS_OUT_OF_MEMORY = 11,
 } PelageStatus;
 
 // How a [`PelageMap`] stores its values.
@@ -748,7 +751,7 @@ enum PelageStatus pelage_bind_query(const struct PelageMeshDesc *rest_mesh, size
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
 // CAPACITY_EXCEEDED (the arena or `bindings_capacity`), MISALIGNED,
-// CANCELLED, PANIC.
+// CANCELLED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, void *arena, size_t arena_bytes, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);
@@ -804,7 +807,7 @@ enum PelageStatus pelage_curves_segment_indices(size_t curve_count, size_t point
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (point count, no guides,
 // bad stride, mesh values beyond 1e9), MISALIGNED, NON_FINITE,
-// OUT_OF_RANGE (an index past the vertices), PANIC.
+// OUT_OF_RANGE (an index past the vertices), OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_frame_new(const struct PelageMeshDesc *mesh, size_t guide_count, uint32_t points_per_strand, PelageFrame *out_frame);
@@ -833,7 +836,7 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // On failure the frame keeps the colliders it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
-// this frame's mesh too large), MISALIGNED, PANIC.
+// this frame's mesh too large), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: no other call may use `frame` during this one.
 enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders);
@@ -867,7 +870,7 @@ enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts, a frame with no
 // guides, patches that leave strands out), NON_FINITE, OUT_OF_RANGE,
-// CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, PANIC.
+// CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread; the frame may be read by
 // other calls meanwhile.
@@ -900,7 +903,7 @@ enum PelageStatus pelage_groom_file_read(const void *data, size_t length, const 
 // it is left untouched.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
-// MISALIGNED (a record pointer), PANIC.
+// MISALIGNED (a record pointer), OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_groom_new(const struct PelageStrands *strands, PelageGroom *out_groom);
@@ -991,7 +994,7 @@ enum PelageStatus pelage_guide_cache_info(const void *data, size_t length, struc
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
 // sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
-// VERSION_MISMATCH, MISALIGNED, PANIC (also when a worker thread cannot
+// VERSION_MISMATCH, MISALIGNED, OUT_OF_MEMORY, PANIC (also when a worker thread cannot
 // start: the frame's guides are then unspecified until the next
 // successful call).
 //
@@ -1020,7 +1023,7 @@ enum PelageStatus pelage_map_mask(const struct PelageMeshDesc *mesh, const struc
 // sorted by LOD rank inside each (an LOD is a cutoff in every patch).
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (patch size 0), NON_FINITE,
-// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED, MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const struct PelageRoot *roots, size_t root_count, uint32_t patch_size, uint32_t *order, struct PelagePatch *patches, size_t patch_capacity, size_t *patch_count);
@@ -1036,7 +1039,7 @@ enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const str
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides,
 // or of another point count), NON_FINITE, OUT_OF_RANGE (a strand's face
-// or guide, a patch past the strands), MISALIGNED, PANIC.
+// or guide, a patch past the strands), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread; the frame may be read by
 // other calls meanwhile.
@@ -1160,7 +1163,7 @@ void pelage_sim_free(PelageSim sim);
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
 // another mesh, the body grid too large, the external curves' count or
 // stride, an external point not finite or beyond 1e9 where
-// `params.external` is above 0), MISALIGNED, PANIC.
+// `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: no other call may use `sim` during this one; the frame
 // may be read by other calls meanwhile.
@@ -1267,7 +1270,7 @@ enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct P
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
 // collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
 // CAPACITY_EXCEEDED (`capacity`; `*record_count` gets the count
-// needed), MISALIGNED, PANIC.
+// needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread; the frame may be read by
 // other calls meanwhile.
@@ -1286,7 +1289,7 @@ enum PelageStatus pelage_trim_find(PelageFrame frame, const struct PelageMeshDes
 // Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
 // groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
 // length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
-// MISALIGNED, PANIC.
+// MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread while `groom` is alive,
 // with distinct `lengths`.
@@ -1309,7 +1312,7 @@ enum PelageStatus pelage_trim_shortest(PelageGroom groom, const struct PelageTri
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
 // without guides or posed for another point count, a collider, the
-// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, PANIC.
+// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread while `groom` is alive,
 // with distinct `lengths`; the frame may be read by other calls meanwhile.

@@ -1,6 +1,6 @@
 //! Binding strands to guides.
 
-use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
+use crate::buffers::{bytes_mut, filled, opt_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
 use crate::threads::{split_over_threads, split_with_progress, Progress};
 use crate::{
@@ -142,7 +142,7 @@ pub extern "C" fn pelage_bind_query(
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
 /// CAPACITY_EXCEEDED (the arena or `bindings_capacity`), MISALIGNED,
-/// CANCELLED, PANIC.
+/// CANCELLED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
 #[no_mangle]
@@ -188,7 +188,7 @@ pub extern "C" fn pelage_bind(
         let reports = if p.progress.is_none() {
             split_over_threads(strand_count, p.thread_count, out, 1, work)?
         } else {
-            let mut made = vec![StrandBinding::default(); strand_count];
+            let mut made = filled(strand_count, StrandBinding::default(), "the bindings")?;
             let progress = Progress::new(p.progress, p.progress_user_data);
             let reports = split_with_progress(strand_count, p.thread_count, &mut made, 1, progress, work)?;
             if reports.iter().all(Result::is_ok) {

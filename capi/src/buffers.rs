@@ -233,3 +233,74 @@ pub(crate) fn handles<'a, T>(
     // handles for the duration of the call.
     Ok(unsafe { std::slice::from_raw_parts(ptr, count) })
 }
+
+/// OUT_OF_MEMORY for `bytes` bytes of `what`.
+fn refused(bytes: usize, what: &str) -> Failure {
+    Failure::new(
+        PelageStatus::OutOfMemory,
+        format!("cannot allocate {bytes} bytes for {what}"),
+    )
+}
+
+/// Grows `v` to at least `n` elements, new ones `value`, or OUT_OF_MEMORY
+/// naming `what` when the system refuses the memory (where `vec!` or
+/// `resize` would abort the host's process).
+pub(crate) fn grow<T: Clone>(
+    v: &mut Vec<T>,
+    n: usize,
+    value: T,
+    what: &str,
+) -> Result<(), Failure> {
+    if n > v.len() {
+        v.try_reserve_exact(n - v.len())
+            .map_err(|_| refused(n.saturating_mul(size_of::<T>()), what))?;
+        v.resize(n, value);
+    }
+    Ok(())
+}
+
+/// `n` copies of `value`, or OUT_OF_MEMORY (see [`grow`]).
+pub(crate) fn filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>, Failure> {
+    let mut v = Vec::new();
+    grow(&mut v, n, value, what)?;
+    Ok(v)
+}
+
+/// The `n` items of `items` in a new vector, or OUT_OF_MEMORY (see
+/// [`grow`]).
+pub(crate) fn collected<T>(
+    items: impl Iterator<Item = T>,
+    n: usize,
+    what: &str,
+) -> Result<Vec<T>, Failure> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| refused(n.saturating_mul(size_of::<T>()), what))?;
+    v.extend(items);
+    Ok(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_the_system_refuses_is_a_status_not_an_abort() {
+        let huge = usize::MAX / 2;
+        let e = filled(huge, 0u8, "the test").unwrap_err();
+        assert_eq!(e.status, PelageStatus::OutOfMemory);
+        assert!(e.message.contains("the test"), "{}", e.message);
+        let mut v = vec![1u32; 3];
+        assert_eq!(
+            grow(&mut v, huge, 0, "more").unwrap_err().status,
+            PelageStatus::OutOfMemory
+        );
+        assert_eq!(v, [1, 1, 1], "a refused growth leaves the vector as it was");
+        grow(&mut v, 5, 7, "more").unwrap();
+        grow(&mut v, 2, 9, "less").unwrap();
+        assert_eq!(v, [1, 1, 1, 7, 7], "it grows and never shrinks");
+        let e = collected(0..3u64, huge, "the items").unwrap_err();
+        assert_eq!(e.status, PelageStatus::OutOfMemory);
+        assert_eq!(collected(0..3u64, 3, "the items").unwrap(), [0, 1, 2]);
+    }
+}

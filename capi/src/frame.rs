@@ -1,7 +1,7 @@
 //! The frame handle: one frame's deformed mesh and posed guides, prepared
 //! once and read by any number of expansions.
 
-use crate::buffers::{req, req_mut};
+use crate::buffers::{collected, filled, grow, req, req_mut};
 use crate::sim::{body_in, HostColliders, HostField};
 use crate::status::Failure;
 use crate::threads::{split_in_chunks, split_over_threads};
@@ -120,7 +120,12 @@ impl Frame {
         thread_count: u32,
     ) -> Result<(), Failure> {
         cache.check(groom, groom_id, sample, &self.posed)?;
-        self.scratch.resize(cache.scratch_words(), 0);
+        grow(
+            &mut self.scratch,
+            cache.scratch_words(),
+            0,
+            "the cache's unpacked guides",
+        )?;
         let unpacked = &mut self.scratch[..];
         let per_block = BLOCK * cache.words_per_guide();
         split_over_threads(
@@ -170,9 +175,9 @@ pub(crate) fn frame_mut<'a>(frame: PelageFrame) -> Result<&'a mut Frame, Failure
     req_mut(frame.cast::<Frame>(), "frame")
 }
 
-/// Copies a host buffer into a heap buffer.
-fn copy<T: bytemuck::Pod>(s: Strided<T>) -> Buffer<T> {
-    Buffer::new(s.iter().collect())
+/// Copies a host buffer into a heap buffer (OUT_OF_MEMORY naming `what`).
+fn copy<T: bytemuck::Pod>(s: Strided<T>, what: &str) -> Result<Buffer<T>, Failure> {
+    Ok(Buffer::new(collected(s.iter(), s.len(), what)?))
 }
 
 /// Creates a frame for `guide_count` posed guides resampled to
@@ -184,7 +189,7 @@ fn copy<T: bytemuck::Pod>(s: Strided<T>) -> Buffer<T> {
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (point count, no guides,
 /// bad stride, mesh values beyond 1e9), MISALIGNED, NON_FINITE,
-/// OUT_OF_RANGE (an index past the vertices), PANIC.
+/// OUT_OF_RANGE (an index past the vertices), OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -204,16 +209,11 @@ pub extern "C" fn pelage_frame_new(
         PosedFrame::check_sizes(guide_count, points)?;
         let mut layout = ArenaLayout::new();
         PosedFrame::layout(&mut layout, host.positions.len(), guide_count, points);
-        let mut storage = Vec::new();
-        storage.try_reserve_exact(layout.bytes()).map_err(|_| {
-            Failure::new(PelageStatus::InvalidArgument, format!("cannot allocate {} bytes for the frame", layout.bytes()))
-        })?;
-        storage.resize(layout.bytes(), 0u8);
-        let arena = Buffer::new(storage);
-        let positions = copy(host.positions);
-        let triangles = copy(host.triangles);
-        let uvs = host.uvs.map(copy);
-        let normals = host.normals.map(copy);
+        let arena = Buffer::new(filled(layout.bytes(), 0u8, "the frame")?);
+        let positions = copy(host.positions, "the mesh's positions")?;
+        let triangles = copy(host.triangles, "the mesh's triangles")?;
+        let uvs = host.uvs.map(|s| copy(s, "the mesh's UVs")).transpose()?;
+        let normals = host.normals.map(|s| copy(s, "the mesh's normals")).transpose()?;
         // SAFETY: each buffer is borrowed once, by the frame made below,
         // which the handle drops before them.
         let mut mesh = unsafe {
@@ -285,7 +285,7 @@ pub extern "C" fn pelage_frame_set_guides(
 /// On failure the frame keeps the colliders it had.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
-/// this frame's mesh too large), MISALIGNED, PANIC.
+/// this frame's mesh too large), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: no other call may use `frame` during this one.
 #[no_mangle]
@@ -305,10 +305,11 @@ pub extern "C" fn pelage_frame_set_colliders(
         let (mut body_memory, mut body) = (None, None);
         if host.body {
             let memory: &mut Option<Buffer<u8>> = &mut body_memory;
-            // SAFETY: the buffer is borrowed once, by the body made here,
-            // which FrameColliders drops before it.
-            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), 1, |bytes| unsafe {
-                memory.insert(Buffer::new(vec![0u8; bytes])).borrow()
+            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), 1, |bytes| {
+                let buffer = Buffer::new(filled(bytes, 0u8, "the body")?);
+                // SAFETY: the buffer is borrowed once, by the body made
+                // here, which FrameColliders drops before it.
+                Ok(unsafe { memory.insert(buffer).borrow() })
             })?);
         }
         frame.push = Some(FrameColliders {

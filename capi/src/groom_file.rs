@@ -1,7 +1,7 @@
 //! The groom file in C: written once per asset from the rest frame and the
 //! strand records, read by a renderer (`docs/FORMAT.md`).
 
-use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, slice_mut};
+use crate::buffers::{bytes, bytes_mut, collected, req, req_mut, slice, slice_mut};
 use crate::expand::PelageStrands;
 use crate::frame::frame_ref;
 use crate::status::Failure;
@@ -91,7 +91,7 @@ pub struct PelageGroomFileBuffers {
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts, a frame with no
 /// guides, patches that leave strands out), NON_FINITE, OUT_OF_RANGE,
-/// CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, PANIC.
+/// CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread; the frame may be read by
 /// other calls meanwhile.
@@ -109,7 +109,7 @@ pub extern "C" fn pelage_groom_file_write(
         if !frame.is_posed() {
             return Err(Failure::new(PelageStatus::InvalidArgument, "the rest frame has no guides"));
         }
-        let points: Vec<[f32; 3]> = frame.local_points().collect();
+        let points = collected(frame.local_points(), frame.guide_count() * frame.points(), "the guide points")?;
         let groom = Groom {
             guide_roots: bytemuck::cast_slice(slice(desc.guide_roots, frame.guide_count(), "guide_roots")?),
             guide_points: &points,

@@ -1,7 +1,7 @@
 //! The groom handle: a groom's render strands, checked once and kept for
 //! expanding every frame.
 
-use crate::buffers::{req, req_mut, slice};
+use crate::buffers::{collected, req, req_mut, slice};
 use crate::expand::{run, Edits};
 use crate::frame::frame_ref;
 use crate::status::Failure;
@@ -56,7 +56,7 @@ pub(crate) fn groom_ref<'a>(groom: PelageGroom) -> Result<&'a Groom, Failure> {
 /// it is left untouched.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
-/// MISALIGNED (a record pointer), PANIC.
+/// MISALIGNED (a record pointer), OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -69,9 +69,9 @@ pub extern "C" fn pelage_groom_new(
         let strands = req(strands, "strands")?.view()?;
         let bounds = StrandBounds::new(&strands)?;
         let groom = Box::new(Groom {
-            roots: strands.roots.to_vec(),
-            bindings: strands.bindings.to_vec(),
-            grooms: strands.grooms.to_vec(),
+            roots: collected(strands.roots.iter().copied(), strands.roots.len(), "the strand roots")?,
+            bindings: collected(strands.bindings.iter().copied(), strands.bindings.len(), "the bindings")?,
+            grooms: collected(strands.grooms.iter().copied(), strands.grooms.len(), "the groom values")?,
             bounds,
         });
         *out = Box::into_raw(groom).cast::<PelageGroomTy>();

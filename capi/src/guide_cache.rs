@@ -157,7 +157,7 @@ pub extern "C" fn pelage_guide_cache_info(
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
 /// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
-/// VERSION_MISMATCH, MISALIGNED, PANIC (also when a worker thread cannot
+/// VERSION_MISMATCH, MISALIGNED, OUT_OF_MEMORY, PANIC (also when a worker thread cannot
 /// start: the frame's guides are then unspecified until the next
 /// successful call).
 ///

@@ -1,7 +1,7 @@
 //! Patches in C: the strand order a groom is stored in, and each patch's
 //! box on a frame (a renderer's bounds, before anything is expanded).
 
-use crate::buffers::{req, req_mut, slice, slice_mut};
+use crate::buffers::{filled, req, req_mut, slice, slice_mut};
 use crate::expand::{core_params, PelageExpandParams, PelageStrands};
 use crate::frame::frame_ref;
 use crate::groom_file::PelagePatch;
@@ -20,7 +20,7 @@ use pelage_core::interp::patch::{self, Patch};
 /// sorted by LOD rank inside each (an LOD is a cutoff in every patch).
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (patch size 0), NON_FINITE,
-/// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+/// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED, MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -40,7 +40,7 @@ pub extern "C" fn pelage_patch_plan(
         let roots: &[pelage_core::Root] = bytemuck::cast_slice(slice(roots, root_count, "roots")?);
         let order = slice_mut(order, root_count, "order")?;
         let patches: &mut [Patch] = bytemuck::cast_slice_mut(slice_mut(patches, patch_capacity, "patches")?);
-        let mut keys = vec![0u64; root_count];
+        let mut keys = filled(root_count, 0u64, "the patch keys")?;
         *count = patch::plan(&mesh, roots, patch_size as usize, &mut keys, order, patches)?;
         Ok(())
     }
@@ -57,7 +57,7 @@ pub extern "C" fn pelage_patch_plan(
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides,
 /// or of another point count), NON_FINITE, OUT_OF_RANGE (a strand's face
-/// or guide, a patch past the strands), MISALIGNED, PANIC.
+/// or guide, a patch past the strands), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread; the frame may be read by
 /// other calls meanwhile.
@@ -83,7 +83,7 @@ pub extern "C" fn pelage_patch_boxes(
             .ok_or(Failure::new(PelageStatus::InvalidArgument, "patch_count overflows"))?;
         let boxes = slice_mut(boxes, floats, "boxes")?;
         patch::check(frame, &strands, patches)?;
-        let mut reach = vec![0.0f32; frame.guide_count()];
+        let mut reach = filled(frame.guide_count(), 0.0f32, "the guides' reach")?;
         patch::guide_reach(frame, &mut reach);
         split_over_threads(patch_count, host.thread_count, boxes, 6, |range, part| {
             for (p, out) in patches[range].iter().zip(part.chunks_exact_mut(6)) {

@@ -1,6 +1,6 @@
 //! The simulation handle: guide dynamics across frames (paper 3).
 
-use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, strided, Float3Out};
+use crate::buffers::{bytes, bytes_mut, grow, req, req_mut, slice, strided, Float3Out};
 use crate::frame::frame_ref;
 use crate::status::Failure;
 use crate::threads::{cut_into, run_parts, split_in_chunks, thread_total};
@@ -375,10 +375,8 @@ pub(crate) fn body_of<'a>(
     thread_count: u32,
 ) -> Result<Body<'a>, Failure> {
     body_in(mesh, rim_arena, thread_count, |bytes| {
-        if body_arena.len() < bytes {
-            body_arena.resize(bytes, 0);
-        }
-        body_arena
+        grow(body_arena, bytes, 0, "the body")?;
+        Ok(body_arena)
     })
 }
 
@@ -389,15 +387,17 @@ pub(crate) fn body_in<'a>(
     mesh: &Mesh,
     rim_arena: &mut Vec<u8>,
     thread_count: u32,
-    memory: impl FnOnce(usize) -> &'a mut [u8],
+    memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
-    let rim_bytes = Rim::required_bytes(mesh);
-    if rim_arena.len() < rim_bytes {
-        rim_arena.resize(rim_bytes, 0);
-    }
+    grow(
+        rim_arena,
+        Rim::required_bytes(mesh),
+        0,
+        "the mesh's boundary loops",
+    )?;
     let rim = Rim::new(mesh, &mut Arena::new(rim_arena))?;
     let plan = BodyPlan::of(mesh, &rim)?;
-    let mut parts = Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())))?;
+    let mut parts = Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())?))?;
     let (layers, per) = (parts.layers(), parts.layer_cells());
     let threads = thread_total(thread_count).clamp(1, layers.max(1));
     let ranges: Vec<Range<usize>> = (0..threads)
@@ -479,7 +479,7 @@ impl SignedDistance for HostField {
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
 /// another mesh, the body grid too large, the external curves' count or
 /// stride, an external point not finite or beyond 1e9 where
-/// `params.external` is above 0), MISALIGNED, PANIC.
+/// `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: no other call may use `sim` during this one; the frame
 /// may be read by other calls meanwhile.

@@ -34,6 +34,9 @@ pub enum PelageStatus {
     /// An internal error (a bug in pelage, or the system refused a thread);
     /// outputs may be partly written.
     Panic = 10,
+    /// The system refused memory pelage asked for (the call's own working
+    /// memory or a copy it keeps); nothing was written or changed.
+    OutOfMemory = 11,
 }
 
 /// A static, human-readable description of a PelageStatus value (never NULL;
@@ -42,7 +45,7 @@ pub enum PelageStatus {
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
 pub extern "C" fn pelage_status_message(status: i32) -> *const c_char {
-    const ALL: [PelageStatus; 11] = [
+    const ALL: [PelageStatus; 12] = [
         PelageStatus::Ok,
         PelageStatus::NullParameter,
         PelageStatus::InvalidArgument,
@@ -54,6 +57,7 @@ pub extern "C" fn pelage_status_message(status: i32) -> *const c_char {
         PelageStatus::VersionMismatch,
         PelageStatus::Cancelled,
         PelageStatus::Panic,
+        PelageStatus::OutOfMemory,
     ];
     let Some(&status) = ALL.iter().find(|s| **s as i32 == status) else {
         return c"unknown status".as_ptr();
@@ -70,6 +74,7 @@ pub extern "C" fn pelage_status_message(status: i32) -> *const c_char {
         PelageStatus::VersionMismatch => c"version mismatch",
         PelageStatus::Cancelled => c"cancelled",
         PelageStatus::Panic => c"internal error (panic caught)",
+        PelageStatus::OutOfMemory => c"out of memory",
     };
     s.as_ptr()
 }
@@ -92,6 +97,7 @@ pub extern "C" fn pelage_last_error() -> *const c_char {
 }
 
 /// A failed call: its status and a message for `pelage_last_error`.
+#[derive(Debug)]
 pub(crate) struct Failure {
     pub status: PelageStatus,
     pub message: String,

@@ -1,7 +1,7 @@
 //! Trimming in C (paper 3.3): a frame's trim records, the shot pass over a
 //! groom's strands, and the two small files.
 
-use crate::buffers::{bytes, bytes_mut, req, req_mut, slice, slice_mut};
+use crate::buffers::{bytes, bytes_mut, filled, grow, req, req_mut, slice, slice_mut};
 use crate::expand::{core_params, PelageExpandParams};
 use crate::frame::frame_ref;
 use crate::groom_handle::groom_ref;
@@ -58,7 +58,12 @@ impl ObstacleMemory {
             true => None,
             false => {
                 let mesh = req(cloth, "cloth")?.view()?;
-                self.cloth.resize(Body::required_bytes(&mesh)?, 0);
+                grow(
+                    &mut self.cloth,
+                    Body::required_bytes(&mesh)?,
+                    0,
+                    "the cloth's body",
+                )?;
                 Some(Body::new(&mesh, &mut Arena::new(&mut self.cloth))?)
             }
         };
@@ -101,7 +106,7 @@ const _: () = assert!(PELAGE_TRIM_WHOLE == pelage_core::trim::WHOLE);
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
 /// collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
 /// CAPACITY_EXCEEDED (`capacity`; `*record_count` gets the count
-/// needed), MISALIGNED, PANIC.
+/// needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread; the frame may be read by
 /// other calls meanwhile.
@@ -156,7 +161,7 @@ pub extern "C" fn pelage_trim_find(
 /// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
 /// groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
 /// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
-/// MISALIGNED, PANIC.
+/// MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread while `groom` is alive,
 /// with distinct `lengths`.
@@ -183,11 +188,7 @@ pub extern "C" fn pelage_trim_shortest(
         }
         groom.bounds.fits(usize::MAX, guide_count)?;
         let lengths = slice_mut(lengths, length_count, "lengths")?;
-        let mut per_guide = Vec::new();
-        per_guide.try_reserve_exact(guide_count).map_err(|_| {
-            Failure::new(PelageStatus::InvalidArgument, format!("cannot allocate {guide_count} guide lengths"))
-        })?;
-        per_guide.resize(guide_count, 0.0f32);
+        let mut per_guide = filled(guide_count, 0.0f32, "the guide lengths")?;
         guide_lengths(records, points_per_guide as usize, &mut per_guide)?;
         shortest(&strands, &per_guide, lengths);
         Ok(())
@@ -211,7 +212,7 @@ pub extern "C" fn pelage_trim_shortest(
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
 /// without guides or posed for another point count, a collider, the
-/// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, PANIC.
+/// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread while `groom` is alive,
 /// with distinct `lengths`; the frame may be read by other calls meanwhile.
