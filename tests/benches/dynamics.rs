@@ -293,7 +293,10 @@ fn full_frame(
         black_box(&out);
         let all = t.elapsed().as_secs_f64();
         times.push(all);
-        for (v, d) in stages.iter_mut().zip([stepped, posing - stepped, all - posing]) {
+        for (v, d) in stages
+            .iter_mut()
+            .zip([stepped, posing - stepped, all - posing])
+        {
             v.push(d);
         }
     }
