@@ -1170,7 +1170,10 @@ void pelage_sim_free(PelageSim sim);
 enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct PelageColliders *colliders, const void *external_points, size_t external_stride, float dt, uint32_t thread_count);
 
 // Writes the posed guides of the last step (world space; all zero before
-// the first step): `points_per_guide` float3 per guide, guide after guide,
+// the first step and after pelage_sim_reset; after pelage_sim_restore,
+// which restores the motion but not the posed points, each guide's
+// points at its root until the next step): `points_per_guide` float3 per
+// guide, guide after guide,
 // `point_stride` bytes apart (>= 12, a multiple of 4), capacity
 // `point_capacity` points. Hand them to pelage_frame_set_guides (with the
 // simulated guides' roots) to expand render hairs from them.

@@ -181,6 +181,12 @@ pub extern "C" fn pelage_bind(
         }
         let out: &mut [StrandBinding] = bytemuck::cast_slice_mut(slice_mut(bindings, strand_count, "bindings")?);
         let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        // with progress the bindings are made aside, and written only when
+        // every range is done: their memory is asked for before anything
+        let mut made = match p.progress {
+            Some(_) => filled(strand_count, StrandBinding::default(), "the bindings")?,
+            None => Vec::new(),
+        };
         let index = GuideIndex::new(&mesh, &guides, &core, &mut Arena::new(arena))?;
         // every strand is checked before any range writes
         check_roots(&mesh, strands, "strand roots")?;
@@ -188,7 +194,6 @@ pub extern "C" fn pelage_bind(
         let reports = if p.progress.is_none() {
             split_over_threads(strand_count, p.thread_count, out, 1, work)?
         } else {
-            let mut made = filled(strand_count, StrandBinding::default(), "the bindings")?;
             let progress = Progress::new(p.progress, p.progress_user_data);
             let reports = split_with_progress(strand_count, p.thread_count, &mut made, 1, progress, work)?;
             if reports.iter().all(Result::is_ok) {

@@ -266,6 +266,24 @@ pub(crate) fn filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>,
     Ok(v)
 }
 
+/// `n` zero bytes, or OUT_OF_MEMORY (see [`grow`]). The system's zeroed
+/// memory, as `vec![0u8; n]` takes it: pages are zeroed as they are first
+/// touched, not written here.
+pub(crate) fn zeroed(n: usize, what: &str) -> Result<Vec<u8>, Failure> {
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let layout = std::alloc::Layout::array::<u8>(n).map_err(|_| refused(n, what))?;
+    // SAFETY: the layout's size is not zero.
+    let p = unsafe { std::alloc::alloc_zeroed(layout) };
+    if p.is_null() {
+        return Err(refused(n, what));
+    }
+    // SAFETY: `p` is a live allocation of the global allocator for `n`
+    // bytes with u8's alignment, all of them initialised (zero).
+    Ok(unsafe { Vec::from_raw_parts(p, n, n) })
+}
+
 /// The `n` items of `items` in a new vector, or OUT_OF_MEMORY (see
 /// [`grow`]).
 pub(crate) fn collected<T>(
@@ -299,6 +317,12 @@ mod tests {
         grow(&mut v, 5, 7, "more").unwrap();
         grow(&mut v, 2, 9, "less").unwrap();
         assert_eq!(v, [1, 1, 1, 7, 7], "it grows and never shrinks");
+        assert_eq!(
+            zeroed(huge, "zeros").unwrap_err().status,
+            PelageStatus::OutOfMemory
+        );
+        assert_eq!(zeroed(5, "zeros").unwrap(), [0u8; 5]);
+        assert!(zeroed(0, "zeros").unwrap().is_empty());
         let e = collected(0..3u64, huge, "the items").unwrap_err();
         assert_eq!(e.status, PelageStatus::OutOfMemory);
         assert_eq!(collected(0..3u64, 3, "the items").unwrap(), [0, 1, 2]);

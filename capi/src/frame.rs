@@ -1,7 +1,7 @@
 //! The frame handle: one frame's deformed mesh and posed guides, prepared
 //! once and read by any number of expansions.
 
-use crate::buffers::{collected, filled, grow, req, req_mut};
+use crate::buffers::{collected, grow, req, req_mut, zeroed};
 use crate::sim::{body_in, HostColliders, HostField};
 use crate::status::Failure;
 use crate::threads::{split_in_chunks, split_over_threads};
@@ -209,7 +209,7 @@ pub extern "C" fn pelage_frame_new(
         PosedFrame::check_sizes(guide_count, points)?;
         let mut layout = ArenaLayout::new();
         PosedFrame::layout(&mut layout, host.positions.len(), guide_count, points);
-        let arena = Buffer::new(filled(layout.bytes(), 0u8, "the frame")?);
+        let arena = Buffer::new(zeroed(layout.bytes(), "the frame")?);
         let positions = copy(host.positions, "the mesh's positions")?;
         let triangles = copy(host.triangles, "the mesh's triangles")?;
         let uvs = host.uvs.map(|s| copy(s, "the mesh's UVs")).transpose()?;
@@ -302,11 +302,14 @@ pub extern "C" fn pelage_frame_set_colliders(
         let host = HostColliders::read(colliders)?;
         let shapes = Colliders { spheres: host.spheres, capsules: host.capsules, planes: host.planes, body: None, field: None };
         shapes.check()?;
+        let spheres = collected(host.spheres.iter().copied(), host.spheres.len(), "the spheres")?;
+        let capsules = collected(host.capsules.iter().copied(), host.capsules.len(), "the capsules")?;
+        let planes = collected(host.planes.iter().copied(), host.planes.len(), "the planes")?;
         let (mut body_memory, mut body) = (None, None);
         if host.body {
             let memory: &mut Option<Buffer<u8>> = &mut body_memory;
             body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), 1, |bytes| {
-                let buffer = Buffer::new(filled(bytes, 0u8, "the body")?);
+                let buffer = Buffer::new(zeroed(bytes, "the body")?);
                 // SAFETY: the buffer is borrowed once, by the body made
                 // here, which FrameColliders drops before it.
                 Ok(unsafe { memory.insert(buffer).borrow() })
@@ -314,9 +317,9 @@ pub extern "C" fn pelage_frame_set_colliders(
         }
         frame.push = Some(FrameColliders {
             body,
-            spheres: host.spheres.to_vec(),
-            capsules: host.capsules.to_vec(),
-            planes: host.planes.to_vec(),
+            spheres,
+            capsules,
+            planes,
             field: host.field,
             _body_memory: body_memory,
         });

@@ -1,7 +1,7 @@
 //! Trimming in C (paper 3.3): a frame's trim records, the shot pass over a
 //! groom's strands, and the two small files.
 
-use crate::buffers::{bytes, bytes_mut, filled, grow, req, req_mut, slice, slice_mut};
+use crate::buffers::{bytes, bytes_mut, collected, filled, grow, req, req_mut, slice, slice_mut};
 use crate::expand::{core_params, PelageExpandParams};
 use crate::frame::frame_ref;
 use crate::groom_handle::groom_ref;
@@ -243,7 +243,7 @@ pub extern "C" fn pelage_trim_shortest_hairs(
         let colliders = host.colliders(body.as_ref());
         colliders.check()?;
         let lengths = slice_mut(lengths, length_count, "lengths")?;
-        let mut own = lengths.to_vec();
+        let mut own = collected(lengths.iter().copied(), lengths.len(), "the lengths")?;
         split_over_threads(n, p.thread_count, &mut own, 1, |range, part| {
             shortest_own(&job, range, cloth_body.as_ref(), &colliders, part)
         })?;

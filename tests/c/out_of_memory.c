@@ -5,7 +5,8 @@
  * PELAGE_STATUS_OUT_OF_MEMORY with a message and leaves its output alone;
  * the process lives on, and a frame that fits is then made as usual.
  * A test of its own: it changes a process-wide limit, which the sanitizer
- * and Valgrind runs of the contract test could not live under. */
+ * and Valgrind runs of the contract test could not live under. Linux only
+ * (elsewhere the limit may not bind, and the test exits 77: skipped). */
 #include <pelage.h>
 
 #include <stdint.h>
@@ -23,6 +24,10 @@ static int failures = 0;
   } while (0)
 
 int main(void) {
+#ifndef __linux__
+  printf("out_of_memory: RLIMIT_AS is enforced only on Linux; skipped\n");
+  return 77;
+#else
   const float positions[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
   const uint32_t indices[2][3] = {{0, 1, 2}, {1, 3, 2}};
   PelageMeshDesc mesh;
@@ -67,4 +72,5 @@ int main(void) {
   }
   printf("out_of_memory: ok\n");
   return 0;
+#endif
 }

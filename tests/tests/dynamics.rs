@@ -258,6 +258,25 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
         pelage_sim_restore(resumed.sim, saved.as_ptr().cast(), saved.len()),
         PelageStatus::Ok
     );
+    // before its first step a restored simulation reads each guide's points
+    // at its root, as pelage.h says (the posed points are not saved)
+    let at_40 = &shot_bits[40];
+    let mut read = vec![[f32::NAN; 3]; at_40.len()];
+    assert_eq!(
+        pelage_sim_read(resumed.sim, read.as_mut_ptr().cast(), 12, read.len()),
+        PelageStatus::Ok
+    );
+    let per = at_40.len() / shot.roots.len();
+    for (g, (got, was)) in read.chunks(per).zip(at_40.chunks(per)).enumerate() {
+        for p in got {
+            let off = Vec3::from(*p).distance(Vec3::from(was[0]));
+            assert!(
+                off < 1e-6,
+                "guide {g}: {p:?} is {off} from its root {:?}",
+                was[0]
+            );
+        }
+    }
     run(&shot, &resumed, 41..FRAMES, 2, false, |f, _, posed, _| {
         assert!(
             posed == shot_bits[f as usize].as_slice(),

@@ -4,6 +4,7 @@
 //! groom's `lift`) and the guide dynamics (posed guides, every step) share
 //! the rotation and the search.
 
+use crate::sqrt;
 use core::f32::consts::FRAC_PI_2;
 use glam::{Vec2, Vec3};
 
@@ -18,7 +19,7 @@ pub(crate) const LIFT_STEP: f32 = FRAC_PI_2 / LIFT_STEPS as f32;
 /// the root, fixed per strand at rest in the strand's own frame, so it
 /// follows the body and does not depend on the pose.
 pub(crate) fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
-    let angle = libm::sqrtf(w[0] * w[0] + w[1] * w[1]);
+    let angle = sqrt::sqrtf(w[0] * w[0] + w[1] * w[1]);
     // a vector too small to square turns nothing (and has no axis)
     if angle == 0.0 {
         return;
