@@ -57,6 +57,80 @@ fn dart(f: usize, uv: [f32; 2]) -> Candidate {
 
 /// Grid cells of the fill, in disk radii.
 const FILL_GRID_CELL: f32 = 6.0;
+/// Most kept points of a face its darts are tested against in lanes (a
+/// face with more tests them one by one).
+const OWN: usize = 256;
+/// Lanes of [`Own::clashes`].
+const OWN_LANES: usize = 8;
+
+/// A face's kept points near a cut edge, copied into lanes once per face
+/// (into one buffer reused from face to face): each of its darts is tested
+/// against them in a vector loop, where a test per point read each from
+/// the records.
+struct Own {
+    x: [f32; OWN],
+    y: [f32; OWN],
+    z: [f32; OWN],
+    /// Points, rounded up to whole lanes (the rest at infinity).
+    lanes: usize,
+}
+
+impl Own {
+    fn new() -> Self {
+        Own {
+            x: [0.0; OWN],
+            y: [0.0; OWN],
+            z: [0.0; OWN],
+            lanes: 0,
+        }
+    }
+
+    /// Holds the `points`; false (and holds none) when there are more than
+    /// [`OWN`].
+    fn set(&mut self, points: impl Iterator<Item = [f32; 3]>) -> bool {
+        let mut n = 0;
+        for p in points {
+            if n == OWN {
+                self.lanes = 0;
+                return false;
+            }
+            (self.x[n], self.y[n], self.z[n]) = (p[0], p[1], p[2]);
+            n += 1;
+        }
+        self.lanes = n.div_ceil(OWN_LANES) * OWN_LANES;
+        for a in [&mut self.x, &mut self.y, &mut self.z] {
+            a[n..self.lanes].fill(f32::INFINITY);
+        }
+        true
+    }
+
+    /// Whether a point is closer to `at` than `sqrt(r2)`: the same test,
+    /// operation for operation, as `distance_squared(at) < r2`.
+    #[inline]
+    fn clashes(&self, at: Vec3, r2: f32) -> bool {
+        let (xs, ys, zs) = (
+            &self.x[..self.lanes],
+            &self.y[..self.lanes],
+            &self.z[..self.lanes],
+        );
+        let chunks = xs
+            .chunks_exact(OWN_LANES)
+            .zip(ys.chunks_exact(OWN_LANES))
+            .zip(zs.chunks_exact(OWN_LANES));
+        // no early exit inside a chunk, so each chunk runs as vector code
+        for ((x, y), z) in chunks {
+            let mut hit = 0u32;
+            for l in 0..OWN_LANES {
+                let (dx, dy, dz) = (x[l] - at.x, y[l] - at.y, z[l] - at.z);
+                hit |= ((dx * dx + dy * dy + dz * dz) < r2) as u32;
+            }
+            if hit != 0 {
+                return true;
+            }
+        }
+        false
+    }
+}
 
 impl<'m, 'a> Stamper<'m, 'a> {
     /// Whether the stamp is filled (see [`fill`](Self::fill)).
@@ -117,6 +191,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let mut gathering = [Near::default(); RUN];
         let mut alive = [0u8; RUN];
         let mut uvs = [[0.0f32; 2]; RUN];
+        let mut own_lanes = Own::new();
         for f in 0..self.faces.len() {
             while own < kept && (cands[own].face as usize) < f {
                 own += 1;
@@ -144,6 +219,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 continue;
             }
             let first_dart = n;
+            let own_points = (own..own_end)
+                .filter(|&j| close(&cands[j]))
+                .map(|j| near[j].position);
+            let in_lanes = own_lanes.set(own_points);
             // each cut edge's strip reaches `r` from the edge, or the far
             // corner; its darts are numbered on after the last edge's. A
             // face the edge of buried skin crosses takes its darts anywhere.
@@ -198,7 +277,10 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let mut left = 0;
                 for (d, dart) in darts[..m].iter().enumerate() {
                     let at = Vec3::from(dart.position);
-                    let blocked = (own..own_end).any(|j| close(&cands[j]) && clash(near, j, at));
+                    let blocked = match in_lanes {
+                        true => own_lanes.clashes(at, r2),
+                        false => (own..own_end).any(|j| close(&cands[j]) && clash(near, j, at)),
+                    };
                     alive[left] = d as u8;
                     left += !blocked as usize;
                 }
