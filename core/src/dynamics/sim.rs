@@ -1229,6 +1229,55 @@ mod tests {
     }
 
     #[test]
+    fn a_collapsed_root_triangle_collapses_its_guide_and_it_comes_back() {
+        let triangle = |scale: f32| TestMesh {
+            p: vec![[0.0, 0.0, 0.0], [scale, 0.0, 0.0], [0.0, scale, 0.0]],
+            t: vec![[0, 1, 2]],
+            uv: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            n: vec![],
+        };
+        let rest = triangle(1.0);
+        let roots = vec![Root {
+            face: 0,
+            u: 0.0,
+            v: 0.0,
+            id: 0,
+            rank: 0,
+        }];
+        let points = vec![[0.0f32, 0.0, 0.0], [0.0, 0.0, 0.1], [0.0, 0.0, 0.2]];
+        let guides = Guides {
+            roots: &roots,
+            points: Strided::from_slice(&points),
+            layout: CvLayout::Fixed(3),
+        };
+        let p = SimParams {
+            joints: 3,
+            points: 3,
+            ..SimParams::default()
+        };
+        let mut layout = ArenaLayout::new();
+        Sim::layout(&mut layout, 3, 1, &p);
+        let mut buf = vec![0u8; layout.bytes()];
+        let mut sim = Sim::new(rest.mesh(), &guides, &p, &mut Arena::new(&mut buf)).unwrap();
+        step(&mut sim, &rest, &Colliders::default(), 1.0 / 24.0);
+        // the triangle scaled to nothing (a rig hiding a part): no frame
+        step(&mut sim, &triangle(0.0), &Colliders::default(), 1.0 / 24.0);
+        for k in 0..3 {
+            let q = sim.posed(0, k);
+            assert!(q.is_finite() && q.length() < 1e-6, "point {k}: {q}");
+        }
+        // back: the guide stands again, its segments their rest length
+        for _ in 0..48 {
+            step(&mut sim, &rest, &Colliders::default(), 1.0 / 24.0);
+        }
+        for k in 1..3 {
+            let segment = sim.posed(0, k).distance(sim.posed(0, k - 1));
+            assert!((segment - 0.1).abs() < 1e-5, "segment {k}: {segment}");
+        }
+        assert!(sim.posed(0, 2).z > 0.19, "tip {}", sim.posed(0, 2));
+    }
+
+    #[test]
     fn a_damaged_state_is_refused_and_changes_nothing() {
         let s = Scene::new(20);
         let mut buf = vec![];
