@@ -633,8 +633,9 @@ pub extern "C" fn pelage_sim_save(
 /// same guides and parameters. Everything is checked first (length, magic,
 /// version, counts, checksum, finite values); on failure nothing changes.
 ///
-/// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values),
-/// VERSION_MISMATCH (magic or format version), INVALID_ARGUMENT (another
+/// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values,
+/// a reserved header word not zero), VERSION_MISMATCH (magic or format
+/// version), INVALID_ARGUMENT (another
 /// guide set), PANIC.
 ///
 /// Thread safety: no other call may use `sim` during this one.

@@ -513,6 +513,11 @@ impl<'a> Sim<'a> {
                 what: "state checksum mismatch",
             });
         }
+        if word(4) != 0 {
+            return Err(Error::Corrupt {
+                what: "state header's reserved word is not zero",
+            });
+        }
         if word(1) as usize != self.len()
             || word(2) as usize != self.params.joints
             || word(3) as usize != self.params.points
@@ -1322,6 +1327,16 @@ mod tests {
         let crc = crc32fast::hash(&huge[..body]).to_le_bytes();
         huge[body..].copy_from_slice(&crc);
         assert!(matches!(sim.restore(&huge), Err(Error::Corrupt { .. })));
+        // the header's reserved word set, the checksum made anew
+        let mut reserved = good.clone();
+        reserved[20..24].copy_from_slice(&1u32.to_le_bytes());
+        let body = reserved.len() - 4;
+        let crc = crc32fast::hash(&reserved[..body]).to_le_bytes();
+        reserved[body..].copy_from_slice(&crc);
+        assert!(matches!(
+            sim.restore(&reserved),
+            Err(Error::Corrupt { what }) if what.contains("reserved")
+        ));
         // a sound state of other guides
         let other_scene = Scene::new(21);
         let mut other_buf = vec![];
