@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 seconds="${1:-60}"
 command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked --version 0.13.2
-for target in decode_groom decode_cache decode_trim; do
+for target in decode_groom decode_cache decode_trim restore_sim; do
   log="$(mktemp)"
   if ! cargo +nightly fuzz run "$target" -- -max_total_time="$seconds" >"$log" 2>&1; then
     tail -60 "$log"

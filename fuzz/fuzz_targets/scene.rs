@@ -25,7 +25,7 @@ pub struct Scene {
 }
 
 /// A grid of N x N quads, lifted by `t`.
-fn grid(t: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+pub fn grid(t: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     let mut p = vec![];
     for y in 0..=N {
         for x in 0..=N {
@@ -44,7 +44,7 @@ fn grid(t: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     (p, tri)
 }
 
-fn guide_roots() -> Vec<Root> {
+pub fn guide_roots() -> Vec<Root> {
     (0..GUIDES as u32)
         .map(|g| Root {
             face: g % (2 * N * N) as u32,
@@ -57,7 +57,7 @@ fn guide_roots() -> Vec<Root> {
 }
 
 /// Guides straight up, swung by `t`.
-fn guides(mesh: &Mesh, roots: &[Root], t: f32) -> Vec<[f32; 3]> {
+pub fn guides(mesh: &Mesh, roots: &[Root], t: f32) -> Vec<[f32; 3]> {
     let mut out = vec![];
     for (g, r) in roots.iter().enumerate() {
         let p = mesh.point(r.face as usize, r.u, r.v);
