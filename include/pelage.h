@@ -1156,9 +1156,9 @@ void pelage_sim_free(PelageSim sim);
 // world points `external_stride` bytes apart, points_per_guide per guide:
 // the guides `params.external` selects take their shape from them
 // (blended, lengths kept). A root whose triangle has collapsed in the
-// frame (zero area, no vertex normals) has no frame there: its guide
-// collapses onto the root for that step, as render hairs expanded there
-// do, and comes back with the triangle. Everything is checked first; when
+// frame (zero area, no vertex normals) has no frame there (every axis
+// zero): its guide collapses onto the root for that step, as render hairs
+// expanded there do, and comes back with the triangle. Everything is checked first; when
 // a check fails the state is unchanged. PANIC (a worker thread that could not
 // start, or a panic) can leave the step half made: reset or restore the
 // simulation before stepping again.

@@ -63,7 +63,8 @@ const OWN: usize = 256;
 /// Lanes of [`Own::clashes`].
 const OWN_LANES: usize = 8;
 
-/// A face's kept points near a cut edge, copied into lanes once per face
+/// A face's kept points its darts may clash with (those the fill's grid
+/// holds, see `close` in [`Stamper::fill`]), copied into lanes once per face
 /// (into one buffer reused from face to face): each of its darts is tested
 /// against them in a vector loop, where a test per point read each from
 /// the records.

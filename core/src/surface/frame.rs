@@ -138,7 +138,10 @@ impl FaceBasis {
     }
 
     /// The frame at barycentric (u, v); the same numbers as
-    /// [`Mesh::point`] and [`Mesh::normal`] give.
+    /// [`Mesh::point`] and [`Mesh::normal`] give. Where there is no normal
+    /// (a collapsed triangle without vertex normals) every axis is zero:
+    /// what the frame carries collapses onto its origin, rather than onto
+    /// a line in some arbitrary direction.
     #[inline]
     pub fn frame(&self, u: f32, v: f32) -> Frame {
         let [a, b, c] = self.corners;
@@ -151,6 +154,7 @@ impl FaceBasis {
             n => n,
         };
         let t = match orthogonal(t, n) {
+            _ if n == Vec3::ZERO => Vec3::ZERO,
             Vec3::ZERO => fallback_tangent(n, self.tangent),
             t => t,
         };
@@ -221,7 +225,9 @@ pub(crate) fn frames(
     for (i, frame) in out[..len].iter_mut().enumerate() {
         let nv = Vec3::new(n[0][i], n[1][i], n[2][i]);
         let mut tv = Vec3::new(t[0][i], t[1][i], t[2][i]);
-        if tv == Vec3::ZERO {
+        if nv == Vec3::ZERO {
+            tv = Vec3::ZERO;
+        } else if tv == Vec3::ZERO {
             // rare (the vertex tangents cancel or run along the normal): the
             // triangle's own tangent is computed again only here
             let face = roots[i].face as usize;
@@ -426,5 +432,35 @@ mod tests {
         blocks.extend([at(1); 40]);
         blocks.extend([at(2); 30]);
         assert_blocks_match(&mesh, tangents, &blocks);
+    }
+
+    #[test]
+    fn a_collapsed_triangle_has_a_zero_frame_on_both_paths() {
+        // triangle 1 collapsed to a point; triangle 0 shares a vertex, so
+        // the vertex tangents there are not zero
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 2.0, 0.0],
+        ];
+        let t = [[0u32, 1, 2], [3, 3, 3]];
+        let uv = [[0.0f32, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.5]];
+        let mut mesh = Mesh::new(Strided::from_slice(&p), Strided::from_slice(&t));
+        mesh.uvs = Some(Strided::from_slice(&uv));
+        let tangents = tangents(&mesh);
+        let f = FaceBasis::new(&mesh, &tangents, 1).frame(0.3, 0.3);
+        assert_eq!((f.t, f.b, f.n), (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO));
+        assert_eq!(
+            f.to_world(Vec3::new(0.1, 0.2, 0.3)),
+            Vec3::new(2.0, 2.0, 0.0)
+        );
+        let root = |face| Root {
+            face,
+            u: 0.3,
+            v: 0.3,
+            ..Root::default()
+        };
+        assert_blocks_match(&mesh, &tangents, &[root(0), root(1), root(0), root(1)]);
     }
 }
