@@ -1158,10 +1158,10 @@ void pelage_sim_free(PelageSim sim);
 // (blended, lengths kept). A root whose triangle has collapsed in the
 // frame (zero area, no vertex normals) has no frame there (every axis
 // zero): its guide collapses onto the root for that step, as render hairs
-// expanded there do, and comes back with the triangle. Everything is checked first; when
-// a check fails the state is unchanged. PANIC (a worker thread that could not
-// start, or a panic) can leave the step half made: reset or restore the
-// simulation before stepping again.
+// expanded there do, and comes back with the triangle. Everything is
+// checked first; when a check fails the state is unchanged. PANIC (a
+// worker thread that could not start, or a panic) can leave the step half
+// made: reset or restore the simulation before stepping again.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
 // another mesh, the body grid too large, the external curves' count or

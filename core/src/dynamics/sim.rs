@@ -1178,46 +1178,65 @@ mod tests {
         }
     }
 
-    /// A guide as long as the coordinate limit allows, on a triangle that
-    /// jumps across it: the IK's products overflow, and the guide takes
-    /// its groomed shape; the state the step saves restores.
-    #[test]
-    fn guides_at_the_coordinate_limit_stay_finite_and_restore() {
-        let triangle = |off: f32| TestMesh {
-            p: vec![
-                [off, off, off],
-                [off + 1000.0, off, off],
-                [off, off + 1000.0, off],
-            ],
+    /// One triangle, its right angle at `corner`, its legs `size` along x
+    /// and y.
+    fn triangle(corner: [f32; 3], size: f32) -> TestMesh {
+        let [x, y, z] = corner;
+        TestMesh {
+            p: vec![corner, [x + size, y, z], [x, y + size, z]],
             t: vec![[0, 1, 2]],
             uv: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             n: vec![],
-        };
-        let rest = triangle(0.0);
-        let roots = vec![Root {
+        }
+    }
+
+    /// The simulation, in `buf`, of one guide of three joints (`points`)
+    /// rooted at `uv` on `rest`'s first triangle, with `p` (its joint and
+    /// point counts set to 3).
+    fn one_guide<'b>(
+        rest: &TestMesh,
+        [u, v]: [f32; 2],
+        points: &[[f32; 3]; 3],
+        p: SimParams,
+        buf: &'b mut Vec<u8>,
+    ) -> Sim<'b> {
+        let roots = [Root {
             face: 0,
-            u: 0.1,
-            v: 0.1,
+            u,
+            v,
             id: 0,
             rank: 0,
         }];
-        let points = vec![[0.1f32, 0.1, 0.0], [1e9, 1e9, 1e9], [-1e9, -1e9, -1e9]];
         let guides = Guides {
             roots: &roots,
-            points: Strided::from_slice(&points),
+            points: Strided::from_slice(points),
             layout: CvLayout::Fixed(3),
         };
         let p = SimParams {
             joints: 3,
             points: 3,
+            ..p
+        };
+        let mut layout = ArenaLayout::new();
+        Sim::layout(&mut layout, 3, 1, &p);
+        buf.resize(layout.bytes(), 0);
+        Sim::new(rest.mesh(), &guides, &p, &mut Arena::new(buf)).unwrap()
+    }
+
+    /// A guide as long as the coordinate limit allows, on a triangle that
+    /// jumps across it: the IK's products overflow, and the guide takes
+    /// its groomed shape; the state the step saves restores.
+    #[test]
+    fn guides_at_the_coordinate_limit_stay_finite_and_restore() {
+        let triangle = |off: f32| triangle([off; 3], 1000.0);
+        let points = [[0.1f32, 0.1, 0.0], [1e9, 1e9, 1e9], [-1e9, -1e9, -1e9]];
+        let p = SimParams {
             frequency: ScalarMap::Constant(0.0),
             decay: ScalarMap::Constant(0.0),
             ..SimParams::default()
         };
-        let mut layout = ArenaLayout::new();
-        Sim::layout(&mut layout, 3, 1, &p);
-        let mut buf = vec![0u8; layout.bytes()];
-        let mut sim = Sim::new(rest.mesh(), &guides, &p, &mut Arena::new(&mut buf)).unwrap();
+        let mut buf = vec![];
+        let mut sim = one_guide(&triangle(0.0), [0.1, 0.1], &points, p, &mut buf);
         for off in [-9e8f32, 9e8] {
             step(&mut sim, &triangle(off), &Colliders::default(), 1.0 / 24.0);
             for k in 0..3 {
@@ -1237,41 +1256,21 @@ mod tests {
     fn a_collapsed_root_triangle_collapses_its_guide_and_it_comes_back() {
         // away from the world's origin, so that "at the root" is not "at 0"
         let o = [3.0f32, -2.0, 5.0];
-        let triangle = |scale: f32| TestMesh {
-            p: vec![o, [o[0] + scale, o[1], o[2]], [o[0], o[1] + scale, o[2]]],
-            t: vec![[0, 1, 2]],
-            uv: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            n: vec![],
-        };
-        let rest = triangle(1.0);
-        let roots = vec![Root {
-            face: 0,
-            u: 0.0,
-            v: 0.0,
-            id: 0,
-            rank: 0,
-        }];
+        let rest = triangle(o, 1.0);
         // leaning along both tangents: a frame left with a tangent would
         // lay it along a line
         let lean = |k: f32| [o[0] + 0.05 * k, o[1] + 0.03 * k, o[2] + 0.08 * k];
-        let points = vec![lean(0.0), lean(1.0), lean(2.0)];
-        let guides = Guides {
-            roots: &roots,
-            points: Strided::from_slice(&points),
-            layout: CvLayout::Fixed(3),
-        };
-        let p = SimParams {
-            joints: 3,
-            points: 3,
-            ..SimParams::default()
-        };
-        let mut layout = ArenaLayout::new();
-        Sim::layout(&mut layout, 3, 1, &p);
-        let mut buf = vec![0u8; layout.bytes()];
-        let mut sim = Sim::new(rest.mesh(), &guides, &p, &mut Arena::new(&mut buf)).unwrap();
+        let points = [lean(0.0), lean(1.0), lean(2.0)];
+        let mut buf = vec![];
+        let mut sim = one_guide(&rest, [0.0, 0.0], &points, SimParams::default(), &mut buf);
         step(&mut sim, &rest, &Colliders::default(), 1.0 / 24.0);
         // the triangle scaled to nothing (a rig hiding a part): no frame
-        step(&mut sim, &triangle(0.0), &Colliders::default(), 1.0 / 24.0);
+        step(
+            &mut sim,
+            &triangle(o, 0.0),
+            &Colliders::default(),
+            1.0 / 24.0,
+        );
         for k in 0..3 {
             let q = sim.posed(0, k);
             let off = q.distance(Vec3::from(o));
