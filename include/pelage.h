@@ -347,6 +347,13 @@ typedef struct PelageCurves {
   uint32_t *curve_ids;
 } PelageCurves;
 
+// Simulated guides: the state of the tip springs across frames, the rest
+// shapes, the tip links. Created by `pelage_sim_new` in memory the host
+// provides (sized by `pelage_sim_query`), stepped frame by frame by
+// `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
+// bytes; released by `pelage_sim_free`.
+typedef struct PelageSimTy *PelageSim;
+
 // A solid sphere collider.
 typedef struct PelageSphere {
   // Centre.
@@ -617,13 +624,6 @@ typedef struct PelageSimParams {
   struct PelageMap external;
 } PelageSimParams;
 
-// Simulated guides: the state of the tip springs across frames, the rest
-// shapes, the tip links. Created by `pelage_sim_new` in memory the host
-// provides (sized by `pelage_sim_query`), stepped frame by frame by
-// `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
-// bytes; released by `pelage_sim_free`.
-typedef struct PelageSimTy *PelageSim;
-
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
   // Number of roots wanted on the whole mesh (at most 2^28; unused when
@@ -825,6 +825,25 @@ enum PelageStatus pelage_frame_new(const struct PelageMeshDesc *mesh, size_t gui
 //
 // Thread safety: no other call may use `frame` during this one.
 enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct PelageGuidesDesc *guides, uint32_t thread_count);
+
+// Poses `frame`'s guides with `sim`'s posed guides of the last step,
+// without copying them out: the bits pelage_sim_read then
+// pelage_frame_set_guides (with the simulation's roots) would give, in
+// less time. The frame must be of the simulation's mesh (its counts) with
+// the simulation's points_per_guide points per strand, made for as many
+// guides as the simulation has; `sim` must have stepped since it was
+// created, reset or restored. Split over `thread_count` threads (0: all
+// cores); the bits do not depend on it. On failure the frame keeps the
+// guides it had.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
+// another point or guide count, no step yet), PANIC (also when a worker
+// thread cannot start: the frame's guides are then unspecified until the
+// next successful call).
+//
+// Thread safety: no other call may use `frame` during this one; `sim` may
+// be read by other calls meanwhile (not stepped, reset or restored).
+enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, uint32_t thread_count);
 
 // Sets the colliders that render strands selected by a push mask
 // (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this

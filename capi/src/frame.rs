@@ -2,14 +2,16 @@
 //! once and read by any number of expansions.
 
 use crate::buffers::{collected, grow, req, req_mut, zeroed};
-use crate::sim::{body_in, HostColliders, HostField};
+use crate::sim::{body_in, sim_ref, HostColliders, HostField, PelageSim};
 use crate::status::Failure;
 use crate::threads::{split_in_chunks, split_over_threads};
 use crate::{PelageColliders, PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::cache::groom_file::Groom;
 use pelage_core::cache::guide_cache::{GuideCache, BLOCK};
-use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance, Sphere};
+use pelage_core::dynamics::collision::{
+    Capsule, Colliders, Plane, SignedDistance, Sphere, COLLISION_CELLS_PER_TRIANGLE,
+};
 use pelage_core::surface::body::Body;
 
 use pelage_core::interp::posed::PosedFrame;
@@ -275,6 +277,43 @@ pub extern "C" fn pelage_frame_set_guides(
     }
 }
 
+/// Poses `frame`'s guides with `sim`'s posed guides of the last step,
+/// without copying them out: the bits pelage_sim_read then
+/// pelage_frame_set_guides (with the simulation's roots) would give, in
+/// less time. The frame must be of the simulation's mesh (its counts) with
+/// the simulation's points_per_guide points per strand, made for as many
+/// guides as the simulation has; `sim` must have stepped since it was
+/// created, reset or restored. Split over `thread_count` threads (0: all
+/// cores); the bits do not depend on it. On failure the frame keeps the
+/// guides it had.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
+/// another point or guide count, no step yet), PANIC (also when a worker
+/// thread cannot start: the frame's guides are then unspecified until the
+/// next successful call).
+///
+/// Thread safety: no other call may use `frame` during this one; `sim` may
+/// be read by other calls meanwhile (not stepped, reset or restored).
+#[no_mangle]
+pub extern "C" fn pelage_frame_set_sim_guides(
+    frame: PelageFrame,
+    sim: PelageSim,
+    thread_count: u32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let frame = frame_mut(frame)?;
+        let sim = &sim_ref(sim)?.sim;
+        let posing = sim.posing(&mut frame.posed)?;
+        let filler = posing.filler;
+        let per = filler.floats_per_guide();
+        split_over_threads(sim.len(), thread_count, &mut *posing.data, per, |range, part| {
+            filler.fill(range.start, part)
+        })?;
+        posing.finish();
+        Ok(())
+    }
+}
+
 /// Sets the colliders that render strands selected by a push mask
 /// (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
 /// frame: `colliders` is copied (its body, when set, is this frame's mesh,
@@ -308,7 +347,7 @@ pub extern "C" fn pelage_frame_set_colliders(
         let (mut body_memory, mut body) = (None, None);
         if host.body {
             let memory: &mut Option<Buffer<u8>> = &mut body_memory;
-            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), 1, |bytes| {
+            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), COLLISION_CELLS_PER_TRIANGLE, 1, |bytes| {
                 let buffer = Buffer::new(zeroed(bytes, "the body")?);
                 // SAFETY: the buffer is borrowed once, by the body made
                 // here, which FrameColliders drops before it.

@@ -37,7 +37,7 @@ pub use expand::{
 };
 pub use frame::{
     pelage_frame_free, pelage_frame_new, pelage_frame_set_colliders, pelage_frame_set_guides,
-    PelageFrame, PelageFrameTy,
+    pelage_frame_set_sim_guides, PelageFrame, PelageFrameTy,
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,

@@ -6,7 +6,9 @@ use crate::status::Failure;
 use crate::threads::{cut_into, run_parts, split_in_chunks, thread_total};
 use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
-use pelage_core::dynamics::collision::{Capsule, Colliders, Plane, SignedDistance, Sphere};
+use pelage_core::dynamics::collision::{
+    Capsule, Colliders, Plane, SignedDistance, Sphere, COLLISION_CELLS_PER_TRIANGLE,
+};
 use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
 use pelage_core::dynamics::sim::{Sim, SimParams, Step};
@@ -133,10 +135,10 @@ fn core_params<'a>(p: &'a PelageSimParams, vertex_count: usize) -> Result<SimPar
 }
 
 /// What a [`PelageSim`] points to.
-struct SimBox {
+pub(crate) struct SimBox {
     /// Lives in the host's memory, which outlives the handle (the header's
     /// contract).
-    sim: Sim<'static>,
+    pub(crate) sim: Sim<'static>,
     /// The body grid of the last step that collided with the body.
     body_arena: Vec<u8>,
     /// The mesh's boundary loops, for the body.
@@ -149,7 +151,7 @@ fn sim_mut<'a>(sim: PelageSim) -> Result<&'a mut SimBox, Failure> {
 
 /// The simulation behind a handle, shared: for the calls that only read
 /// it, which may run at once.
-fn sim_ref<'a>(sim: PelageSim) -> Result<&'a SimBox, Failure> {
+pub(crate) fn sim_ref<'a>(sim: PelageSim) -> Result<&'a SimBox, Failure> {
     req(sim.cast::<SimBox>().cast_const(), "sim")
 }
 
@@ -366,26 +368,29 @@ impl<'a> HostColliders<'a> {
 }
 
 /// The solid of `mesh`, its rim and grid built in the two arenas (grown
-/// as needed, kept for the next call), its grid over `thread_count`
-/// threads.
+/// as needed, kept for the next call), its grid of `density` cells per
+/// triangle over `thread_count` threads.
 pub(crate) fn body_of<'a>(
     mesh: &Mesh,
     rim_arena: &mut Vec<u8>,
     body_arena: &'a mut Vec<u8>,
+    density: f32,
     thread_count: u32,
 ) -> Result<Body<'a>, Failure> {
-    body_in(mesh, rim_arena, thread_count, |bytes| {
+    body_in(mesh, rim_arena, density, thread_count, |bytes| {
         grow(body_arena, bytes, 0, "the body")?;
         Ok(body_arena)
     })
 }
 
 /// The solid of `mesh`, its rim built in `rim_arena` (grown as needed), its
-/// grid in the memory `memory` gives for the bytes it needs, built by
-/// layers over `thread_count` threads (the same bits on any count).
+/// grid of `density` cells per triangle in the memory `memory` gives for
+/// the bytes it needs, built by layers over `thread_count` threads (the
+/// same bits on any count).
 pub(crate) fn body_in<'a>(
     mesh: &Mesh,
     rim_arena: &mut Vec<u8>,
+    density: f32,
     thread_count: u32,
     memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
@@ -396,7 +401,7 @@ pub(crate) fn body_in<'a>(
         "the mesh's boundary loops",
     )?;
     let rim = Rim::new(mesh, &mut Arena::new(rim_arena))?;
-    let plan = BodyPlan::of(mesh, &rim)?;
+    let plan = BodyPlan::with_density(mesh, &rim, density)?;
     let mut parts = Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())?))?;
     let (layers, per) = (parts.layers(), parts.layer_cells());
     let threads = thread_total(thread_count).clamp(1, layers.max(1));
@@ -507,7 +512,7 @@ pub extern "C" fn pelage_sim_step(
             (false, _) => None,
             (true, Some(body)) => Some(body),
             (true, None) => {
-                built = body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena, thread_count)?;
+                built = body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena, COLLISION_CELLS_PER_TRIANGLE, thread_count)?;
                 Some(&built)
             }
         };

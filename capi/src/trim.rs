@@ -11,7 +11,7 @@ use crate::threads::split_over_threads;
 use crate::{PelageColliders, PelageFrame, PelageGroom, PelageMeshDesc, PelageStatus};
 use pelage_core::cache::trim_file::{self, RecordsInfo};
 use pelage_core::interp::expand::ExpandJob;
-use pelage_core::surface::body::Body;
+use pelage_core::surface::body::{Body, CELLS_PER_TRIANGLE};
 use pelage_core::trim::length::{guide_lengths, shortest, shortest_own};
 use pelage_core::trim::meet::meet;
 use pelage_core::trim::TrimRecord;
@@ -69,7 +69,13 @@ impl ObstacleMemory {
         };
         let host = HostColliders::read(colliders)?;
         let body = match host.body {
-            true => Some(body_of(mesh, &mut self.rim, &mut self.body, threads)?),
+            true => Some(body_of(
+                mesh,
+                &mut self.rim,
+                &mut self.body,
+                CELLS_PER_TRIANGLE,
+                threads,
+            )?),
             false => None,
         };
         Ok((cloth, host, body))

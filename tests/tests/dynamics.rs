@@ -9,7 +9,7 @@ use pelage::*;
 use pelage_core::surface::body::Body;
 use pelage_core::surface::frame::{vertex_tangents, Frame as SurfaceFrame};
 use pelage_core::{Arena, Root};
-use pelage_tests::animated::{capsules, colliders, pose, segment_distance, FRAMES};
+use pelage_tests::animated::{capsules, colliders, pose, segment_distance, FRAMES, TELEPORT_FRAME};
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
     combed_guides, frame, guides_desc, mesh_desc, mesh_view, stamp_roots, Frame,
@@ -345,4 +345,84 @@ fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
         }
     }
     assert!(worst < 1e-3, "segments off the host's by {worst}");
+}
+
+#[test]
+fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
+    use pelage_core::interp::groom::StrandGroom;
+    use pelage_tests::measure::{bind_vec, curves_desc, strands_desc};
+    let shot = Shot::new();
+    let sim = SimHandle::new(&shot, &shot.params());
+    let guides = guides_desc(&shot.roots, &shot.points);
+    let rest = mesh_view(&shot.rest);
+    let hairs = stamp_roots(rest, 6_000, 2);
+    let bindings = bind_vec(&rest, &shot.roots, &shot.points, JOINTS, &hairs);
+    let grooms = vec![StrandGroom::default(); hairs.len()];
+    let strands = strands_desc(
+        &hairs,
+        bytemuck::cast_slice(&bindings),
+        bytemuck::cast_slice(&grooms),
+    );
+    let mut groom = null_mut();
+    assert_eq!(pelage_groom_new(&strands, &mut groom), PelageStatus::Ok);
+    let ep = PelageExpandParams {
+        points_per_strand: JOINTS as u32,
+        ..pelage_expand_params_defaults()
+    };
+    let mut per = 0;
+    assert_eq!(pelage_expand_query(&ep, &mut per), PelageStatus::Ok);
+    let grown = |frame: &Frame| {
+        let mut out = vec![[0.0f32; 4]; hairs.len() * per];
+        let curves = curves_desc(&mut out, None);
+        let s = pelage_groom_expand(groom, frame.0, 0, hairs.len(), &ep, &curves);
+        assert_eq!(s, PelageStatus::Ok);
+        out
+    };
+    let status = |frame: &Frame, threads| pelage_frame_set_sim_guides(frame.0, sim.sim, threads);
+    let first = frame(&mesh_desc(&shot.rest), &guides, JOINTS as u32, 1).unwrap();
+    // no posed guides before the first step: refused, the frame unchanged
+    let before = grown(&first);
+    assert_eq!(status(&first, 1), PelageStatus::InvalidArgument);
+    assert!(grown(&first) == before);
+    for f in [0, 1, 2, 30, 31, TELEPORT_FRAME, TELEPORT_FRAME + 1] {
+        let mesh = pose(&shot.rest, f);
+        let read = frame(&mesh_desc(&mesh), &guides, JOINTS as u32, 1).unwrap();
+        let caps = capsules(&shot.rest, &shot.roots, f);
+        let s = pelage_sim_step(
+            sim.sim,
+            read.0,
+            &colliders(&caps, true),
+            std::ptr::null(),
+            0,
+            1.0 / 24.0,
+            2,
+        );
+        assert_eq!(s, PelageStatus::Ok);
+        let posed = sim.read(shot.roots.len());
+        let simulated = guides_desc(&shot.roots, &posed);
+        assert_eq!(
+            pelage_frame_set_guides(read.0, &simulated, 1),
+            PelageStatus::Ok
+        );
+        let want = grown(&read);
+        for threads in [1, 2, 3] {
+            let direct = frame(&mesh_desc(&mesh), &guides, JOINTS as u32, 1).unwrap();
+            assert_eq!(status(&direct, threads), PelageStatus::Ok);
+            assert!(grown(&direct) == want, "frame {f}, {threads} threads");
+        }
+    }
+    // another point count, a null handle, and after a reset: refused
+    let coarse = frame(&mesh_desc(&shot.rest), &guides, JOINTS as u32 - 1, 1).unwrap();
+    assert_eq!(status(&coarse, 1), PelageStatus::InvalidArgument);
+    assert_eq!(
+        pelage_frame_set_sim_guides(first.0, null_mut(), 1),
+        PelageStatus::NullParameter
+    );
+    assert_eq!(
+        pelage_frame_set_sim_guides(null_mut(), sim.sim, 1),
+        PelageStatus::NullParameter
+    );
+    assert_eq!(pelage_sim_reset(sim.sim), PelageStatus::Ok);
+    assert_eq!(status(&first, 1), PelageStatus::InvalidArgument);
+    pelage_groom_free(groom);
 }

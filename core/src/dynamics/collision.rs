@@ -17,6 +17,14 @@ use bytemuck::{Pod, Zeroable};
 use core::f32::consts::FRAC_PI_2;
 use glam::{Vec2, Vec3, Vec3A};
 
+/// Cells per triangle of the body grid built per frame for collisions, by a
+/// step or for a frame's colliders (see
+/// [`BodyPlan::with_density`](crate::surface::body::BodyPlan::with_density)):
+/// a step's few hundred thousand guide points do not repay the default
+/// grid's build. Both build it alike, so a step colliding with either body
+/// gives the same bits.
+pub const COLLISION_CELLS_PER_TRIANGLE: f32 = 8.0;
+
 /// A solid sphere.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

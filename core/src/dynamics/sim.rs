@@ -21,7 +21,7 @@ use super::spline;
 use super::spring::TipSpring;
 use crate::arena::{Arena, ArenaLayout};
 use crate::guides::Guides;
-use crate::interp::posed::PosedFrame;
+use crate::interp::posed::{GuidePoints, PosedFrame, Posing};
 use crate::surface::frame::Frame;
 use crate::surface::map::ScalarMap;
 use crate::{Error, Mesh, Root, Strided};
@@ -169,6 +169,9 @@ pub struct Sim<'a> {
     snapshot: &'a mut [[f32; 3]],
     /// The rest mesh's triangle and vertex counts, which every frame's has.
     topology: (usize, usize),
+    /// A step has begun since the simulation was made, reset or restored:
+    /// there are posed guides to read.
+    stepped: bool,
 }
 
 impl<'a> Sim<'a> {
@@ -280,6 +283,7 @@ impl<'a> Sim<'a> {
             blocks,
             snapshot: rest_tips,
             topology: (rest.triangle_count(), rest.positions.len()),
+            stepped: false,
         })
     }
 
@@ -339,6 +343,37 @@ impl<'a> Sim<'a> {
     /// Forgets the motion: the next step starts from the neutral pose.
     pub fn reset(&mut self) {
         self.blocks.fill(0.0);
+        self.stepped = false;
+    }
+
+    /// Poses `frame`'s guides with the posed guides of the last step, for
+    /// a host to fill in parallel as [`PosedFrame::posing`] does: the bits
+    /// that step's world points would give through [`PosedFrame::posing`]
+    /// (from the same roots), without copying them out. The frame must be of
+    /// a mesh with the rest mesh's counts and take [`points`](Self::points)
+    /// points per strand, and a step must have run since the simulation was
+    /// made, reset or restored.
+    pub fn posing<'r>(
+        &'r self,
+        frame: &'r mut PosedFrame<'_>,
+    ) -> Result<Posing<'r, SimGuides<'r, 'a>>, Error> {
+        let mesh = frame.mesh();
+        if (mesh.triangle_count(), mesh.positions.len()) != self.topology {
+            return Err(Error::InvalidArgument(
+                "the frame's mesh has other triangle or vertex counts than the rest mesh",
+            ));
+        }
+        if frame.points() != self.points() {
+            return Err(Error::InvalidArgument(
+                "the frame's points per strand differ from the simulation's",
+            ));
+        }
+        if !self.stepped {
+            return Err(Error::InvalidArgument(
+                "the simulation has no posed guides until it steps (after being made, reset or restored)",
+            ));
+        }
+        frame.posing_from(SimGuides { sim: self })
     }
 
     /// Checks the step's inputs and splits the simulation into what the
@@ -390,6 +425,7 @@ impl<'a> Sim<'a> {
             }
         }
         let block = Self::block_floats(&self.params);
+        self.stepped = true;
         Ok(Step {
             context: StepContext {
                 params: &self.params,
@@ -554,6 +590,7 @@ impl<'a> Sim<'a> {
                 };
             }
         }
+        self.stepped = false;
         Ok(())
     }
 }
@@ -593,6 +630,28 @@ fn last_frame(b: &[f32]) -> Frame {
         t: at(FRAME + 3),
         b: at(FRAME + 6),
         n: at(FRAME + 9),
+    }
+}
+
+/// The posed guides of a simulation's last step, in world space (see
+/// [`Sim::posing`]).
+#[derive(Clone, Copy)]
+pub struct SimGuides<'r, 'a> {
+    sim: &'r Sim<'a>,
+}
+
+impl GuidePoints for SimGuides<'_, '_> {
+    fn roots(&self) -> &[Root] {
+        self.sim.roots
+    }
+
+    /// `n` is the simulation's point count ([`Sim::posing`] checks it).
+    #[inline]
+    fn each_point(&self, g: usize, n: usize, mut visit: impl FnMut(usize, Vec3)) {
+        let frame = self.sim.root_frame(g);
+        for j in 0..n {
+            visit(j, frame.to_world(self.sim.posed_local(g, j)));
+        }
     }
 }
 

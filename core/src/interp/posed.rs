@@ -11,7 +11,7 @@ use crate::arena::{Arena, ArenaLayout};
 use crate::guides::Guides;
 use crate::interp::strand::{ExpandParams, MAX_STRAND_POINTS};
 use crate::surface::frame::{self, Frame, FRAME_LANES};
-use crate::{Error, Mesh};
+use crate::{Error, Mesh, Root};
 use glam::Vec3;
 
 /// A deformed mesh with its vertex tangents (see
@@ -119,17 +119,26 @@ impl<'m> PosedFrame<'m> {
     /// fill every guide through disjoint parts of [`Posing::data`], then
     /// calls [`Posing::finish`] (the same bits as `pose` for any split).
     pub fn posing<'r>(&'r mut self, guides: &'r Guides<'r>) -> Result<Posing<'r>, Error> {
-        if guides.len() != self.guides {
+        guides.validate(&self.mesh)?;
+        self.posing_from(guides)
+    }
+
+    /// [`posing`](Self::posing) from guide points already checked (finite,
+    /// within range, roots on this frame's mesh): only their count is.
+    pub(crate) fn posing_from<'r, S: GuidePoints>(
+        &'r mut self,
+        source: S,
+    ) -> Result<Posing<'r, S>, Error> {
+        if source.roots().len() != self.guides {
             return Err(Error::InvalidArgument(
                 "the guide count differs from the frame's",
             ));
         }
-        guides.validate(&self.mesh)?;
         Ok(Posing {
             filler: GuideFiller {
                 mesh: &self.mesh,
                 tangents: self.tangents,
-                guides,
+                source,
                 points: self.points,
             },
             data: self.data,
@@ -221,17 +230,50 @@ impl<'m> PosedFrame<'m> {
     }
 }
 
+/// The world points a frame's guides are posed from: a host's guides
+/// ([`Guides`]) or a simulation's last step
+/// ([`Sim::posing`](crate::dynamics::sim::Sim::posing)).
+pub trait GuidePoints: Copy + Sync {
+    /// Each guide's root.
+    fn roots(&self) -> &[Root];
+    /// Hands `visit` each point `j` of guide `g` resampled to `n` points
+    /// (n >= 2), in order.
+    fn each_point(&self, g: usize, n: usize, visit: impl FnMut(usize, Vec3));
+}
+
+impl GuidePoints for &Guides<'_> {
+    fn roots(&self) -> &[Root] {
+        self.roots
+    }
+
+    #[inline]
+    fn each_point(&self, g: usize, n: usize, mut visit: impl FnMut(usize, Vec3)) {
+        let step = 1.0 / (n - 1) as f32;
+        let (_, count) = self.span(g);
+        for j in 0..n {
+            visit(
+                j,
+                if count == n {
+                    self.point(g, j)
+                } else {
+                    self.sample(g, j as f32 * step)
+                },
+            );
+        }
+    }
+}
+
 /// A [`PosedFrame`] being filled with checked guides (see
 /// [`PosedFrame::posing`]).
-pub struct Posing<'r> {
+pub struct Posing<'r, S = &'r Guides<'r>> {
     /// Fills ranges of guides.
-    pub filler: GuideFiller<'r>,
+    pub filler: GuideFiller<'r, S>,
     /// [`GuideFiller::floats_per_guide`] floats per guide, guide after guide.
     pub data: &'r mut [f32],
     posed: &'r mut bool,
 }
 
-impl Posing<'_> {
+impl<S> Posing<'_, S> {
     /// Marks the frame posed, once every guide is filled.
     pub fn finish(self) {
         *self.posed = true;
@@ -240,14 +282,14 @@ impl Posing<'_> {
 
 /// Fills the slots of a range of guides (see [`Posing`]).
 #[derive(Clone, Copy)]
-pub struct GuideFiller<'r> {
+pub struct GuideFiller<'r, S = &'r Guides<'r>> {
     mesh: &'r Mesh<'r>,
     tangents: &'r [[f32; 3]],
-    guides: &'r Guides<'r>,
+    source: S,
     points: usize,
 }
 
-impl GuideFiller<'_> {
+impl<S: GuidePoints> GuideFiller<'_, S> {
     /// Floats each guide takes.
     pub fn floats_per_guide(&self) -> usize {
         6 * self.points
@@ -257,28 +299,21 @@ impl GuideFiller<'_> {
     /// [`GuideFiller::floats_per_guide`]).
     pub fn fill(&self, first: usize, part: &mut [f32]) {
         let n = self.points;
-        let step = 1.0 / (n - 1) as f32;
         // frames a block at a time (their square-root chains overlap)
         let (mut frames, mut basis) = ([Frame::default(); FRAME_LANES], None);
         for (i, slot) in part.chunks_exact_mut(6 * n).enumerate() {
             let g = first + i;
             if i % FRAME_LANES == 0 {
-                let roots = &self.guides.roots[g..];
+                let roots = &self.source.roots()[g..];
                 frame::frames(self.mesh, self.tangents, roots, &mut basis, &mut frames);
             }
             let frame = &frames[i % FRAME_LANES];
-            let (_, count) = self.guides.span(g);
             let (local, world) = slot.split_at_mut(3 * n);
-            for j in 0..n {
-                let p = if count == n {
-                    self.guides.point(g, j)
-                } else {
-                    self.guides.sample(g, j as f32 * step)
-                };
+            self.source.each_point(g, n, |j, p| {
                 let l = frame.to_local(p);
                 (local[j], local[n + j], local[2 * n + j]) = (l.x, l.y, l.z);
                 (world[j], world[n + j], world[2 * n + j]) = (p.x, p.y, p.z);
-            }
+            });
         }
     }
 }

@@ -39,9 +39,12 @@ pub use crate::surface::rim::Rim;
 use crate::{Error, Mesh};
 use core::ops::Range;
 use glam::Vec3;
+use wide::{f32x4, CmpEq, CmpGt, CmpNe};
 
-/// Cells per triangle the grid aims at (finer grids answer more points by lookup).
-const CELLS_PER_TRIANGLE: f32 = 32.0;
+/// Cells per triangle the grid aims at by default: finer grids answer more
+/// points by lookup and test fewer triangles in the others, coarser ones
+/// build faster (see [`BodyPlan::with_density`]).
+pub const CELLS_PER_TRIANGLE: f32 = 32.0;
 /// Most cells along one axis.
 const MAX_DIM: f32 = 1024.0;
 
@@ -77,7 +80,7 @@ struct Shape {
 impl Shape {
     /// The grid over the triangles of `mesh` that `solid` keeps (those
     /// not degenerate).
-    fn of(mesh: &Mesh, solid: impl Fn(usize) -> bool) -> Result<Shape, Error> {
+    fn of(mesh: &Mesh, density: f32, solid: impl Fn(usize) -> bool) -> Result<Shape, Error> {
         mesh.check()?;
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         let mut triangles = 0;
@@ -94,8 +97,8 @@ impl Shape {
         }
         let extent = hi - lo;
         let volume = extent.x.max(1e-30) * extent.y.max(1e-30) * extent.z.max(1e-30);
-        let cell = libm::cbrtf(volume / (CELLS_PER_TRIANGLE * triangles as f32))
-            .max(extent.max_element() / MAX_DIM);
+        let cell =
+            libm::cbrtf(volume / (density * triangles as f32)).max(extent.max_element() / MAX_DIM);
         if !(cell.is_finite() && cell > 0.0) {
             return Err(Error::InvalidArgument("body extent is not finite"));
         }
@@ -438,8 +441,23 @@ impl BodyPlan {
     /// Validates `mesh` and places the grid; `rim` is the mesh's boundary
     /// (see [`Rim`] for when it must be found again).
     pub fn of(mesh: &Mesh, rim: &Rim) -> Result<Self, Error> {
+        Self::with_density(mesh, rim, CELLS_PER_TRIANGLE)
+    }
+
+    /// [`of`](Self::of), the grid aiming at `cells_per_triangle` cells per
+    /// triangle (1 to 64; the grid has at most 1024 cells a side): a body
+    /// built for few queries (a guide simulation's step) builds faster
+    /// coarse, one queried by a million render strands answers faster fine.
+    /// The solid is the same at any density (answers may differ only for
+    /// points within rounding of the surface).
+    pub fn with_density(mesh: &Mesh, rim: &Rim, cells_per_triangle: f32) -> Result<Self, Error> {
+        if !(1.0..=64.0).contains(&cells_per_triangle) {
+            return Err(Error::InvalidArgument(
+                "body grid density must be 1 to 64 cells per triangle",
+            ));
+        }
         rim.check_mesh(mesh)?;
-        let shape = Shape::of(mesh, |f| rim.is_solid(f))?;
+        let shape = Shape::of(mesh, cells_per_triangle, |f| rim.is_solid(f))?;
         if shape.refs >= u32::MAX as usize {
             return Err(Error::InvalidArgument("body grid is too large"));
         }
@@ -474,7 +492,7 @@ impl<'a> Body<'a> {
     /// Arena bytes [`Body::new`] needs for `mesh` (validates it): its rim's
     /// and its body's, for the most boundary edges the mesh could have.
     pub fn required_bytes(mesh: &Mesh) -> Result<usize, Error> {
-        let shape = Shape::of(mesh, |f| !mesh.is_degenerate(f))?;
+        let shape = Shape::of(mesh, CELLS_PER_TRIANGLE, |f| !mesh.is_degenerate(f))?;
         // a loop has three edges or more
         let edges = 3 * mesh.triangle_count();
         let body = BodyPlan::bytes_with(&shape, edges, edges / 3);
@@ -916,15 +934,47 @@ fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
     }
     let turn = |v: [f32; 3]| [v[AXIS], v[j], v[k]];
     let (a, b, c, p) = (turn(t[0]), turn(t[1]), turn(t[2]), turn(p.to_array()));
-    let (w0, s0) = edge(b, c, p);
-    let (w1, s1) = edge(c, a, p);
-    let (w2, s2) = edge(a, b, p);
-    if s0 != s1 || s1 != s2 {
+    // the edges b -> c, c -> a, a -> b in lanes 0, 1, 2
+    let from = [b, c, a];
+    let to = [c, a, b];
+    let gather = |v: &[[f32; 3]; 3], i: usize| f32x4::from([v[0][i], v[1][i], v[2][i], 0.0]);
+    let (w, positive) = edges(
+        [gather(&from, 1), gather(&from, 2)],
+        [gather(&to, 1), gather(&to, 2)],
+        [p[1], p[2]],
+    );
+    let sides = positive & 7;
+    if sides != 0 && sides != 7 {
         return None;
     }
+    let [w0, w1, w2, _] = w.to_array();
     let sum = w0 + w1 + w2;
-    let step = if s0 { -1 } else { 1 };
+    let step = if sides == 7 { -1 } else { 1 };
     Some(((w0 * a[0] + w1 * b[0] + w2 * c[0]) / sum, step))
+}
+
+/// The edge functions of `p` against the edges `from -> to` (y and z of
+/// each, an edge per lane) in the plane of those two coordinates, and a
+/// bit per lane for the side `p` is on. Each is evaluated with the edge's
+/// endpoints in a canonical order (the lower (y, z) first), so the
+/// neighbour across an edge sees its exact negation; on an exact zero the
+/// side is the one a fixed infinitesimal shift of `p`, (0, -eps^2, eps),
+/// would give, so a point on an edge belongs to exactly one of its
+/// triangles. In the canonical order the edge's dy is >= 0, and dz >= 0
+/// where dy is 0: that shift then puts `p` on the positive side of every
+/// edge but a point's.
+#[inline]
+fn edges(from: [f32x4; 2], to: [f32x4; 2], p: [f32; 2]) -> (f32x4, i32) {
+    let zero = f32x4::ZERO;
+    let swap = from[0].cmp_gt(to[0]) | (from[0].cmp_eq(to[0]) & from[1].cmp_gt(to[1]));
+    let (ly, lz) = (swap.blend(to[0], from[0]), swap.blend(to[1], from[1]));
+    let (hy, hz) = (swap.blend(from[0], to[0]), swap.blend(from[1], to[1]));
+    let (dy, dz) = (hy - ly, hz - lz);
+    let e = dy * (f32x4::splat(p[1]) - lz) - dz * (f32x4::splat(p[0]) - ly);
+    let positive = e.cmp_gt(zero) | (e.cmp_eq(zero) & (dy.cmp_ne(zero) | dz.cmp_ne(zero)));
+    // negated by its sign bit (wide's `-e` is `0 - e`, which loses -0)
+    let negated = e ^ f32x4::splat(-0.0);
+    (swap.blend(negated, e), (positive ^ swap).move_mask())
 }
 
 /// Fills `caps` with the fans that close `rim`'s loops on `mesh`: for a
@@ -962,32 +1012,6 @@ fn solid_angle(t: &Stored, p: Vec3) -> f64 {
     2.0 * libm::atan2(det, den)
 }
 
-/// The edge function of `p` against edge `a -> b` in the plane of the last
-/// two coordinates, and which side `p` is on. The value is evaluated with the
-/// endpoints in a canonical order, so the neighbour across the edge sees its
-/// exact negation; on an exact zero the side is the one a fixed infinitesimal
-/// shift of `p`, (0, -eps^2, eps), would give, so a point on an edge belongs
-/// to exactly one of its triangles.
-#[inline]
-fn edge(a: [f32; 3], b: [f32; 3], p: [f32; 3]) -> (f32, bool) {
-    let swap = (a[1], a[2]) > (b[1], b[2]);
-    let (a, b) = if swap { (b, a) } else { (a, b) };
-    let (dy, dz) = (b[1] - a[1], b[2] - a[2]);
-    let e = dy * (p[2] - a[2]) - dz * (p[1] - a[1]);
-    let positive = if e != 0.0 {
-        e > 0.0
-    } else if dy != 0.0 {
-        dy > 0.0
-    } else {
-        dz > 0.0
-    };
-    if swap {
-        (-e, !positive)
-    } else {
-        (e, positive)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -997,6 +1021,96 @@ mod tests {
     fn build<'a>(mesh: &Mesh, buf: &'a mut Vec<u8>) -> Body<'a> {
         *buf = vec![0u8; Body::required_bytes(mesh).unwrap()];
         Body::new(mesh, &mut Arena::new(buf)).unwrap()
+    }
+
+    /// One edge at a time, with branches: what [`edges`] computes in lanes.
+    fn edge(a: [f32; 3], b: [f32; 3], p: [f32; 3]) -> (f32, bool) {
+        let swap = (a[1], a[2]) > (b[1], b[2]);
+        let (a, b) = if swap { (b, a) } else { (a, b) };
+        let (dy, dz) = (b[1] - a[1], b[2] - a[2]);
+        let e = dy * (p[2] - a[2]) - dz * (p[1] - a[1]);
+        let positive = if e != 0.0 {
+            e > 0.0
+        } else if dy != 0.0 {
+            dy > 0.0
+        } else {
+            dz > 0.0
+        };
+        if swap {
+            (-e, !positive)
+        } else {
+            (e, positive)
+        }
+    }
+
+    /// [`crossing`] from [`edge`].
+    fn crossing_by_edge<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
+        let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
+        let [.., lo, hi] = t;
+        if p[j] < lo[j] || p[j] > hi[j] || p[k] < lo[k] || p[k] > hi[k] {
+            return None;
+        }
+        let turn = |v: [f32; 3]| [v[AXIS], v[j], v[k]];
+        let (a, b, c, p) = (turn(t[0]), turn(t[1]), turn(t[2]), turn(p.to_array()));
+        let (w0, s0) = edge(b, c, p);
+        let (w1, s1) = edge(c, a, p);
+        let (w2, s2) = edge(a, b, p);
+        if s0 != s1 || s1 != s2 {
+            return None;
+        }
+        let sum = w0 + w1 + w2;
+        Some((
+            (w0 * a[0] + w1 * b[0] + w2 * c[0]) / sum,
+            if s0 { -1 } else { 1 },
+        ))
+    }
+
+    #[test]
+    fn crossings_in_lanes_match_one_edge_at_a_time() {
+        // small integer coordinates make lines through edges and vertices,
+        // collinear and repeated corners common; the rest are arbitrary
+        let mut checked = 0;
+        for i in 0..400_000u64 {
+            let mut next = {
+                let mut k = 0u32;
+                move || {
+                    k += 1;
+                    rng::unit(11, i, Purpose::Uniform, k)
+                }
+            };
+            let exact = i % 2 == 0;
+            let mut value = || {
+                let u = next();
+                if exact {
+                    libm::floorf(u * 4.0) - 1.0
+                } else {
+                    u * 2.0 - 1.0
+                }
+            };
+            let corners: [[f32; 3]; 3] = core::array::from_fn(|_| [value(), value(), value()]);
+            let p = Vec3::new(value(), value(), value());
+            let [a, b, c] = corners.map(Vec3::from);
+            let t: Stored = [a, b, c, a.min(b).min(c), a.max(b).max(c)].map(Into::into);
+            let same = |x: Option<(f32, i32)>, y: Option<(f32, i32)>| match (x, y) {
+                (Some((h, s)), Some((g, r))) => h.to_bits() == g.to_bits() && s == r,
+                (None, None) => true,
+                _ => false,
+            };
+            assert!(
+                same(crossing::<0>(&t, p), crossing_by_edge::<0>(&t, p)),
+                "{t:?} {p}"
+            );
+            assert!(
+                same(crossing::<1>(&t, p), crossing_by_edge::<1>(&t, p)),
+                "{t:?} {p}"
+            );
+            assert!(
+                same(crossing::<2>(&t, p), crossing_by_edge::<2>(&t, p)),
+                "{t:?} {p}"
+            );
+            checked += crossing_by_edge::<2>(&t, p).is_some() as u32;
+        }
+        assert!(checked > 10_000, "{checked} crossings");
     }
 
     #[test]
