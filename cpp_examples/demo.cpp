@@ -354,7 +354,6 @@ int main(int argc, char** argv) try {
     PelageSim sim = nullptr;
     creature::check(pelage_sim_new(&rest_desc, &guides, &simp, sim_memory.data(), sim_bytes, &sim), "pelage_sim_new");
     const std::vector<float> rest_positions = mesh.positions;
-    std::vector<float> simulated(guide_points.size());
     PelageColliders colliders{};
     colliders.body = 1;
     const int steps_per_tile = 3;
@@ -368,9 +367,7 @@ int main(int argc, char** argv) try {
       creature::Stopwatch step_clock;
       const creature::Frame frame(mesh, guides, ep);
       creature::check(pelage_sim_step(sim, frame.get(), &colliders, nullptr, 0, 1.0f / 24.0f, 0), "pelage_sim_step");
-      creature::check(pelage_sim_read(sim, simulated.data(), 12, simulated.size() / 3), "pelage_sim_read");
-      const PelageGuidesDesc posed_guides = creature::guides_desc(guide_roots, simulated, cvs);
-      creature::check(pelage_frame_set_guides(frame.get(), &posed_guides, 0), "pelage_frame_set_guides");
+      creature::check(pelage_frame_set_sim_guides(frame.get(), sim, 0), "pelage_frame_set_sim_guides");
       sim_s.push_back(step_clock.seconds());
       step_clock = {};
       expander.expand(frame, fur, 0, n, points.data(), per * n);

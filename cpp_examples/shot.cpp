@@ -212,7 +212,6 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
 
   check(pelage_guide_cache_max_size(set.guide_count, kCvs, kSamples, 0, &bytes), "pelage_guide_cache_max_size");
   std::vector<unsigned char> cache(bytes);
-  std::vector<float> simulated(rest_points.size());
   for (int f = 0; f < frames; ++f) {
     clock = {};
     std::vector<creature::Mesh> meshes;
@@ -224,9 +223,7 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
       const PelageFrame frame = samples[k]->get();
       check(pelage_sim_step(sim.get(), frame, &colliders, nullptr, 0, 1.0f / (kFps * kSamples), 0),
             "pelage_sim_step");
-      check(pelage_sim_read(sim.get(), simulated.data(), 12, simulated.size() / 3), "pelage_sim_read");
-      const PelageGuidesDesc guides = creature::guides_desc(guide_roots, simulated, kCvs);
-      check(pelage_frame_set_guides(frame, &guides, 0), "pelage_frame_set_guides");
+      check(pelage_frame_set_sim_guides(frame, sim.get(), 0), "pelage_frame_set_sim_guides");
       met = std::max(met, write_trim_records(records_path(dir, f, k), frame, meshes[k], colliders, set.guide_count));
     }
     const PelageFrame at[kSamples] = {samples[0]->get(), samples[1]->get()};

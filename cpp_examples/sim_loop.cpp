@@ -1,8 +1,8 @@
 // A plugin-style simulation loop: what a DCC plugin does every frame with
 // pelage's guide dynamics. The creature walks and sways; each frame the host
 // makes the frame (deformed mesh and neutral guides), steps the simulation
-// (tip springs, links, CCD IK, the body and a capsule as colliders), reads
-// the simulated guides back into the frame, and expands the fur from them.
+// (tip springs, links, CCD IK, the body and a capsule as colliders), poses
+// the frame's guides from the simulation, and expands the fur from them.
 // Prints the time of each stage per frame.
 //
 //   sim_loop <creature.obj> [frames]
@@ -57,7 +57,6 @@ int main(int argc, char** argv) {
     ep.thread_count = 0;
     creature::Expander expander(ep);
     std::vector<float> curves(4 * expander.points_per_curve() * hairs.size());
-    std::vector<float> simulated(guide_points.size());
     creature::Mesh posed = rest;
     std::printf("%5s | %9s %9s %9s %9s\n", "frame", "frame ms", "step ms", "expand ms", "total ms");
     for (int f = 0; f < frames; ++f) {
@@ -76,9 +75,7 @@ int main(int argc, char** argv) {
       const creature::Frame frame(posed, guides, ep);
       const auto t1 = std::chrono::steady_clock::now();
       check(pelage_sim_step(sim, frame.get(), &colliders, nullptr, 0, 1.0f / 24.0f, 0), "pelage_sim_step");
-      check(pelage_sim_read(sim, simulated.data(), 12, simulated.size() / 3), "pelage_sim_read");
-      const PelageGuidesDesc simulated_guides = creature::guides_desc(guide_roots, simulated, joints);
-      check(pelage_frame_set_guides(frame.get(), &simulated_guides, 0), "pelage_frame_set_guides");
+      check(pelage_frame_set_sim_guides(frame.get(), sim, 0), "pelage_frame_set_sim_guides");
       const auto t2 = std::chrono::steady_clock::now();
       expander.expand(frame, fur, 0, hairs.size(), curves.data(), curves.size() / 4);
       const auto t3 = std::chrono::steady_clock::now();
