@@ -16,7 +16,9 @@
 //! surface. The mesh's own winding number is `w` minus the caps' solid
 //! angle over 4 pi, which matters only near a cap.
 //!
-//! A uniform grid over the mesh triangles. Every cell centre's `w` is found
+//! A uniform grid over the mesh triangles: each cell lists the triangles
+//! whose bounds meet it and whose plane passes through it (padded against
+//! rounding), so it lists only those that may cross it. Every cell centre's `w` is found
 //! once, by one sweep along x through each row of centres that adds up the
 //! signed crossings between consecutive centres. A point in a cell no
 //! triangle touches, far from every cap, takes its cell's class by a
@@ -229,13 +231,16 @@ impl<'a> BodyParts<'a> {
     }
 
     /// Records the references of every layer (the sum of what
-    /// [`BodyGrid::count`] returned), which must be the plan's.
+    /// [`BodyGrid::count`] returned), at most the plan's (which counts
+    /// every cell of each triangle's bounds).
     pub fn set_total(&mut self, total: u64) -> Result<(), Error> {
-        if total != self.refs.len() as u64 {
+        if total > self.refs.len() as u64 {
             return Err(Error::InvalidArgument("body plan made from another mesh"));
         }
         let cells = self.start.len() - 1;
         self.start[cells] = total as u32;
+        let refs = core::mem::take(&mut self.refs);
+        self.refs = &mut refs[..total as usize];
         Ok(())
     }
 
@@ -254,18 +259,33 @@ impl<'a> BodyParts<'a> {
 }
 
 impl BodyGrid<'_> {
-    /// Visits the cells of layers `layers` that a triangle's bounds
-    /// touch (its `span`), by their index within those layers.
+    /// Visits the cells of layers `layers` that triangle `t` may touch, by
+    /// their index within those layers: the cells of its bounds (its span)
+    /// that its plane passes through. The cells are padded as the bounds
+    /// are, and the plane's distance is given more than its rounding, so
+    /// every cell where a crossing with the triangle can be computed is
+    /// visited (most of a bounding box's corners are not).
     #[inline]
-    fn each_cell(&self, span: &Span, layers: &Range<usize>, mut visit: impl FnMut(usize)) {
+    fn each_cell(&self, t: usize, layers: &Range<usize>, mut visit: impl FnMut(usize)) {
         let shape = &self.shape;
-        let [a0, a1, a2, b0, b1, b2] = span.map(usize::from);
+        let [a0, a1, a2, b0, b1, b2] = self.spans[t].map(usize::from);
         let (a, b) = ([a0, a1, a2], [b0, b1, b2]);
+        let [p, q, r, ..] = self.triangles[t].map(Vec3::from);
+        let n = (q - p).cross(r - p);
+        let weight = n.abs().element_sum();
+        // half a cell and the bounds' pad; the rounding of n . (c - p),
+        // with n, c and c - p rounded, stays below ~10 units in the last
+        // place of |n| (|c| + |p|): 4e-6 is over thirty
+        let half = (0.5 + 1e-3) / shape.inv_cell;
+        let size = shape.lo.abs().max(shape.hi.abs()).max_element() + 2.0 / shape.inv_cell;
+        let reach = weight * (half + 4e-6 * (size + p.abs().max_element()));
         let skip = layers.start * shape.layer_cells();
         for z in a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1)) {
             for y in a[1]..=b[1] {
                 for x in a[0]..=b[0] {
-                    visit(shape.index(x, y, z) - skip);
+                    if n.dot(shape.centre(x, y, z) - p).abs() <= reach {
+                        visit(shape.index(x, y, z) - skip);
+                    }
                 }
             }
         }
@@ -279,8 +299,8 @@ impl BodyGrid<'_> {
         if layers.is_empty() {
             return 0;
         }
-        for span in self.spans {
-            self.each_cell(span, &layers, |c| start[c] += 1);
+        for t in 0..self.spans.len() {
+            self.each_cell(t, &layers, |c| start[c] += 1);
         }
         let mut sum = 0u32;
         for s in start.iter_mut() {
@@ -299,8 +319,8 @@ impl BodyGrid<'_> {
             return;
         }
         // filled backwards from each cell's end, so each ends at its start
-        for (t, span) in self.spans.iter().enumerate() {
-            self.each_cell(span, &layers, |c| {
+        for t in 0..self.spans.len() {
+            self.each_cell(t, &layers, |c| {
                 start[c] -= 1;
                 refs[start[c] as usize] = t as u32;
             });
