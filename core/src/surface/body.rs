@@ -18,8 +18,8 @@
 //!
 //! A uniform grid over the mesh triangles: each cell lists the triangles
 //! whose bounds meet it and whose plane passes through it (padded against
-//! rounding), so it lists only those that may cross it. Every cell centre's `w` is found
-//! once, by one sweep along x through each row of centres that adds up the
+//! rounding), the only ones that may cross it. Every cell centre's `w` is
+//! found once, by one sweep along x through each row of centres that adds up the
 //! signed crossings between consecutive centres. A point in a cell no
 //! triangle touches, far from every cap, takes its cell's class by a
 //! lookup; a point in a cell the surface passes through takes the centre's
