@@ -827,19 +827,23 @@ enum PelageStatus pelage_frame_new(const struct PelageMeshDesc *mesh, size_t gui
 enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct PelageGuidesDesc *guides, uint32_t thread_count);
 
 // Poses `frame`'s guides with `sim`'s posed guides of the last step,
-// without copying them out: the bits pelage_sim_read then
-// pelage_frame_set_guides (with the simulation's roots) would give, in
-// less time. The frame must be of the simulation's mesh (its counts) with
-// the simulation's points_per_guide points per strand, made for as many
+// without copying them out: the bits and the statuses of pelage_sim_read
+// then pelage_frame_set_guides (with the simulation's roots), in less
+// time. The frame must be of the simulation's mesh (its counts) with the
+// simulation's points_per_guide points per strand, made for as many
 // guides as the simulation has; `sim` must have stepped since it was
-// created, reset or restored. Split over `thread_count` threads (0: all
-// cores); the bits do not depend on it. On failure the frame keeps the
-// guides it had.
+// created, reset or restored (after a PANIC from pelage_sim_step, reset
+// or restore it first: a half-made step is not refused here). Split over
+// `thread_count` threads (0: all cores); the bits do not depend on it. On
+// failure the frame keeps the guides it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
-// another point or guide count, no step yet), PANIC (also when a worker
-// thread cannot start: the frame's guides are then unspecified until the
-// next successful call).
+// another point or guide count, no step yet; a simulated guide with a
+// point beyond 1e9 or of zero length, on a collapsed root triangle, as
+// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
+// step), PANIC (also when a worker thread
+// cannot start: the frame's guides are then unspecified until the next
+// successful call).
 //
 // Thread safety: no other call may use `frame` during this one; `sim` may
 // be read by other calls meanwhile (not stepped, reset or restored).

@@ -22,7 +22,9 @@ use glam::{Vec2, Vec3, Vec3A};
 /// [`BodyPlan::with_density`](crate::surface::body::BodyPlan::with_density)):
 /// a step's few hundred thousand guide points do not repay the default
 /// grid's build. Both build it alike, so a step colliding with either body
-/// gives the same bits.
+/// gives the same bits; the frame's body thus answers the render strands'
+/// push-out at this density too (a query there costs ~1.4x what it would
+/// at the default's, its build ~0.6x).
 pub const COLLISION_CELLS_PER_TRIANGLE: f32 = 8.0;
 
 /// A solid sphere.

@@ -349,10 +349,11 @@ impl<'a> Sim<'a> {
     /// Poses `frame`'s guides with the posed guides of the last step, for
     /// a host to fill in parallel as [`PosedFrame::posing`] does: the bits
     /// that step's world points would give through [`PosedFrame::posing`]
-    /// (from the same roots), without copying them out. The frame must be of
-    /// a mesh with the rest mesh's counts and take [`points`](Self::points)
-    /// points per strand, and a step must have run since the simulation was
-    /// made, reset or restored.
+    /// (from the same roots), without copying them out, and the same
+    /// errors where [`Guides::validate`] refuses those points. The frame
+    /// must be of a mesh with the rest mesh's counts and take
+    /// [`points`](Self::points) points per strand, and a step must have run
+    /// since the simulation was made, reset or restored.
     pub fn posing<'r>(
         &'r self,
         frame: &'r mut PosedFrame<'_>,
@@ -373,7 +374,54 @@ impl<'a> Sim<'a> {
                 "the simulation has no posed guides until it steps (after being made, reset or restored)",
             ));
         }
+        self.check_posed()?;
         frame.posing_from(SimGuides { sim: self })
+    }
+
+    /// What [`Guides::validate`] refuses of the world points [`posed`]
+    /// gives (the same checks, in the same order, with the same errors):
+    /// a point not finite or beyond 1e9, a guide of zero length (its root
+    /// triangle collapsed).
+    ///
+    /// [`posed`]: Self::posed
+    fn check_posed(&self) -> Result<(), Error> {
+        let limit = crate::surface::mesh::MAX_COORDINATE;
+        let m = self.points();
+        let (mut not_finite, mut far, mut zero) = (None, None, false);
+        for g in 0..self.len() {
+            let frame = self.root_frame(g);
+            let (mut length, mut last) = (0.0f32, Vec3::ZERO);
+            for j in 0..m {
+                let p = frame.to_world(self.posed_local(g, j));
+                let index = g * m + j;
+                if !p.is_finite() {
+                    not_finite = not_finite.or(Some(index));
+                } else if p.abs().max_element() > limit {
+                    far = far.or(Some(index));
+                }
+                if j > 0 {
+                    length += p.distance(last);
+                }
+                last = p;
+            }
+            zero |= length.is_nan() || length <= 0.0;
+        }
+        if let Some(index) = not_finite {
+            return Err(Error::NonFinite {
+                what: "guide points",
+                index,
+            });
+        }
+        if let Some(index) = far {
+            return Err(Error::OutOfDomain {
+                what: "guide points (within 1e9)",
+                index,
+            });
+        }
+        if zero {
+            return Err(Error::InvalidArgument("a guide has zero length"));
+        }
+        Ok(())
     }
 
     /// Checks the step's inputs and splits the simulation into what the
@@ -1338,6 +1386,20 @@ mod tests {
                 "point {k}: {q}, {off} from the root"
             );
         }
+        // a frame posed from it refuses the collapsed guide, as posing it
+        // from the points it reads does
+        let pose_on = |mesh: &crate::testmesh::TestMesh, sim: &Sim| {
+            let mut layout = ArenaLayout::new();
+            PosedFrame::layout(&mut layout, mesh.p.len(), 1, sim.points());
+            let mut buf = vec![0u8; layout.bytes()];
+            let mut frame =
+                PosedFrame::new(mesh.mesh(), 1, sim.points(), &mut Arena::new(&mut buf)).unwrap();
+            sim.posing(&mut frame).map(|posing| posing.finish())
+        };
+        assert!(matches!(
+            pose_on(&triangle(o, 0.0), &sim),
+            Err(Error::InvalidArgument("a guide has zero length"))
+        ));
         // back: the guide stands again, its segments their rest length
         for _ in 0..48 {
             step(&mut sim, &rest, &Colliders::default(), 1.0 / 24.0);
@@ -1352,6 +1414,7 @@ mod tests {
         }
         let tip = sim.posed(0, 2);
         assert!(tip.distance(Vec3::from(lean(2.0))) < 0.01, "tip {tip}");
+        assert!(pose_on(&rest, &sim).is_ok());
     }
 
     #[test]

@@ -273,12 +273,22 @@ impl BodyGrid<'_> {
         let [p, q, r, ..] = self.triangles[t].map(Vec3::from);
         let n = (q - p).cross(r - p);
         let weight = n.abs().element_sum();
-        // half a cell and the bounds' pad; the rounding of n . (c - p),
-        // with n, c and c - p rounded, stays below ~10 units in the last
-        // place of |n| (|c| + |p|): 4e-6 is over thirty
+        // half a cell and the bounds' pad, and room for rounding, in units
+        // of n: n . (c - p) rounds by ~10 units in the last place of
+        // |n| (|c| + |p|) (4e-6 is over thirty); n itself, a cross product
+        // of differences, by ~3 of |e|^2 (e the longest edge) in each
+        // component, and a crossing `crossing` computes lies off the plane
+        // by up to ~12 of |e|^3 (its weights round like n): a thin
+        // triangle's computed crossings stray from its plane, and it is
+        // then kept in more cells
         let half = (0.5 + 1e-3) / shape.inv_cell;
         let size = shape.lo.abs().max(shape.hi.abs()).max_element() + 2.0 / shape.inv_cell;
-        let reach = weight * (half + 4e-6 * (size + p.abs().max_element()));
+        let e2 = (q - p)
+            .length_squared()
+            .max((r - p).length_squared())
+            .max((r - q).length_squared());
+        let thin = 64.0 * f32::EPSILON * e2 * (libm::sqrtf(e2) + 2.0 / shape.inv_cell);
+        let reach = weight * (half + 4e-6 * (size + p.abs().max_element())) + thin;
         let skip = layers.start * shape.layer_cells();
         for z in a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1)) {
             for y in a[1]..=b[1] {
@@ -1083,6 +1093,47 @@ mod tests {
             (w0 * a[0] + w1 * b[0] + w2 * c[0]) / sum,
             if s0 { -1 } else { 1 },
         ))
+    }
+
+    #[test]
+    fn slivers_are_listed_wherever_their_crossings_can_fall() {
+        // three bands of 1,500 slivers (aspect ~300) from pole to pole, and
+        // points within 0.01 of them, at a coarse and a fine grid
+        let m = sphere(3, 1500);
+        let mesh = m.mesh();
+        for density in [2.0, 32.0] {
+            let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
+            let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
+            let plan = BodyPlan::with_density(&mesh, &rim, density).unwrap();
+            let mut memory = vec![0u8; plan.bytes()];
+            let body = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
+            let mut inside = 0;
+            for i in 0..1500u64 {
+                let r = |c| rng::unit(17, i, Purpose::Uniform, c);
+                let f =
+                    ((r(0) * mesh.triangle_count() as f32) as usize).min(mesh.triangle_count() - 1);
+                let (u, v) = (r(1), r(2));
+                let (u, v) = if u + v > 1.0 {
+                    (1.0 - u, 1.0 - v)
+                } else {
+                    (u, v)
+                };
+                let [a, b, c] = mesh.corners(f);
+                let n = (b - a).cross(c - a).normalize();
+                let p = a + (b - a) * u + (c - a) * v + n * (0.01 * (r(3) * 2.0 - 1.0));
+                let w = winding(&mesh, p);
+                if (w - 0.5).abs() < 1e-3 {
+                    continue;
+                }
+                assert_eq!(
+                    body.contains(p),
+                    w > 0.5,
+                    "{p}: winding {w}, density {density}"
+                );
+                inside += (w > 0.5) as usize;
+            }
+            assert!((400..1100).contains(&inside), "{inside}");
+        }
     }
 
     #[test]
