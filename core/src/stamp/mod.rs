@@ -839,6 +839,37 @@ mod tests {
         assert!(roots.iter().enumerate().all(|(i, r)| r.id == i as u32));
     }
 
+    /// A face holding more kept points than the fill tests in lanes
+    /// (`fill::OWN`, 256, of those within reach of its cut edges) has its
+    /// darts tested point by point: two triangles of ~10,000 roots each
+    /// keep the spacing, the count and the fill's refills.
+    #[test]
+    fn faces_with_more_points_than_the_fills_lanes_keep_the_spacing() {
+        let m = graded_plane(1, 1.0);
+        let mesh = m.mesh();
+        for seed in [3, 4] {
+            let (roots, report) = run(
+                mesh,
+                &StampParams {
+                    seed,
+                    ..params(20_000)
+                },
+            );
+            assert_eq!(roots.len(), 20_000, "{report:?}");
+            assert!(report.filled > 0, "the fill added nothing: {report:?}");
+            for face in 0..2 {
+                let on = roots.iter().filter(|r| r.face == face).count();
+                assert!(on > 256, "face {face}: {on} roots");
+            }
+            let min = min_spacing(&mesh, &roots);
+            assert!(
+                min >= report.radius * 0.999,
+                "min {min} < r {}",
+                report.radius
+            );
+        }
+    }
+
     #[test]
     fn shells_closer_than_the_radius_keep_the_spacing_between_them() {
         // two parallel sheets facing the same way, a grid cell's boundary
