@@ -383,7 +383,8 @@ pub(crate) fn body_of<'a>(
     })
 }
 
-/// The solid of `mesh`, its rim built in `rim_arena` (grown as needed), its
+/// The solid of `mesh`, its rim found in `rim_arena` (grown as needed; the
+/// rim an earlier call left there is taken again while it still fits), its
 /// grid of `density` cells per triangle in the memory `memory` gives for
 /// the bytes it needs, built by layers over `thread_count` threads (the
 /// same bits on any count).
@@ -400,7 +401,7 @@ pub(crate) fn body_in<'a>(
         0,
         "the mesh's boundary loops",
     )?;
-    let rim = Rim::new(mesh, &mut Arena::new(rim_arena))?;
+    let rim = Rim::refresh(mesh, &mut Arena::new(rim_arena))?;
     let plan = BodyPlan::with_density(mesh, &rim, density)?;
     let mut parts = Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())?))?;
     let (layers, per) = (parts.layers(), parts.layer_cells());

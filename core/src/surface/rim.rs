@@ -8,11 +8,11 @@
 //! The boundary depends on the triangle indices, on which vertices share a
 //! position (welding) and on which triangles are degenerate (skipped, as
 //! the body skips them, so a sliver becomes a capped hole rather than a
-//! slit): find it again when the positions may change those (the
-//! simulation finds it every step; see
-//! [`BodyPlan::of`](crate::surface::body::BodyPlan::of)). An edge listed
-//! `a -> b` by `m` triangles and `b -> a` by `n` is a boundary edge `m - n`
-//! times (in the direction of the surplus); a closed mesh, however many
+//! slit): find it again when the positions may change those
+//! ([`Rim::refresh`] checks whether they did, in one pass over the mesh,
+//! and finds it again only then: the simulation refreshes it every step).
+//! An edge listed `a -> b` by `m` triangles and `b -> a` by `n` is a
+//! boundary edge `m - n` times (in the direction of the surplus); a closed mesh, however many
 //! shells it has, has none. The surplus edges meet every vertex as often
 //! going in as going out (each triangle does), so they always split into
 //! closed loops.
@@ -72,27 +72,176 @@ fn sort_by_first_end<'a>(
     Ok(sorted)
 }
 
+/// What a rim keeps at the front of its arena, for [`Rim::refresh`] to
+/// find again: a header, then the rim's arrays and a copy of the indices
+/// it was found for.
+struct Kept<'a> {
+    /// [`MAGIC`], the header's address, vertices, triangles, boundary
+    /// edges, loops; all zero until a rim is complete.
+    header: &'a mut [u64],
+    weld: &'a mut [u32],
+    indices: &'a mut [[u32; 3]],
+    edges: &'a mut [[u32; 2]],
+    starts: &'a mut [u32],
+    solid: &'a mut [u8],
+}
+
+/// The first word of a complete rim's header.
+const MAGIC: u64 = u64::from_le_bytes(*b"pelarim1");
+/// Words of a rim's header.
+const HEADER: usize = 6;
+
+impl<'a> Kept<'a> {
+    fn layout(layout: &mut ArenaLayout, vertices: usize, triangles: usize) {
+        layout
+            .add::<u64>(HEADER)
+            .add::<u32>(vertices)
+            .add::<[u32; 3]>(triangles)
+            .add::<[u32; 2]>(3 * triangles)
+            .add::<u32>(triangles + 2)
+            .add::<u8>(triangles);
+    }
+
+    fn alloc(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
+        let (vertices, triangles) = (mesh.positions.len(), mesh.triangle_count());
+        Ok(Kept {
+            header: arena.alloc::<u64>(HEADER)?,
+            weld: arena.alloc::<u32>(vertices)?,
+            indices: arena.alloc::<[u32; 3]>(triangles)?,
+            edges: arena.alloc::<[u32; 2]>(3 * triangles)?,
+            starts: arena.alloc::<u32>(triangles + 2)?,
+            solid: arena.alloc::<u8>(triangles)?,
+        })
+    }
+
+    /// The header a rim of `edges` boundary edges in `loops` loops on
+    /// `mesh` has here.
+    fn header(&self, mesh: &Mesh, edges: usize, loops: usize) -> [u64; HEADER] {
+        [
+            MAGIC,
+            self.header.as_ptr() as u64,
+            mesh.positions.len() as u64,
+            mesh.triangle_count() as u64,
+            edges as u64,
+            loops as u64,
+        ]
+    }
+
+    fn rim(self, mesh: &Mesh, edges: usize, loops: usize) -> Rim<'a> {
+        Rim {
+            weld: self.weld,
+            edges: &self.edges[..edges],
+            starts: &self.starts[..=loops],
+            solid: self.solid,
+            vertices: mesh.positions.len(),
+            triangles: mesh.triangle_count(),
+        }
+    }
+
+    /// Whether the rim kept here is `mesh`'s: found for the same indices,
+    /// the same triangles degenerate, and the same vertices welded (each
+    /// at its welded vertex's position, and no two welded vertices at one
+    /// position), which is all a rim depends on. `table` is scratch.
+    fn still_fits(&self, mesh: &Mesh, table: &mut [u32]) -> bool {
+        let [magic, _, _, _, edges, loops] =
+            *<&[u64; HEADER]>::try_from(&*self.header).unwrap_or(&[0; HEADER]);
+        let fits = magic == MAGIC
+            && self.header[..4] == self.header(mesh, 0, 0)[..4]
+            && edges <= self.edges.len() as u64
+            && loops < self.starts.len() as u64;
+        if !fits {
+            return false;
+        }
+        if (0..mesh.triangle_count()).any(|f| self.indices[f] != mesh.triangles.get(f)) {
+            return false;
+        }
+        if (0..mesh.triangle_count()).any(|f| self.solid[f] != !mesh.is_degenerate(f) as u8) {
+            return false;
+        }
+        let key = |v: u32| mesh.positions.get(v as usize).map(|c| (c + 0.0).to_bits());
+        if (0..mesh.positions.len() as u32).any(|v| key(v) != key(self.weld[v as usize])) {
+            return false;
+        }
+        // the welded vertices at distinct positions: an open-addressed set
+        table.fill(u32::MAX);
+        let mask = table.len() - 1;
+        for v in (0..mesh.positions.len() as u32).filter(|&v| self.weld[v as usize] == v) {
+            let [x, y, z] = key(v);
+            let mut h = (x.wrapping_mul(0x9E37_79B1)
+                ^ y.wrapping_mul(0x85EB_CA77)
+                ^ z.wrapping_mul(0xC2B2_AE3D)) as usize;
+            loop {
+                h &= mask;
+                match table[h] {
+                    u32::MAX => {
+                        table[h] = v;
+                        break;
+                    }
+                    u if key(u) == key(v) => return false,
+                    _ => h += 1,
+                }
+            }
+        }
+        true
+    }
+}
+
 impl<'a> Rim<'a> {
-    /// Arena bytes [`Rim::new`] takes for `mesh` (an upper bound: every edge
-    /// could be a boundary edge).
+    /// Arena bytes [`Rim::new`] and [`Rim::refresh`] take for `mesh` (an
+    /// upper bound: every edge could be a boundary edge).
     pub fn required_bytes(mesh: &Mesh) -> usize {
         let edges = 3 * mesh.triangle_count();
         let vertices = mesh.positions.len();
         let mut layout = ArenaLayout::new();
+        Kept::layout(&mut layout, vertices, mesh.triangle_count());
         layout
-            .add::<u32>(vertices)
             .add::<[u32; 4]>(edges.max(vertices))
             .add::<[u32; 4]>(edges)
-            .add::<u32>(vertices + 1)
-            .add::<[u32; 2]>(edges)
-            .add::<u32>(edges / 3 + 2)
-            .add::<u8>(mesh.triangle_count());
+            .add::<u32>(vertices + 1);
         layout.bytes()
     }
 
     /// Finds the boundary loops of `mesh` (checks its indices).
     pub fn new(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
         mesh.check()?;
+        Self::check_room(mesh, arena)?;
+        let kept = Kept::alloc(mesh, arena)?;
+        let keys = arena.alloc::<[u32; 4]>(Self::key_count(mesh))?;
+        Self::find(mesh, kept, keys, arena)
+    }
+
+    /// The boundary loops of `mesh`, found in `arena` as [`Rim::new`] finds
+    /// them, unless `arena` (the same memory, at the same address) holds
+    /// the rim of an earlier call that is still `mesh`'s: found for the
+    /// same triangle indices, with the same triangles degenerate and the
+    /// same vertices sharing a position. That rim is then taken as it is,
+    /// after a check linear in the mesh, where finding it sorts. A host that
+    /// builds the body of a deforming mesh every frame keeps one arena for
+    /// its rim: the same rim, in less time.
+    pub fn refresh(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
+        Self::check_room(mesh, arena)?;
+        let kept = Kept::alloc(mesh, arena)?;
+        let keys = arena.alloc::<[u32; 4]>(Self::key_count(mesh))?;
+        // the check's set of positions takes at most 4 slots a vertex: it
+        // fits in the keys' scratch
+        let slots = (2 * mesh.positions.len()).max(2).next_power_of_two();
+        let words = bytemuck::cast_slice_mut::<[u32; 4], u32>(keys);
+        if slots <= words.len() && kept.still_fits(mesh, &mut words[..slots]) {
+            let [.., edges, loops] =
+                *<&[u64; HEADER]>::try_from(&*kept.header).unwrap_or(&[0; HEADER]);
+            return Ok(kept.rim(mesh, edges as usize, loops as usize));
+        }
+        mesh.check()?;
+        Self::find(mesh, kept, keys, arena)
+    }
+
+    /// Scratch keys [`Rim::find`] takes: one per edge, and one per vertex
+    /// to weld them.
+    fn key_count(mesh: &Mesh) -> usize {
+        (3 * mesh.triangle_count()).max(mesh.positions.len())
+    }
+
+    fn check_room(mesh: &Mesh, arena: &Arena) -> Result<(), Error> {
         let needed = Self::required_bytes(mesh);
         if arena.remaining() < needed {
             return Err(Error::CapacityExceeded {
@@ -100,9 +249,21 @@ impl<'a> Rim<'a> {
                 available: arena.capacity(),
             });
         }
+        Ok(())
+    }
+
+    /// Finds the rim of `mesh` (its indices checked) into `kept`, with
+    /// `keys` ([`key_count`](Self::key_count) of them) and `arena` for
+    /// scratch.
+    fn find(
+        mesh: &Mesh,
+        kept: Kept<'a>,
+        keys: &mut [[u32; 4]],
+        arena: &mut Arena<'_>,
+    ) -> Result<Self, Error> {
+        kept.header.fill(0);
         let vertices = mesh.positions.len();
-        let weld = arena.alloc::<u32>(vertices)?;
-        let keys = arena.alloc::<[u32; 4]>((3 * mesh.triangle_count()).max(vertices))?;
+        let weld = &mut *kept.weld;
         // vertices sorted by position (their bits, with -0 as 0): equal
         // positions are adjacent and take the first index among them
         for (v, key) in keys[..vertices].iter_mut().enumerate() {
@@ -120,8 +281,9 @@ impl<'a> Rim<'a> {
         // each edge keyed by its ends in increasing order, with its
         // direction: after sorting, an edge's copies are adjacent
         let mut n = 0;
-        let solid = arena.alloc::<u8>(mesh.triangle_count())?;
+        let solid = &mut *kept.solid;
         for (f, t) in mesh.triangles.iter().enumerate() {
+            kept.indices[f] = t;
             solid[f] = !mesh.is_degenerate(f) as u8;
             if solid[f] == 0 {
                 continue;
@@ -156,8 +318,7 @@ impl<'a> Rim<'a> {
         }
         let open = &mut keys[..e];
         open.sort_unstable();
-        let edges = arena.alloc::<[u32; 2]>(e)?;
-        let starts = arena.alloc::<u32>(e / 3 + 2)?;
+        let (edges, starts) = (&mut *kept.edges, &mut *kept.starts);
         // walk each loop from an unused edge to the unused edge leaving its
         // end, until the walk is back where it began
         const USED: u32 = 1;
@@ -190,14 +351,9 @@ impl<'a> Rim<'a> {
             }
         }
         starts[loops] = written as u32;
-        Ok(Rim {
-            weld,
-            edges: &edges[..written],
-            starts: &starts[..=loops],
-            solid,
-            vertices: mesh.positions.len(),
-            triangles: mesh.triangle_count(),
-        })
+        let header = kept.header(mesh, written, loops);
+        kept.header.copy_from_slice(&header);
+        Ok(kept.rim(mesh, written, loops))
     }
 
     /// Number of boundary edges.
@@ -283,6 +439,93 @@ mod tests {
             assert_eq!(w[0][1], w[1][0]);
         }
         assert_eq!(edges.last().unwrap()[1], edges[0][0]);
+    }
+
+    /// The rim `refresh` gives in `memory` (kept from call to call) is the
+    /// one `new` finds in fresh memory, whatever changed in between.
+    fn refreshes_as_found(mesh: &Mesh, memory: &mut [u8]) {
+        let refreshed = Rim::refresh(mesh, &mut Arena::new(memory)).unwrap();
+        let mut fresh_memory = vec![];
+        let fresh = rim_of(mesh, &mut fresh_memory);
+        assert_eq!(
+            (refreshed.edge_count(), refreshed.loop_count()),
+            (fresh.edge_count(), fresh.loop_count())
+        );
+        for k in 0..fresh.loop_count() {
+            assert_eq!(refreshed.loop_edges(k), fresh.loop_edges(k));
+        }
+        for v in 0..mesh.positions.len() as u32 {
+            assert_eq!(refreshed.welded(v), fresh.welded(v));
+        }
+        for f in 0..mesh.triangle_count() {
+            assert_eq!(refreshed.is_solid(f), fresh.is_solid(f));
+        }
+    }
+
+    #[test]
+    fn a_refreshed_rim_is_the_rim_found_again() {
+        // a seamed sphere with two holes: welds, loops and solid triangles
+        let m = seamed_sphere(12, 24);
+        let tris: Vec<[u32; 3]> =
+            m.t.iter()
+                .enumerate()
+                .filter(|&(i, _)| i != 40 && i != 150)
+                .map(|(_, &t)| t)
+                .collect();
+        let mut p = m.p.clone();
+        let mut memory = vec![
+            0u8;
+            Rim::required_bytes(&Mesh::new(
+                Strided::from_slice(&p),
+                Strided::from_slice(&tris)
+            ))
+        ];
+        let check = |p: &[[f32; 3]], t: &[[u32; 3]], memory: &mut [u8]| {
+            refreshes_as_found(
+                &Mesh::new(Strided::from_slice(p), Strided::from_slice(t)),
+                memory,
+            )
+        };
+        // fresh memory, then the same mesh again, then moved
+        check(&p, &tris, &mut memory);
+        check(&p, &tris, &mut memory);
+        p.iter_mut()
+            .for_each(|q| *q = [q[0] * 1.5 + 0.25, q[1], q[2] - 2.0]);
+        check(&p, &tris, &mut memory);
+        // a triangle collapsed (no longer solid: a third hole), then back
+        let saved = p.clone();
+        let [a, b, c] = tris[7];
+        p[b as usize] = p[a as usize];
+        p[c as usize] = p[a as usize];
+        check(&p, &tris, &mut memory);
+        p.clone_from(&saved);
+        check(&p, &tris, &mut memory);
+        // the seam's welded copies pulled apart (a slit opens), then back
+        let copies: Vec<usize> = (0..p.len())
+            .filter(|&v| (0..p.len()).any(|u| u != v && p[u] == p[v]))
+            .collect();
+        assert!(!copies.is_empty());
+        p[copies[0]][0] += 1e-3;
+        check(&p, &tris, &mut memory);
+        p.clone_from(&saved);
+        check(&p, &tris, &mut memory);
+        // two vertices of a hole's rim moved onto one spot (welded anew)
+        let [a, b, ..] = m.t[40];
+        p[b as usize] = p[a as usize];
+        check(&p, &tris, &mut memory);
+        p.clone_from(&saved);
+        // other indices, the same counts
+        let mut turned = tris.clone();
+        turned.iter_mut().for_each(|t| *t = [t[1], t[2], t[0]]);
+        turned.swap(0, 1);
+        check(&p, &turned, &mut memory);
+        let mut other = tris.clone();
+        other[3] = other[200];
+        check(&p, &other, &mut memory);
+        check(&p, &tris, &mut memory);
+        // memory moved: found again, the same rim
+        let mut moved = memory.clone();
+        check(&p, &tris, &mut moved);
     }
 
     #[test]
