@@ -390,6 +390,9 @@ impl<'a> Sim<'a> {
         let (mut not_finite, mut far, mut zero) = (None, None, false);
         for g in 0..self.len() {
             let frame = self.root_frame(g);
+            if self.plainly_posed(g, &frame) {
+                continue;
+            }
             let (mut length, mut last) = (0.0f32, Vec3::ZERO);
             for j in 0..m {
                 let p = frame.to_world(self.posed_local(g, j));
@@ -422,6 +425,41 @@ impl<'a> Sim<'a> {
             return Err(Error::InvalidArgument("a guide has zero length"));
         }
         Ok(())
+    }
+
+    /// True when guide `g`, on its root frame `frame`, passes
+    /// [`check_posed`](Self::check_posed) for certain, from its local
+    /// points alone (no world point made): the frame and the points
+    /// finite, the frame's axes unit and square (not collapsed), every point within
+    /// half the coordinate limit, and consecutive points farther apart than
+    /// the world points' rounding could close (a few units in the last
+    /// place of the largest coordinate; 1e-5 of it is ~100).
+    fn plainly_posed(&self, g: usize, frame: &Frame) -> bool {
+        let (t, b, n) = (frame.t, frame.b, frame.n);
+        let unit = [t, b, n]
+            .iter()
+            .all(|a| (a.length_squared() - 1.0).abs() < 1e-3);
+        let square = [t.dot(b), t.dot(n), b.dot(n)]
+            .iter()
+            .all(|d| d.abs() < 1e-3);
+        if !(frame.origin.is_finite() && unit && square) {
+            return false;
+        }
+        let (mut farthest, mut closest, mut last) = (0.0f32, f32::INFINITY, None);
+        for j in 0..self.points() {
+            let l = self.posed_local(g, j);
+            if !l.is_finite() {
+                return false;
+            }
+            farthest = farthest.max(l.length_squared());
+            if let Some(p) = last {
+                closest = closest.min(l.distance_squared(p));
+            }
+            last = Some(l);
+        }
+        let scale = frame.origin.abs().max_element() + 1.01 * libm::sqrtf(farthest);
+        let limit = crate::surface::mesh::MAX_COORDINATE;
+        scale < 0.5 * limit && closest > (1e-5 * scale) * (1e-5 * scale)
     }
 
     /// Checks the step's inputs and splits the simulation into what the
@@ -1330,6 +1368,33 @@ mod tests {
         Sim::new(rest.mesh(), &guides, &p, &mut Arena::new(buf)).unwrap()
     }
 
+    /// Whether posing a frame from `sim` on `mesh` succeeds or fails as
+    /// validating the world points it reads (with its roots) does.
+    fn posing_agrees_with_its_points(sim: &Sim, mesh: &crate::testmesh::TestMesh) {
+        let points: Vec<[f32; 3]> = (0..sim.len())
+            .flat_map(|g| (0..sim.points()).map(move |k| (g, k)))
+            .map(|(g, k)| sim.posed(g, k).to_array())
+            .collect();
+        let guides = Guides {
+            roots: sim.roots(),
+            points: Strided::from_slice(&points),
+            layout: CvLayout::Fixed(sim.points()),
+        };
+        let want = guides.validate(&mesh.mesh());
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, mesh.p.len(), sim.len(), sim.points());
+        let mut buf = vec![0u8; layout.bytes()];
+        let mut frame = PosedFrame::new(
+            mesh.mesh(),
+            sim.len(),
+            sim.points(),
+            &mut Arena::new(&mut buf),
+        )
+        .unwrap();
+        let got = sim.posing(&mut frame).map(|posing| posing.finish());
+        assert_eq!(format!("{got:?}"), format!("{want:?}"));
+    }
+
     /// A guide as long as the coordinate limit allows, on a triangle that
     /// jumps across it: the IK's products overflow, and the guide takes
     /// its groomed shape; the state the step saves restores.
@@ -1344,8 +1409,9 @@ mod tests {
         };
         let mut buf = vec![];
         let mut sim = one_guide(&triangle(0.0), [0.1, 0.1], &points, p, &mut buf);
-        for off in [-9e8f32, 9e8] {
+        for off in [-9e8f32, 9e8, 0.0] {
             step(&mut sim, &triangle(off), &Colliders::default(), 1.0 / 24.0);
+            posing_agrees_with_its_points(&sim, &triangle(off));
             for k in 0..3 {
                 assert!(
                     sim.posed(0, k).is_finite(),
@@ -1400,6 +1466,7 @@ mod tests {
             pose_on(&triangle(o, 0.0), &sim),
             Err(Error::InvalidArgument("a guide has zero length"))
         ));
+        posing_agrees_with_its_points(&sim, &triangle(o, 0.0));
         // back: the guide stands again, its segments their rest length
         for _ in 0..48 {
             step(&mut sim, &rest, &Colliders::default(), 1.0 / 24.0);
@@ -1666,6 +1733,7 @@ mod tests {
         assert!(!sim.links().is_empty());
         // a jolt that throws the tips around
         step(&mut sim, &s.rest, &Colliders::default(), 1.0 / 24.0);
+        posing_agrees_with_its_points(&sim, &s.rest);
         let jolted = moved(
             &s.rest,
             Quat::from_rotation_z(0.6),
