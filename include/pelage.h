@@ -834,8 +834,11 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // guides as the simulation has; `sim` must have stepped since it was
 // created, reset or restored (after a PANIC from pelage_sim_step, reset
 // or restore it first: a half-made step is not refused here). Split over
-// `thread_count` threads (0: all cores); the bits do not depend on it. On
-// failure the frame keeps the guides it had.
+// `thread_count` threads (0: all cores); the bits do not depend on it. The
+// guides are checked as they are written: when one is refused, the frame
+// has no guides (expansions from it are refused) until guides are set
+// again; when the frame or the simulation is refused (the counts, no
+// step yet), the frame keeps the guides it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
 // another point or guide count, no step yet; a simulated guide with a

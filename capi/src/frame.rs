@@ -12,6 +12,7 @@ use pelage_core::cache::guide_cache::{GuideCache, BLOCK};
 use pelage_core::dynamics::collision::{
     Capsule, Colliders, Plane, SignedDistance, Sphere, COLLISION_CELLS_PER_TRIANGLE,
 };
+use pelage_core::dynamics::sim::PosedFaults;
 use pelage_core::surface::body::Body;
 
 use pelage_core::interp::posed::PosedFrame;
@@ -285,8 +286,11 @@ pub extern "C" fn pelage_frame_set_guides(
 /// guides as the simulation has; `sim` must have stepped since it was
 /// created, reset or restored (after a PANIC from pelage_sim_step, reset
 /// or restore it first: a half-made step is not refused here). Split over
-/// `thread_count` threads (0: all cores); the bits do not depend on it. On
-/// failure the frame keeps the guides it had.
+/// `thread_count` threads (0: all cores); the bits do not depend on it. The
+/// guides are checked as they are written: when one is refused, the frame
+/// has no guides (expansions from it are refused) until guides are set
+/// again; when the frame or the simulation is refused (the counts, no
+/// step yet), the frame keeps the guides it had.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
 /// another point or guide count, no step yet; a simulated guide with a
@@ -310,10 +314,11 @@ pub extern "C" fn pelage_frame_set_sim_guides(
         let posing = sim.posing(&mut frame.posed)?;
         let filler = posing.filler;
         let per = filler.floats_per_guide();
-        split_over_threads(sim.len(), thread_count, &mut *posing.data, per, |range, part| {
-            filler.fill(range.start, part)
+        let faults = split_over_threads(sim.len(), thread_count, &mut *posing.data, per, |range, part| {
+            filler.fill(range.start, part);
+            sim.posed_faults(range)
         })?;
-        posing.finish();
+        posing.finish_if(faults.into_iter().fold(PosedFaults::default(), PosedFaults::then).result())?;
         Ok(())
     }
 }

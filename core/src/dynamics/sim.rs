@@ -25,6 +25,7 @@ use crate::interp::posed::{GuidePoints, PosedFrame, Posing};
 use crate::surface::frame::Frame;
 use crate::surface::map::ScalarMap;
 use crate::{Error, Mesh, Root, Strided};
+use core::ops::Range;
 use glam::Vec3;
 
 /// Most joints a guide is simulated with, and most points it is written with.
@@ -347,13 +348,19 @@ impl<'a> Sim<'a> {
     }
 
     /// Poses `frame`'s guides with the posed guides of the last step, for
-    /// a host to fill in parallel as [`PosedFrame::posing`] does: the bits
-    /// that step's world points would give through [`PosedFrame::posing`]
-    /// (from the same roots), without copying them out, and the same
-    /// errors where [`Guides::validate`] refuses those points. The frame
-    /// must be of a mesh with the rest mesh's counts and take
+    /// a host to fill in parallel as [`PosedFrame::posing`] does, checking
+    /// them as it fills: the host has [`GuideFiller::fill`] fill every
+    /// guide and [`posed_faults`](Self::posed_faults) check every guide, then
+    /// calls [`Posing::finish_if`] with their faults merged in order
+    /// ([`PosedFaults::then`], [`PosedFaults::result`]). The bits are those
+    /// the step's world points would give through [`PosedFrame::posing`]
+    /// (from the same roots), and the errors those it would return. The
+    /// frame must be of a mesh with the rest mesh's counts and take
     /// [`points`](Self::points) points per strand, and a step must have run
-    /// since the simulation was made, reset or restored.
+    /// since the simulation was made, reset or restored; when those hold,
+    /// the frame has no guides from here until a successful finish.
+    ///
+    /// [`GuideFiller::fill`]: crate::interp::posed::GuideFiller::fill
     pub fn posing<'r>(
         &'r self,
         frame: &'r mut PosedFrame<'_>,
@@ -374,21 +381,20 @@ impl<'a> Sim<'a> {
                 "the simulation has no posed guides until it steps (after being made, reset or restored)",
             ));
         }
-        self.check_posed()?;
-        frame.posing_from(SimGuides { sim: self })
+        let mut posing = frame.posing_from(SimGuides { sim: self })?;
+        posing.unpose();
+        Ok(posing)
     }
 
-    /// What [`Guides::validate`] refuses of the world points [`posed`]
-    /// gives (the same checks, in the same order, with the same errors):
-    /// a point not finite or beyond 1e9, a guide of zero length (its root
-    /// triangle collapsed).
-    ///
-    /// [`posed`]: Self::posed
-    fn check_posed(&self) -> Result<(), Error> {
+    /// What [`Guides::validate`] would refuse of the world points
+    /// [`posed`](Self::posed) gives for guides `guides` (see
+    /// [`posing`](Self::posing)): a point not finite or beyond 1e9, a guide
+    /// of zero length (its root triangle collapsed).
+    pub fn posed_faults(&self, guides: Range<usize>) -> PosedFaults {
         let limit = crate::surface::mesh::MAX_COORDINATE;
         let m = self.points();
-        let (mut not_finite, mut far, mut zero) = (None, None, false);
-        for g in 0..self.len() {
+        let mut faults = PosedFaults::default();
+        for g in guides {
             let frame = self.root_frame(g);
             if self.plainly_posed(g, &frame) {
                 continue;
@@ -398,37 +404,22 @@ impl<'a> Sim<'a> {
                 let p = frame.to_world(self.posed_local(g, j));
                 let index = g * m + j;
                 if !p.is_finite() {
-                    not_finite = not_finite.or(Some(index));
+                    faults.not_finite = faults.not_finite.or(Some(index));
                 } else if p.abs().max_element() > limit {
-                    far = far.or(Some(index));
+                    faults.far = faults.far.or(Some(index));
                 }
                 if j > 0 {
                     length += p.distance(last);
                 }
                 last = p;
             }
-            zero |= length.is_nan() || length <= 0.0;
+            faults.zero |= length.is_nan() || length <= 0.0;
         }
-        if let Some(index) = not_finite {
-            return Err(Error::NonFinite {
-                what: "guide points",
-                index,
-            });
-        }
-        if let Some(index) = far {
-            return Err(Error::OutOfDomain {
-                what: "guide points (within 1e9)",
-                index,
-            });
-        }
-        if zero {
-            return Err(Error::InvalidArgument("a guide has zero length"));
-        }
-        Ok(())
+        faults
     }
 
-    /// True when guide `g`, on its root frame `frame`, passes
-    /// [`check_posed`](Self::check_posed) for certain, from its local
+    /// True when guide `g`, on its root frame `frame`, has none of the
+    /// faults [`posed_faults`](Self::posed_faults) looks for, for certain, from its local
     /// points alone (no world point made): the frame and the points
     /// finite, the frame's axes unit and square (not collapsed), every point within
     /// half the coordinate limit, and consecutive points farther apart than
@@ -445,18 +436,18 @@ impl<'a> Sim<'a> {
         if !(frame.origin.is_finite() && unit && square) {
             return false;
         }
-        let (mut farthest, mut closest, mut last) = (0.0f32, f32::INFINITY, None);
-        for j in 0..self.points() {
-            let l = self.posed_local(g, j);
-            if !l.is_finite() {
-                return false;
-            }
-            farthest = farthest.max(l.length_squared());
-            if let Some(p) = last {
-                closest = closest.min(l.distance_squared(p));
-            }
-            last = Some(l);
+        // the block's posed points, read once (x, y, z per point)
+        let local = &self.block(g)[POSED..POSED + 3 * self.points()];
+        if !local.iter().all(|x| x.is_finite()) {
+            return false;
         }
+        let square = |p: &[f32]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+        let farthest = local.chunks_exact(3).map(square).fold(0.0f32, f32::max);
+        let closest = local
+            .chunks_exact(3)
+            .zip(local[3..].chunks_exact(3))
+            .map(|(a, b)| square(&[b[0] - a[0], b[1] - a[1], b[2] - a[2]]))
+            .fold(f32::INFINITY, f32::min);
         let scale = frame.origin.abs().max_element() + 1.01 * libm::sqrtf(farthest);
         let limit = crate::surface::mesh::MAX_COORDINATE;
         scale < 0.5 * limit && closest > (1e-5 * scale) * (1e-5 * scale)
@@ -716,6 +707,49 @@ fn last_frame(b: &[f32]) -> Frame {
         t: at(FRAME + 3),
         b: at(FRAME + 6),
         n: at(FRAME + 9),
+    }
+}
+
+/// What [`Sim::posed_faults`] found on a range of guides.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PosedFaults {
+    /// The first point not finite.
+    not_finite: Option<usize>,
+    /// The first point beyond 1e9.
+    far: Option<usize>,
+    /// Some guide has zero length.
+    zero: bool,
+}
+
+impl PosedFaults {
+    /// These faults and those of a `later` range.
+    pub fn then(self, later: PosedFaults) -> PosedFaults {
+        PosedFaults {
+            not_finite: self.not_finite.or(later.not_finite),
+            far: self.far.or(later.far),
+            zero: self.zero || later.zero,
+        }
+    }
+
+    /// The error [`Guides::validate`] gives for these faults (the first
+    /// point not finite, else the first beyond 1e9, else a zero length).
+    pub fn result(self) -> Result<(), Error> {
+        if let Some(index) = self.not_finite {
+            return Err(Error::NonFinite {
+                what: "guide points",
+                index,
+            });
+        }
+        if let Some(index) = self.far {
+            return Err(Error::OutOfDomain {
+                what: "guide points (within 1e9)",
+                index,
+            });
+        }
+        if self.zero {
+            return Err(Error::InvalidArgument("a guide has zero length"));
+        }
+        Ok(())
     }
 }
 
@@ -1368,6 +1402,13 @@ mod tests {
         Sim::new(rest.mesh(), &guides, &p, &mut Arena::new(buf)).unwrap()
     }
 
+    /// Poses `frame` from `sim` on the calling thread, checked.
+    fn pose_from(sim: &Sim, frame: &mut PosedFrame) -> Result<(), Error> {
+        let posing = sim.posing(frame)?;
+        posing.filler.fill(0, posing.data);
+        posing.finish_if(sim.posed_faults(0..sim.len()).result())
+    }
+
     /// Whether posing a frame from `sim` on `mesh` succeeds or fails as
     /// validating the world points it reads (with its roots) does.
     fn posing_agrees_with_its_points(sim: &Sim, mesh: &crate::testmesh::TestMesh) {
@@ -1391,7 +1432,7 @@ mod tests {
             &mut Arena::new(&mut buf),
         )
         .unwrap();
-        let got = sim.posing(&mut frame).map(|posing| posing.finish());
+        let got = pose_from(sim, &mut frame);
         assert_eq!(format!("{got:?}"), format!("{want:?}"));
     }
 
@@ -1460,7 +1501,7 @@ mod tests {
             let mut buf = vec![0u8; layout.bytes()];
             let mut frame =
                 PosedFrame::new(mesh.mesh(), 1, sim.points(), &mut Arena::new(&mut buf)).unwrap();
-            sim.posing(&mut frame).map(|posing| posing.finish())
+            pose_from(sim, &mut frame)
         };
         assert!(matches!(
             pose_on(&triangle(o, 0.0), &sim),

@@ -278,6 +278,20 @@ impl<S> Posing<'_, S> {
     pub fn finish(self) {
         *self.posed = true;
     }
+
+    /// [`finish`](Self::finish) when `checked` (the check of every guide,
+    /// made while filling) is `Ok`; else the frame stays without guides.
+    pub fn finish_if(self, checked: Result<(), Error>) -> Result<(), Error> {
+        checked?;
+        self.finish();
+        Ok(())
+    }
+
+    /// Marks the frame without guides until [`finish`](Self::finish): for
+    /// guides checked while they fill it.
+    pub(crate) fn unpose(&mut self) {
+        *self.posed = false;
+    }
 }
 
 /// Fills the slots of a range of guides (see [`Posing`]).
