@@ -844,9 +844,8 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // another point or guide count, no step yet; a simulated guide with a
 // point beyond 1e9 or of zero length, on a collapsed root triangle, as
 // pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
-// step), PANIC (also when a worker thread
-// cannot start: the frame's guides are then unspecified until the next
-// successful call).
+// step), PANIC (also when a worker thread cannot start: the frame then
+// has no guides until guides are set again).
 //
 // Thread safety: no other call may use `frame` during this one; `sim` may
 // be read by other calls meanwhile (not stepped, reset or restored).

@@ -296,9 +296,8 @@ pub extern "C" fn pelage_frame_set_guides(
 /// another point or guide count, no step yet; a simulated guide with a
 /// point beyond 1e9 or of zero length, on a collapsed root triangle, as
 /// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
-/// step), PANIC (also when a worker thread
-/// cannot start: the frame's guides are then unspecified until the next
-/// successful call).
+/// step), PANIC (also when a worker thread cannot start: the frame then
+/// has no guides until guides are set again).
 ///
 /// Thread safety: no other call may use `frame` during this one; `sim` may
 /// be read by other calls meanwhile (not stepped, reset or restored).
@@ -318,7 +317,7 @@ pub extern "C" fn pelage_frame_set_sim_guides(
             filler.fill(range.start, part);
             sim.posed_faults(range)
         })?;
-        posing.finish_if(faults.into_iter().fold(PosedFaults::default(), PosedFaults::then).result())?;
+        posing.finish_checked(faults.into_iter().fold(PosedFaults::default(), PosedFaults::then))?;
         Ok(())
     }
 }

@@ -351,8 +351,8 @@ impl<'a> Sim<'a> {
     /// a host to fill in parallel as [`PosedFrame::posing`] does, checking
     /// them as it fills: the host has [`GuideFiller::fill`] fill every
     /// guide and [`posed_faults`](Self::posed_faults) check every guide, then
-    /// calls [`Posing::finish_if`] with their faults merged in order
-    /// ([`PosedFaults::then`], [`PosedFaults::result`]). The bits are those
+    /// calls [`Posing::finish_checked`] with their faults merged in order
+    /// ([`PosedFaults::then`]). The bits are those
     /// the step's world points would give through [`PosedFrame::posing`]
     /// (from the same roots), and the errors those it would return. The
     /// frame must be of a mesh with the rest mesh's counts and take
@@ -393,7 +393,10 @@ impl<'a> Sim<'a> {
     pub fn posed_faults(&self, guides: Range<usize>) -> PosedFaults {
         let limit = crate::surface::mesh::MAX_COORDINATE;
         let m = self.points();
-        let mut faults = PosedFaults::default();
+        let mut faults = PosedFaults {
+            guides: guides.len(),
+            ..PosedFaults::default()
+        };
         for g in guides {
             let frame = self.root_frame(g);
             if self.plainly_posed(g, &frame) {
@@ -450,7 +453,8 @@ impl<'a> Sim<'a> {
             .fold(f32::INFINITY, f32::min);
         let scale = frame.origin.abs().max_element() + 1.01 * libm::sqrtf(farthest);
         let limit = crate::surface::mesh::MAX_COORDINATE;
-        scale < 0.5 * limit && closest > (1e-5 * scale) * (1e-5 * scale)
+        // with a floor: squares of steps near the smallest floats vanish
+        scale < 0.5 * limit && closest > ((1e-5 * scale) * (1e-5 * scale)).max(1e-30)
     }
 
     /// Checks the step's inputs and splits the simulation into what the
@@ -719,6 +723,8 @@ pub struct PosedFaults {
     far: Option<usize>,
     /// Some guide has zero length.
     zero: bool,
+    /// Guides checked.
+    guides: usize,
 }
 
 impl PosedFaults {
@@ -728,6 +734,7 @@ impl PosedFaults {
             not_finite: self.not_finite.or(later.not_finite),
             far: self.far.or(later.far),
             zero: self.zero || later.zero,
+            guides: self.guides + later.guides,
         }
     }
 
@@ -749,6 +756,23 @@ impl PosedFaults {
         if self.zero {
             return Err(Error::InvalidArgument("a guide has zero length"));
         }
+        Ok(())
+    }
+}
+
+impl Posing<'_, SimGuides<'_, '_>> {
+    /// Marks the frame posed when `faults`, every guide's merged in order,
+    /// are none: else the error [`Guides::validate`] gives for them (or for
+    /// faults of fewer guides than the simulation has, an invalid
+    /// argument), and the frame stays without guides.
+    pub fn finish_checked(self, faults: PosedFaults) -> Result<(), Error> {
+        if faults.guides != self.source().sim.len() {
+            return Err(Error::InvalidArgument(
+                "the posed guides' faults must cover every guide",
+            ));
+        }
+        faults.result()?;
+        self.finish_unchecked();
         Ok(())
     }
 }
@@ -1406,7 +1430,7 @@ mod tests {
     fn pose_from(sim: &Sim, frame: &mut PosedFrame) -> Result<(), Error> {
         let posing = sim.posing(frame)?;
         posing.filler.fill(0, posing.data);
-        posing.finish_if(sim.posed_faults(0..sim.len()).result())
+        posing.finish_checked(sim.posed_faults(0..sim.len()))
     }
 
     /// Whether posing a frame from `sim` on `mesh` succeeds or fails as
@@ -1508,6 +1532,23 @@ mod tests {
             Err(Error::InvalidArgument("a guide has zero length"))
         ));
         posing_agrees_with_its_points(&sim, &triangle(o, 0.0));
+        // a posing finished with faults of no guide is refused
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, rest.p.len(), 1, sim.points());
+        let mut frame_buf = vec![0u8; layout.bytes()];
+        let mut frame = PosedFrame::new(
+            rest.mesh(),
+            1,
+            sim.points(),
+            &mut Arena::new(&mut frame_buf),
+        )
+        .unwrap();
+        let posing = sim.posing(&mut frame).unwrap();
+        assert!(matches!(
+            posing.finish_checked(PosedFaults::default()),
+            Err(Error::InvalidArgument(_))
+        ));
+        assert!(!frame.is_posed());
         // back: the guide stands again, its segments their rest length
         for _ in 0..48 {
             step(&mut sim, &rest, &Colliders::default(), 1.0 / 24.0);

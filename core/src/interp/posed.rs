@@ -273,24 +273,28 @@ pub struct Posing<'r, S = &'r Guides<'r>> {
     posed: &'r mut bool,
 }
 
-impl<S> Posing<'_, S> {
+impl Posing<'_> {
     /// Marks the frame posed, once every guide is filled.
     pub fn finish(self) {
         *self.posed = true;
     }
+}
 
-    /// [`finish`](Self::finish) when `checked` (the check of every guide,
-    /// made while filling) is `Ok`; else the frame stays without guides.
-    pub fn finish_if(self, checked: Result<(), Error>) -> Result<(), Error> {
-        checked?;
-        self.finish();
-        Ok(())
+impl<S> Posing<'_, S> {
+    /// Marks the frame posed, for a source whose own finish checked it.
+    pub(crate) fn finish_unchecked(self) {
+        *self.posed = true;
     }
 
-    /// Marks the frame without guides until [`finish`](Self::finish): for
-    /// guides checked while they fill it.
+    /// Marks the frame without guides until it is finished: for guides
+    /// checked while they fill it.
     pub(crate) fn unpose(&mut self) {
         *self.posed = false;
+    }
+
+    /// The points the guides are posed from.
+    pub(crate) fn source(&self) -> &S {
+        &self.filler.source
     }
 }
 

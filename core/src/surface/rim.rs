@@ -159,7 +159,12 @@ impl<'a> Kept<'a> {
             return false;
         }
         let key = |v: u32| mesh.positions.get(v as usize).map(|c| (c + 0.0).to_bits());
-        if (0..mesh.positions.len() as u32).any(|v| key(v) != key(self.weld[v as usize])) {
+        // a vertex is welded to itself or a lower index
+        let weld_ok = (0..mesh.positions.len() as u32).all(|v| {
+            let w = self.weld[v as usize];
+            w <= v && key(v) == key(w)
+        });
+        if !weld_ok {
             return false;
         }
         // the welded vertices at distinct positions: an open-addressed set
@@ -219,6 +224,7 @@ impl<'a> Rim<'a> {
     /// builds the body of a deforming mesh every frame keeps one arena for
     /// its rim: the same rim, in less time.
     pub fn refresh(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
+        mesh.check()?;
         Self::check_room(mesh, arena)?;
         let kept = Kept::alloc(mesh, arena)?;
         let keys = arena.alloc::<[u32; 4]>(Self::key_count(mesh))?;
@@ -231,7 +237,6 @@ impl<'a> Rim<'a> {
                 *<&[u64; HEADER]>::try_from(&*kept.header).unwrap_or(&[0; HEADER]);
             return Ok(kept.rim(mesh, edges as usize, loops as usize));
         }
-        mesh.check()?;
         Self::find(mesh, kept, keys, arena)
     }
 
