@@ -16,11 +16,10 @@ use pelage_core::{Arena, ArenaLayout, Root, ScalarMap};
 use pelage_tests::animated::{capsules, colliders, pose, ShotSim, FRAMES};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
-    bind_vec, combed_guides, curves_desc, frame, guides_desc, mesh_desc, mesh_view, stamp_roots,
-    strands_desc,
+    bind_vec, combed_guides, curves_desc, frame, groom_handle, guides_desc, mesh_desc, mesh_view,
+    stamp_roots,
 };
 use std::hint::black_box;
-use std::ptr::null_mut;
 use std::time::Instant;
 
 const GUIDES: u32 = 13_030;
@@ -242,13 +241,11 @@ fn full_frame(
         ..GroomMaps::default()
     };
     maps.evaluate(&mesh, &hairs, 0, &mut grooms).unwrap();
-    let strands = strands_desc(
+    let groom = groom_handle(
         &hairs,
         bytemuck::cast_slice(&bindings),
         bytemuck::cast_slice(&grooms),
     );
-    let mut groom = null_mut();
-    assert_eq!(pelage_groom_new(&strands, &mut groom), PelageStatus::Ok);
     let ep = PelageExpandParams {
         points_per_strand: JOINTS as u32,
         thread_count: 2,

@@ -19,8 +19,8 @@ use pelage_core::interp::strands::{StrandBounds, Strands};
 use pelage_core::{Arena, ArenaLayout, Mesh, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
-    combed_guides, curves_desc, frame, guides_desc, mesh_desc, mesh_view, stamp_roots,
-    strands_desc, ExpandCall, Frame,
+    combed_guides, curves_desc, frame, groom_handle, guides_desc, mesh_desc, mesh_view,
+    stamp_roots, ExpandCall, Frame,
 };
 use std::hint::black_box;
 use std::time::Instant;
@@ -123,9 +123,7 @@ fn main() {
         bytemuck::cast_slice(&bindings),
         bytemuck::cast_slice(&grooms),
     );
-    let strands = strands_desc(&hairs, binds, groom_records);
-    let mut handle: PelageGroom = std::ptr::null_mut();
-    assert_eq!(pelage_groom_new(&strands, &mut handle), PelageStatus::Ok);
+    let handle = groom_handle(&hairs, binds, groom_records);
     for threads in [1u32, 2] {
         ep.thread_count = threads;
         let t_floor = time(7, || {

@@ -374,6 +374,22 @@ pub fn strands_desc(
     }
 }
 
+/// A groom handle (`pelage_groom_new`) of the strands `roots` with their
+/// bindings and groom records; free it with `pelage_groom_free`.
+pub fn groom_handle(
+    roots: &[Root],
+    bindings: &[pelage::PelageStrandBinding],
+    grooms: &[pelage::PelageStrandGroom],
+) -> pelage::PelageGroom {
+    let strands = strands_desc(roots, bindings, grooms);
+    let mut handle = std::ptr::null_mut();
+    assert_eq!(
+        pelage::pelage_groom_new(&strands, &mut handle),
+        pelage::PelageStatus::Ok
+    );
+    handle
+}
+
 /// Packed float4 curves (stride 16) into `out`, optionally with counts.
 pub fn curves_desc(out: &mut [[f32; 4]], counts: Option<&mut [u32]>) -> pelage::PelageCurves {
     pelage::PelageCurves {

@@ -350,7 +350,7 @@ fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
 #[test]
 fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
     use pelage_core::interp::groom::StrandGroom;
-    use pelage_tests::measure::{bind_vec, curves_desc, strands_desc};
+    use pelage_tests::measure::{bind_vec, curves_desc, groom_handle};
     let shot = Shot::new();
     let sim = SimHandle::new(&shot, &shot.params());
     let guides = guides_desc(&shot.roots, &shot.points);
@@ -358,13 +358,11 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
     let hairs = stamp_roots(rest, 6_000, 2);
     let bindings = bind_vec(&rest, &shot.roots, &shot.points, JOINTS, &hairs);
     let grooms = vec![StrandGroom::default(); hairs.len()];
-    let strands = strands_desc(
+    let groom = groom_handle(
         &hairs,
         bytemuck::cast_slice(&bindings),
         bytemuck::cast_slice(&grooms),
     );
-    let mut groom = null_mut();
-    assert_eq!(pelage_groom_new(&strands, &mut groom), PelageStatus::Ok);
     let ep = PelageExpandParams {
         points_per_strand: JOINTS as u32,
         ..pelage_expand_params_defaults()

@@ -78,7 +78,7 @@ fn sort_by_first_end<'a>(
 struct Kept<'a> {
     /// [`MAGIC`], the header's address, vertices, triangles, boundary
     /// edges, loops; all zero until a rim is complete.
-    header: &'a mut [u64],
+    header: &'a mut [u64; HEADER],
     weld: &'a mut [u32],
     indices: &'a mut [[u32; 3]],
     edges: &'a mut [[u32; 2]],
@@ -94,7 +94,7 @@ const HEADER: usize = 6;
 impl<'a> Kept<'a> {
     fn layout(layout: &mut ArenaLayout, vertices: usize, triangles: usize) {
         layout
-            .add::<u64>(HEADER)
+            .add::<[u64; HEADER]>(1)
             .add::<u32>(vertices)
             .add::<[u32; 3]>(triangles)
             .add::<[u32; 2]>(3 * triangles)
@@ -105,7 +105,7 @@ impl<'a> Kept<'a> {
     fn alloc(mesh: &Mesh, arena: &mut Arena<'a>) -> Result<Self, Error> {
         let (vertices, triangles) = (mesh.positions.len(), mesh.triangle_count());
         Ok(Kept {
-            header: arena.alloc::<u64>(HEADER)?,
+            header: &mut arena.alloc::<[u64; HEADER]>(1)?[0],
             weld: arena.alloc::<u32>(vertices)?,
             indices: arena.alloc::<[u32; 3]>(triangles)?,
             edges: arena.alloc::<[u32; 2]>(3 * triangles)?,
@@ -143,8 +143,7 @@ impl<'a> Kept<'a> {
     /// at its welded vertex's position, and no two welded vertices at one
     /// position), which is all a rim depends on. `table` is scratch.
     fn still_fits(&self, mesh: &Mesh, table: &mut [u32]) -> bool {
-        let [magic, _, _, _, edges, loops] =
-            *<&[u64; HEADER]>::try_from(&*self.header).unwrap_or(&[0; HEADER]);
+        let [magic, _, _, _, edges, loops] = *self.header;
         let fits = magic == MAGIC
             && self.header[..4] == self.header(mesh, 0, 0)[..4]
             && edges <= self.edges.len() as u64
@@ -233,8 +232,7 @@ impl<'a> Rim<'a> {
         let slots = (2 * mesh.positions.len()).max(2).next_power_of_two();
         let words = bytemuck::cast_slice_mut::<[u32; 4], u32>(keys);
         if slots <= words.len() && kept.still_fits(mesh, &mut words[..slots]) {
-            let [.., edges, loops] =
-                *<&[u64; HEADER]>::try_from(&*kept.header).unwrap_or(&[0; HEADER]);
+            let [.., edges, loops] = *kept.header;
             return Ok(kept.rim(mesh, edges as usize, loops as usize));
         }
         Self::find(mesh, kept, keys, arena)
@@ -356,8 +354,7 @@ impl<'a> Rim<'a> {
             }
         }
         starts[loops] = written as u32;
-        let header = kept.header(mesh, written, loops);
-        kept.header.copy_from_slice(&header);
+        *kept.header = kept.header(mesh, written, loops);
         Ok(kept.rim(mesh, written, loops))
     }
 
@@ -425,6 +422,17 @@ mod tests {
     use crate::testmesh::{graded_plane, seamed_sphere, sphere};
     use crate::Strided;
 
+    /// `triangles` without triangles 40 and 150: far apart on the test
+    /// spheres, two triangular holes.
+    fn two_holes(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+        triangles
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| i != 40 && i != 150)
+            .map(|(_, &t)| t)
+            .collect()
+    }
+
     fn rim_of<'a>(mesh: &Mesh, buf: &'a mut Vec<u8>) -> Rim<'a> {
         *buf = vec![0u8; Rim::required_bytes(mesh)];
         Rim::new(mesh, &mut Arena::new(buf)).unwrap()
@@ -471,12 +479,7 @@ mod tests {
     fn a_refreshed_rim_is_the_rim_found_again() {
         // a seamed sphere with two holes: welds, loops and solid triangles
         let m = seamed_sphere(12, 24);
-        let tris: Vec<[u32; 3]> =
-            m.t.iter()
-                .enumerate()
-                .filter(|&(i, _)| i != 40 && i != 150)
-                .map(|(_, &t)| t)
-                .collect();
+        let tris = two_holes(&m.t);
         let mut p = m.p.clone();
         let mut memory = vec![
             0u8;
@@ -544,12 +547,7 @@ mod tests {
     fn holes_give_one_loop_each_and_a_short_arena_is_refused() {
         // two triangles removed far apart on a sphere: two triangular holes
         let m = sphere(8, 16);
-        let tris: Vec<[u32; 3]> =
-            m.t.iter()
-                .enumerate()
-                .filter(|&(i, _)| i != 40 && i != 150)
-                .map(|(_, &t)| t)
-                .collect();
+        let tris = two_holes(&m.t);
         let mesh = Mesh::new(Strided::from_slice(&m.p), Strided::from_slice(&tris));
         let mut buf = vec![];
         let rim = rim_of(&mesh, &mut buf);
