@@ -80,13 +80,15 @@ pub(crate) struct Frame {
 /// A frame's colliders for pushing render strands out
 /// (`pelage_frame_set_colliders`): the shapes copied, the body built once.
 struct FrameColliders {
-    /// Borrows `_body_memory`; declared first, so dropped first.
+    /// Borrows `_body_memory` and `_refs_memory`; declared first, so
+    /// dropped first.
     body: Option<Body<'static>>,
     spheres: Vec<Sphere>,
     capsules: Vec<Capsule>,
     planes: Vec<Plane>,
     field: Option<HostField>,
     _body_memory: Option<Buffer<u8>>,
+    _refs_memory: Option<Buffer<u8>>,
 }
 
 impl Frame {
@@ -352,15 +354,19 @@ pub extern "C" fn pelage_frame_set_colliders(
         let spheres = collected(host.spheres.iter().copied(), host.spheres.len(), "the spheres")?;
         let capsules = collected(host.capsules.iter().copied(), host.capsules.len(), "the capsules")?;
         let planes = collected(host.planes.iter().copied(), host.planes.len(), "the planes")?;
-        let (mut body_memory, mut body) = (None, None);
+        let (mut body_memory, mut refs_memory, mut body) = (None, None, None);
         if host.body {
-            let memory: &mut Option<Buffer<u8>> = &mut body_memory;
-            body = Some(body_in(frame.posed.mesh(), &mut Vec::new(), COLLISION_CELLS_PER_TRIANGLE, 1, |bytes| {
-                let buffer = Buffer::new(zeroed(bytes, "the body")?);
-                // SAFETY: the buffer is borrowed once, by the body made
-                // here, which FrameColliders drops before it.
-                Ok(unsafe { memory.insert(buffer).borrow() })
-            })?);
+            let (memory, refs): (&mut Option<Buffer<u8>>, &mut Option<Buffer<u8>>) = (&mut body_memory, &mut refs_memory);
+            // SAFETY (both): each buffer is borrowed once, by the body made
+            // here, which FrameColliders drops before them.
+            body = Some(body_in(
+                frame.posed.mesh(),
+                &mut Vec::new(),
+                COLLISION_CELLS_PER_TRIANGLE,
+                1,
+                |bytes| Ok(unsafe { memory.insert(Buffer::new(zeroed(bytes, "the body")?)).borrow() }),
+                |bytes| Ok(unsafe { refs.insert(Buffer::new(zeroed(bytes, "the body's triangle references")?)).borrow() }),
+            )?);
         }
         frame.push = Some(FrameColliders {
             body,
@@ -369,6 +375,7 @@ pub extern "C" fn pelage_frame_set_colliders(
             planes,
             field: host.field,
             _body_memory: body_memory,
+            _refs_memory: refs_memory,
         });
         Ok(())
     }

@@ -13,7 +13,7 @@ use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
 use pelage_core::dynamics::sim::{Sim, SimParams, Step};
 use pelage_core::interp::posed::PosedFrame;
-use pelage_core::surface::body::{Body, BodyPlan, Rim};
+use pelage_core::surface::body::{Body, BodyParts, BodyPlan, Rim};
 use pelage_core::{Arena, Mesh};
 use std::ffi::c_void;
 use std::ops::Range;
@@ -139,10 +139,8 @@ pub(crate) struct SimBox {
     /// Lives in the host's memory, which outlives the handle (the header's
     /// contract).
     pub(crate) sim: Sim<'static>,
-    /// The body grid of the last step that collided with the body.
-    body_arena: Vec<u8>,
-    /// The mesh's boundary loops, for the body.
-    rim_arena: Vec<u8>,
+    /// The body of the last step that collided with the body.
+    body: BodyMemory,
 }
 
 fn sim_mut<'a>(sim: PelageSim) -> Result<&'a mut SimBox, Failure> {
@@ -214,7 +212,7 @@ pub extern "C" fn pelage_sim_new(
         // the rest mesh is read only while the simulation is made: the
         // guides' rest shapes and roots are copied into its memory
         let sim = Sim::new(mesh, &guides, &p, &mut Arena::new(memory))?;
-        *out = Box::into_raw(Box::new(SimBox { sim, body_arena: Vec::new(), rim_arena: Vec::new() })).cast::<PelageSimTy>();
+        *out = Box::into_raw(Box::new(SimBox { sim, body: BodyMemory::default() })).cast::<PelageSimTy>();
         Ok(())
     }
 }
@@ -367,33 +365,55 @@ impl<'a> HostColliders<'a> {
     }
 }
 
-/// The solid of `mesh`, its rim and grid built in the two arenas (grown
-/// as needed, kept for the next call), its grid of `density` cells per
-/// triangle over `thread_count` threads.
-pub(crate) fn body_of<'a>(
-    mesh: &Mesh,
-    rim_arena: &mut Vec<u8>,
-    body_arena: &'a mut Vec<u8>,
-    density: f32,
-    thread_count: u32,
-) -> Result<Body<'a>, Failure> {
-    body_in(mesh, rim_arena, density, thread_count, |bytes| {
-        grow(body_arena, bytes, 0, "the body")?;
-        Ok(body_arena)
-    })
+/// The memory of a body built every call, kept from call to call: its
+/// rim, its grid and the grid's triangle references.
+#[derive(Default)]
+pub(crate) struct BodyMemory {
+    rim: Vec<u8>,
+    grid: Vec<u8>,
+    refs: Vec<u8>,
+}
+
+impl BodyMemory {
+    /// The solid of `mesh` in this memory (grown as needed), its grid of
+    /// `density` cells per triangle built over `thread_count` threads.
+    pub(crate) fn body<'a>(
+        &'a mut self,
+        mesh: &Mesh,
+        density: f32,
+        thread_count: u32,
+    ) -> Result<Body<'a>, Failure> {
+        let (grid, refs) = (&mut self.grid, &mut self.refs);
+        body_in(
+            mesh,
+            &mut self.rim,
+            density,
+            thread_count,
+            |bytes| {
+                grow(grid, bytes, 0, "the body")?;
+                Ok(grid)
+            },
+            |bytes| {
+                grow(refs, bytes, 0, "the body's triangle references")?;
+                Ok(refs)
+            },
+        )
+    }
 }
 
 /// The solid of `mesh`, its rim found in `rim_arena` (grown as needed; the
 /// rim an earlier call left there is taken again while it still fits), its
 /// grid of `density` cells per triangle in the memory `memory` gives for
-/// the bytes it needs, built by layers over `thread_count` threads (the
-/// same bits on any count).
+/// the bytes it needs, and its triangle references, once counted, in the
+/// memory `refs_memory` gives; built by layers over `thread_count` threads
+/// (the same bits on any count).
 pub(crate) fn body_in<'a>(
     mesh: &Mesh,
     rim_arena: &mut Vec<u8>,
     density: f32,
     thread_count: u32,
     memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
+    refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
     grow(
         rim_arena,
@@ -415,11 +435,14 @@ pub(crate) fn body_in<'a>(
     let totals = run_parts(ranges.iter().cloned().zip(starts).collect(), |(l, part)| {
         grid.count(l, part)
     })?;
-    parts.set_total(totals.iter().map(|&t| u64::from(t)).sum())?;
+    let total = totals.iter().sum();
+    let refs = refs_memory(BodyParts::refs_bytes(total)?)?;
+    parts.set_total(total, &mut Arena::new(refs))?;
     let (grid, start, refs, class) = parts.split();
+    // each below the total, which set_total found below 2^32
     let bases = totals.iter().scan(0u32, |sum, &t| {
         let base = *sum;
-        *sum += t;
+        *sum += t as u32;
         Some(base)
     });
     let lists: Vec<usize> = totals.iter().map(|&t| t as usize).collect();
@@ -513,7 +536,7 @@ pub extern "C" fn pelage_sim_step(
             (false, _) => None,
             (true, Some(body)) => Some(body),
             (true, None) => {
-                built = body_of(frame.posed().mesh(), &mut sim.rim_arena, &mut sim.body_arena, COLLISION_CELLS_PER_TRIANGLE, thread_count)?;
+                built = sim.body.body(frame.posed().mesh(), COLLISION_CELLS_PER_TRIANGLE, thread_count)?;
                 Some(&built)
             }
         };

@@ -5,7 +5,7 @@ use crate::buffers::{bytes, bytes_mut, collected, filled, grow, req, req_mut, sl
 use crate::expand::{core_params, PelageExpandParams};
 use crate::frame::frame_ref;
 use crate::groom_handle::groom_ref;
-use crate::sim::{body_of, HostColliders};
+use crate::sim::{BodyMemory, HostColliders};
 use crate::status::Failure;
 use crate::threads::split_over_threads;
 use crate::{PelageColliders, PelageFrame, PelageGroom, PelageMeshDesc, PelageStatus};
@@ -35,12 +35,11 @@ pub struct PelageTrimRecord {
 same_layout!(PelageTrimRecord, TrimRecord, guide, cv, length);
 
 /// The memory of what guides and hairs meet: the cloth's grid, and the
-/// body's rim and grid.
+/// body's.
 #[derive(Default)]
 struct ObstacleMemory {
     cloth: Vec<u8>,
-    rim: Vec<u8>,
-    body: Vec<u8>,
+    body: BodyMemory,
 }
 
 impl ObstacleMemory {
@@ -69,13 +68,7 @@ impl ObstacleMemory {
         };
         let host = HostColliders::read(colliders)?;
         let body = match host.body {
-            true => Some(body_of(
-                mesh,
-                &mut self.rim,
-                &mut self.body,
-                CELLS_PER_TRIANGLE,
-                threads,
-            )?),
+            true => Some(self.body.body(mesh, CELLS_PER_TRIANGLE, threads)?),
             false => None,
         };
         Ok((cloth, host, body))

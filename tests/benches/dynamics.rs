@@ -58,11 +58,15 @@ fn main() {
     );
     // the body's build stage by stage, on one thread
     let mut stages = vec![vec![]; 6];
-    // the rim's memory kept from frame to frame, as the step keeps it
+    // the memory kept from frame to frame, as the step keeps it
     let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
+    let most = meshes
+        .iter()
+        .map(|m| Body::required_bytes(&mesh_view(m)).unwrap());
+    let mut memory = vec![0u8; most.max().unwrap()];
+    let mut refs_memory = vec![];
     for m in &meshes {
         let view = mesh_view(m);
-        let mut memory = vec![0u8; Body::required_bytes(&view).unwrap()];
         let mut lap = {
             let mut t = Instant::now();
             move |k: usize, stages: &mut Vec<Vec<f64>>| {
@@ -80,7 +84,10 @@ fn main() {
         let (grid, start, _, _) = parts.split();
         let cells = start.len() - 1;
         let total = grid.count(layers.clone(), &mut start[..cells]);
-        parts.set_total(u64::from(total)).unwrap();
+        refs_memory.resize(refs_memory.len().max(4 * total as usize), 0);
+        parts
+            .set_total(total, &mut Arena::new(&mut refs_memory))
+            .unwrap();
         lap(3, &mut stages);
         let (grid, start, refs, class) = parts.split();
         grid.fill(layers.clone(), 0, &mut start[..cells], refs);

@@ -71,8 +71,6 @@ struct Shape {
     origin: Vec3,
     inv_cell: f32,
     dims: [usize; 3],
-    /// Triangle references over all cells.
-    refs: usize,
     triangles: usize,
     /// The bounds of the mesh.
     lo: Vec3,
@@ -107,21 +105,29 @@ impl Shape {
         let inv_cell = 1.0 / cell;
         // one empty layer before and at least one after every triangle
         let dim = |e: f32| (e * inv_cell) as usize + 4;
-        let mut shape = Shape {
+        Ok(Shape {
             origin: lo - Vec3::splat(cell),
             inv_cell,
             dims: [dim(extent.x), dim(extent.y), dim(extent.z)],
-            refs: 0,
             triangles,
             lo,
             hi,
-        };
-        for f in (0..mesh.triangle_count()).filter(|&f| solid(f)) {
-            let [a, b, c] = mesh.corners(f);
-            let (a, b) = shape.cell_range(a.min(b).min(c), a.max(b).max(c));
-            shape.refs += (0..3).map(|k| b[k] - a[k] + 1).product::<usize>();
-        }
-        Ok(shape)
+        })
+    }
+
+    /// The most triangle references the grid can hold for the triangles of
+    /// `mesh` that `solid` keeps: every cell of each one's bounds (the
+    /// count stage keeps those its plane passes through). Only to size
+    /// memory before a build: a build counts its own.
+    fn refs_bound(&self, mesh: &Mesh, solid: impl Fn(usize) -> bool) -> usize {
+        (0..mesh.triangle_count())
+            .filter(|&f| solid(f))
+            .map(|f| {
+                let [a, b, c] = mesh.corners(f);
+                let (a, b) = self.cell_range(a.min(b).min(c), a.max(b).max(c));
+                (0..3).map(|k| b[k] - a[k] + 1).product::<usize>()
+            })
+            .fold(0usize, usize::saturating_add)
     }
 
     fn cells(&self) -> usize {
@@ -188,7 +194,8 @@ pub struct Body<'a> {
 /// A body's grid being built (from [`Body::parts`]), by stages over its
 /// layers of cells (along z), so a host with threads builds the layers at
 /// once: [`BodyGrid::count`] per range of layers, [`BodyParts::set_total`]
-/// with the ranges' sum, [`BodyGrid::fill`] per range, [`BodyGrid::classify`]
+/// with the ranges' sum (which takes the references' memory then, when
+/// their number is known), [`BodyGrid::fill`] per range, [`BodyGrid::classify`]
 /// per range, then [`BodyParts::finish`]. Each stage writes only its
 /// layers' part of each array, and a cell's result does not depend on the
 /// split: any split gives the bits of [`Body::build`].
@@ -225,23 +232,33 @@ impl<'a> BodyParts<'a> {
 
     /// The grid every stage reads, and the arrays they write: each cell's
     /// first reference (one entry per cell, then the total), the
-    /// references, and the cells' classes.
+    /// references (none before [`set_total`](Self::set_total)), and the
+    /// cells' classes.
     pub fn split(&mut self) -> (&BodyGrid<'a>, &mut [u32], &mut [u32], &mut [u8]) {
         (&self.grid, self.start, self.refs, self.class)
     }
 
     /// Records the references of every layer (the sum of what
-    /// [`BodyGrid::count`] returned), at most the plan's (which counts
-    /// every cell of each triangle's bounds).
-    pub fn set_total(&mut self, total: u64) -> Result<(), Error> {
-        if total > self.refs.len() as u64 {
-            return Err(Error::InvalidArgument("body plan made from another mesh"));
-        }
+    /// [`BodyGrid::count`] returned) and takes their memory, 4 bytes each,
+    /// from `arena` (which may be the one the parts came from).
+    ///
+    /// Errors: `InvalidArgument` when there are 2^32 - 1 or more (the grid
+    /// is too large), `CapacityExceeded` when `arena` is short.
+    pub fn set_total(&mut self, total: u64, arena: &mut Arena<'a>) -> Result<(), Error> {
+        Self::refs_bytes(total)?;
+        self.refs = arena.alloc::<u32>(total as usize)?;
         let cells = self.start.len() - 1;
         self.start[cells] = total as u32;
-        let refs = core::mem::take(&mut self.refs);
-        self.refs = &mut refs[..total as usize];
         Ok(())
+    }
+
+    /// The bytes [`set_total`](Self::set_total) takes for `total`
+    /// references; `InvalidArgument` when there are too many.
+    pub fn refs_bytes(total: u64) -> Result<usize, Error> {
+        match total < u64::from(u32::MAX) {
+            true => Ok(total as usize * size_of::<u32>()),
+            false => Err(Error::InvalidArgument("body grid is too large")),
+        }
     }
 
     /// The body, once every stage ran on every layer.
@@ -303,8 +320,9 @@ impl BodyGrid<'_> {
 
     /// Stage 1: counts the triangles of each cell of `layers` into `start`
     /// (those layers' cells), as each cell's end among the layers'
-    /// references; returns the layers' references.
-    pub fn count(&self, layers: Range<usize>, start: &mut [u32]) -> u32 {
+    /// references; returns the layers' references (the ends are right
+    /// when all of them, over every layer, are fewer than 2^32).
+    pub fn count(&self, layers: Range<usize>, start: &mut [u32]) -> u64 {
         start.fill(0);
         if layers.is_empty() {
             return 0;
@@ -312,10 +330,10 @@ impl BodyGrid<'_> {
         for t in 0..self.spans.len() {
             self.each_cell(t, &layers, |c| start[c] += 1);
         }
-        let mut sum = 0u32;
+        let mut sum = 0u64;
         for s in start.iter_mut() {
-            sum += *s;
-            *s = sum;
+            sum += u64::from(*s);
+            *s = sum as u32;
         }
         sum
     }
@@ -488,9 +506,6 @@ impl BodyPlan {
         }
         rim.check_mesh(mesh)?;
         let shape = Shape::of(mesh, cells_per_triangle, |f| rim.is_solid(f))?;
-        if shape.refs >= u32::MAX as usize {
-            return Err(Error::InvalidArgument("body grid is too large"));
-        }
         Ok(BodyPlan {
             shape,
             cap_triangles: rim.edge_count(),
@@ -498,22 +513,35 @@ impl BodyPlan {
         })
     }
 
-    /// Arena bytes [`Body::build`] needs.
+    /// Arena bytes [`Body::parts`] takes: the grid without its triangle
+    /// references, whose memory [`BodyParts::set_total`] takes once they
+    /// are counted.
     pub fn bytes(&self) -> usize {
-        Self::bytes_with(&self.shape, self.cap_triangles, self.loops)
+        Self::bytes_with(&self.shape, self.cap_triangles, self.loops, 0)
     }
 
-    fn bytes_with(shape: &Shape, cap_triangles: usize, loops: usize) -> usize {
+    /// Arena bytes [`Body::build`] needs for `mesh` and `rim` (the plan's):
+    /// [`bytes`](Self::bytes) and room for the most references the
+    /// triangles could list (found by a pass over them; a build lists
+    /// fewer).
+    pub fn build_bytes(&self, mesh: &Mesh, rim: &Rim) -> usize {
+        let refs = self.shape.refs_bound(mesh, |f| rim.is_solid(f));
+        Self::bytes_with(&self.shape, self.cap_triangles, self.loops, refs)
+    }
+
+    /// The bytes of the parts, in the order [`Body::build`] takes them,
+    /// with `refs` references last.
+    fn bytes_with(shape: &Shape, cap_triangles: usize, loops: usize, refs: usize) -> usize {
         let cells = shape.cells();
         let mut layout = ArenaLayout::new();
         layout
             .add::<u32>(cells + 1)
-            .add::<u32>(shape.refs)
             .add::<Stored>(shape.triangles)
             .add::<Span>(shape.triangles)
             .add::<Stored>(cap_triangles)
             .add::<CapBall>(loops)
-            .add::<u8>(cells);
+            .add::<u8>(cells)
+            .add::<u32>(refs);
         layout.bytes()
     }
 }
@@ -522,10 +550,12 @@ impl<'a> Body<'a> {
     /// Arena bytes [`Body::new`] needs for `mesh` (validates it): its rim's
     /// and its body's, for the most boundary edges the mesh could have.
     pub fn required_bytes(mesh: &Mesh) -> Result<usize, Error> {
-        let shape = Shape::of(mesh, CELLS_PER_TRIANGLE, |f| !mesh.is_degenerate(f))?;
+        let solid = |f| !mesh.is_degenerate(f);
+        let shape = Shape::of(mesh, CELLS_PER_TRIANGLE, solid)?;
         // a loop has three edges or more
         let edges = 3 * mesh.triangle_count();
-        let body = BodyPlan::bytes_with(&shape, edges, edges / 3);
+        let refs = shape.refs_bound(mesh, solid);
+        let body = BodyPlan::bytes_with(&shape, edges, edges / 3, refs);
         Ok(Rim::required_bytes(mesh).saturating_add(body))
     }
 
@@ -568,7 +598,6 @@ impl<'a> Body<'a> {
         }
         let cells = shape.cells();
         let start = arena.alloc::<u32>(cells + 1)?;
-        let refs = arena.alloc::<u32>(shape.refs)?;
         let triangles = arena.alloc::<Stored>(shape.triangles)?;
         let spans = arena.alloc::<Span>(shape.triangles)?;
         let caps = arena.alloc::<Stored>(plan.cap_triangles)?;
@@ -600,14 +629,15 @@ impl<'a> Body<'a> {
                 loops,
             },
             start,
-            refs,
+            refs: &mut [],
             class,
         })
     }
 
     /// Builds the grid and cell classes of `mesh`, placed by `plan` (made
     /// from this mesh and `rim`), on the calling thread (see
-    /// [`BodyParts`] to build it on several).
+    /// [`BodyParts`] to build it on several), in `arena`
+    /// ([`BodyPlan::build_bytes`] is enough).
     pub fn build(
         plan: &BodyPlan,
         mesh: &Mesh,
@@ -619,7 +649,7 @@ impl<'a> Body<'a> {
         let (grid, start, _, _) = parts.split();
         let cells = start.len() - 1;
         let total = grid.count(layers.clone(), &mut start[..cells]);
-        parts.set_total(u64::from(total))?;
+        parts.set_total(total, arena)?;
         let (grid, start, refs, class) = parts.split();
         grid.fill(layers.clone(), 0, &mut start[..cells], refs);
         grid.classify(layers, start, class);
@@ -1105,7 +1135,7 @@ mod tests {
             let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
             let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
             let plan = BodyPlan::with_density(&mesh, &rim, density).unwrap();
-            let mut memory = vec![0u8; plan.bytes()];
+            let mut memory = vec![0u8; plan.build_bytes(&mesh, &rim)];
             let body = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
             let mut inside = 0;
             for i in 0..1500u64 {
@@ -1306,7 +1336,7 @@ mod tests {
         let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
         let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
         let plan = BodyPlan::of(&mesh, &rim).unwrap();
-        let mut whole_memory = vec![0u8; plan.bytes()];
+        let mut whole_memory = vec![0u8; plan.build_bytes(&mesh, &rim)];
         let whole = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut whole_memory)).unwrap();
         let n = whole.shape.dims[2];
         for cuts in [
@@ -1316,27 +1346,37 @@ mod tests {
         ] {
             let mut memory = vec![0u8; plan.bytes()];
             let mut parts = Body::parts(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
+            // the references in memory of their own, as a host with
+            // threads may give them
             let per = parts.layer_cells();
             let ranges: Vec<Range<usize>> = cuts.windows(2).map(|w| w[0]..w[1]).collect();
             let (grid, start, _, _) = parts.split();
-            let totals: Vec<u32> = ranges
+            let totals: Vec<u64> = ranges
                 .iter()
                 .map(|l| grid.count(l.clone(), &mut start[l.start * per..l.end * per]))
                 .collect();
+            let total: u64 = totals.iter().sum();
+            let mut refs_memory = vec![0u8; BodyParts::refs_bytes(total).unwrap()];
+            let mut short = vec![0u8; refs_memory.len() - 1];
+            // short memory is refused, and leaves the parts to try again
+            assert!(matches!(
+                parts.set_total(total, &mut Arena::new(&mut short)),
+                Err(Error::CapacityExceeded { .. })
+            ));
             parts
-                .set_total(totals.iter().map(|&t| u64::from(t)).sum())
+                .set_total(total, &mut Arena::new(&mut refs_memory))
                 .unwrap();
             let (grid, start, refs, class) = parts.split();
             let mut base = 0u32;
             for (l, &total) in ranges.iter().zip(&totals) {
-                let part = &mut refs[base as usize..(base + total) as usize];
+                let part = &mut refs[base as usize..(base + total as u32) as usize];
                 grid.fill(
                     l.clone(),
                     base,
                     &mut start[l.start * per..l.end * per],
                     part,
                 );
-                base += total;
+                base += total as u32;
             }
             for l in &ranges {
                 grid.classify(l.clone(), start, &mut class[l.start * per..l.end * per]);
@@ -1346,6 +1386,10 @@ mod tests {
             assert!(body.refs == whole.refs, "{cuts:?}");
             assert!(body.class == whole.class, "{cuts:?}");
         }
+        assert!(matches!(
+            BodyParts::refs_bytes(u64::from(u32::MAX)),
+            Err(Error::InvalidArgument(_))
+        ));
     }
 
     /// A sphere with the triangles whose centroid has `y > cut` removed.
@@ -1426,7 +1470,8 @@ mod tests {
         let mut rim_memory = vec![0u8; Rim::required_bytes(&other.mesh())];
         let rim = Rim::new(&other.mesh(), &mut Arena::new(&mut rim_memory)).unwrap();
         let plan = BodyPlan::of(&other.mesh(), &rim).unwrap();
-        let mut big = vec![0u8; plan.bytes().max(Body::required_bytes(&mesh).unwrap())];
+        let bytes = plan.build_bytes(&other.mesh(), &rim);
+        let mut big = vec![0u8; bytes.max(Body::required_bytes(&mesh).unwrap())];
         assert!(matches!(
             Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut big)),
             Err(Error::InvalidArgument(_))
