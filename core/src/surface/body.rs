@@ -40,7 +40,7 @@ use crate::surface::grid::floor_i32;
 pub use crate::surface::rim::Rim;
 use crate::{Error, Mesh};
 use core::ops::Range;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use wide::{f32x4, CmpEq, CmpGt, CmpNe};
 
 /// Cells per triangle the grid aims at by default: finer grids answer more
@@ -936,24 +936,18 @@ impl Legs<'_> {
             }
         };
         let spans = [span(0), span(1), span(2)];
-        let near = self.met.iter().map(|&t| &self.body.caps[t as usize]);
-        let listed = self
-            .listed
-            .iter()
-            .map(|&t| &self.body.triangles[t as usize]);
-        let mut w = 0;
-        for t in listed.chain(self.caps).chain(near) {
+        let (q1, q2) = (Vec3A::from(starts[1]), Vec3A::from(starts[2]));
+        let legs_of = |t: &Stored| {
             let [.., lo, hi] = *t;
-            let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-            let within = |q: Vec3| (lo.cmple(q) & q.cmple(hi)).bitmask();
+            let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+            let within = |q: Vec3A| (lo.cmple(q) & q.cmple(hi)).bitmask();
             // leg 0's line is (y, z) of starts[1], leg 1's (x, z) of it,
             // leg 2's (x, y) of starts[2]
-            let (a, b) = (within(starts[1]), within(starts[2]));
-            let legs =
-                (a & 6 == 6) as u32 | ((a & 5 == 5) as u32) << 1 | ((b & 3 == 3) as u32) << 2;
-            if legs == 0 {
-                continue;
-            }
+            let (a, b) = (within(q1), within(q2));
+            (a & 6 == 6) as u32 | ((a & 5 == 5) as u32) << 1 | ((b & 3 == 3) as u32) << 2
+        };
+        let crossed = |t: &Stored, legs: u32| {
+            let mut w = 0;
             if legs & 1 != 0 {
                 w += counted(crossing::<0>(t, starts[0]), spans[0]);
             }
@@ -962,6 +956,23 @@ impl Legs<'_> {
             }
             if legs & 4 != 0 {
                 w += counted(crossing::<2>(t, starts[2]), spans[2]);
+            }
+            w
+        };
+        let mut w = 0;
+        // the cell's own triangles, then the caps (none in most cells)
+        for &t in self.listed {
+            let t = &self.body.triangles[t as usize];
+            let legs = legs_of(t);
+            if legs != 0 {
+                w += crossed(t, legs);
+            }
+        }
+        let near = self.met.iter().map(|&t| &self.body.caps[t as usize]);
+        for t in self.caps.iter().chain(near) {
+            let legs = legs_of(t);
+            if legs != 0 {
+                w += crossed(t, legs);
             }
         }
         w
