@@ -58,22 +58,28 @@ fn dart(f: usize, uv: [f32; 2]) -> Candidate {
 /// Grid cells of the fill, in disk radii.
 const FILL_GRID_CELL: f32 = 6.0;
 /// Most kept points of a face its darts are tested against in lanes (a
-/// face with more tests them one by one).
-const OWN: usize = 256;
+/// face with more tests them one by one), and most darts a face keeps
+/// that its later darts are tested against in lanes.
+pub(super) const OWN: usize = 1024;
 /// Lanes of [`Own::clashes`].
 const OWN_LANES: usize = 8;
 
-/// A face's kept points its darts may clash with (those the fill's grid
-/// holds, see `close` in [`Stamper::fill`]), copied into lanes once per face
-/// (into one buffer reused from face to face): each of its darts is tested
-/// against them in a vector loop, where a test per point read each from
-/// the records.
+/// Points of one face its darts may clash with, in lanes (one buffer
+/// reused from face to face): the face's kept points (those the fill's
+/// grid holds, see `close` in [`Stamper::fill`]), or the darts it kept so
+/// far. Each dart is tested against them in a vector loop, where a test
+/// per point read each from the records.
 struct Own {
     x: [f32; OWN],
     y: [f32; OWN],
     z: [f32; OWN],
+    /// Points held.
+    len: usize,
     /// Points, rounded up to whole lanes (the rest at infinity).
     lanes: usize,
+    /// Whether every point given since the last `set` is held (none is
+    /// when more than [`OWN`] were given).
+    whole: bool,
 }
 
 impl Own {
@@ -82,7 +88,9 @@ impl Own {
             x: [0.0; OWN],
             y: [0.0; OWN],
             z: [0.0; OWN],
+            len: 0,
             lanes: 0,
+            whole: true,
         }
     }
 
@@ -92,22 +100,42 @@ impl Own {
         let mut n = 0;
         for p in points {
             if n == OWN {
-                self.lanes = 0;
+                (self.len, self.lanes, self.whole) = (0, 0, false);
                 return false;
             }
             (self.x[n], self.y[n], self.z[n]) = (p[0], p[1], p[2]);
             n += 1;
         }
-        self.lanes = n.div_ceil(OWN_LANES) * OWN_LANES;
+        (self.len, self.lanes, self.whole) = (n, n.div_ceil(OWN_LANES) * OWN_LANES, true);
         for a in [&mut self.x, &mut self.y, &mut self.z] {
             a[n..self.lanes].fill(f32::INFINITY);
         }
         true
     }
 
+    /// Holds `p` too; holds none from then on when [`OWN`] are held.
+    fn push(&mut self, p: [f32; 3]) {
+        if !self.whole {
+            return;
+        }
+        if self.len == OWN {
+            (self.len, self.lanes, self.whole) = (0, 0, false);
+            return;
+        }
+        let n = self.len;
+        if n == self.lanes {
+            self.lanes += OWN_LANES;
+            for a in [&mut self.x, &mut self.y, &mut self.z] {
+                a[n..self.lanes].fill(f32::INFINITY);
+            }
+        }
+        (self.x[n], self.y[n], self.z[n]) = (p[0], p[1], p[2]);
+        self.len += 1;
+    }
+
     /// Whether a point is closer to `at` than `sqrt(r2)`: the same test,
     /// operation for operation, as `distance_squared(at) < r2`.
-    #[inline]
+    #[inline(always)]
     fn clashes(&self, at: Vec3, r2: f32) -> bool {
         let (xs, ys, zs) = (
             &self.x[..self.lanes],
@@ -193,6 +221,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
         let mut alive = [0u8; RUN];
         let mut uvs = [[0.0f32; 2]; RUN];
         let mut own_lanes = Own::new();
+        let mut kept_lanes = Own::new();
         for f in 0..self.faces.len() {
             while own < kept && (cands[own].face as usize) < f {
                 own += 1;
@@ -224,6 +253,7 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 .filter(|&j| close(&cands[j]))
                 .map(|j| near[j].position);
             let in_lanes = own_lanes.set(own_points);
+            kept_lanes.set(core::iter::empty());
             // each cut edge's strip reaches `r` from the edge, or the far
             // corner; its darts are numbered on after the last edge's. A
             // face the edge of buried skin crosses takes its darts anywhere.
@@ -275,13 +305,20 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 let clash = |near: &[Near], j: usize, at: Vec3| {
                     Vec3::from(near[j].position).distance_squared(at) < r2
                 };
+                // the darts the face kept in earlier runs: the same test the
+                // last stage makes, made before the gathering
+                let kept_clash =
+                    |kept_lanes: &Own, near: &[Near], n: usize, at: Vec3| match kept_lanes.whole {
+                        true => kept_lanes.clashes(at, r2),
+                        false => (first_dart..n).any(|j| clash(near, j, at)),
+                    };
                 let mut left = 0;
                 for (d, dart) in darts[..m].iter().enumerate() {
                     let at = Vec3::from(dart.position);
                     let blocked = match in_lanes {
                         true => own_lanes.clashes(at, r2),
                         false => (own..own_end).any(|j| close(&cands[j]) && clash(near, j, at)),
-                    };
+                    } || (n > first_dart && kept_clash(&kept_lanes, near, n, at));
                     alive[left] = d as u8;
                     left += !blocked as usize;
                 }
@@ -310,11 +347,12 @@ impl<'m, 'a> Stamper<'m, 'a> {
                     let at = Vec3::from(group[k].position);
                     if clashed[k]
                         || n == room
-                        || (first_dart..n).any(|j| clash(near, j, at))
+                        || kept_clash(&kept_lanes, near, n, at)
                         || (whole_face.is_none() && self.shells.buried(at, normal, lift))
                     {
                         continue;
                     }
+                    kept_lanes.push(group[k].position);
                     cands[n] = dart(f, uvs[d]);
                     near[n] = Near {
                         index: n as u32,

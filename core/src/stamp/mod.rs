@@ -840,26 +840,26 @@ mod tests {
     }
 
     /// A face holding more kept points than the fill tests in lanes
-    /// (`fill::OWN`, 256, of those within reach of its cut edges) has its
-    /// darts tested point by point: two triangles of ~10,000 roots each
+    /// (`fill::OWN`, 1024, of those within reach of its cut edges) has its
+    /// darts tested point by point: two triangles of ~25,000 roots each
     /// keep the spacing, the count and the fill's refills.
     #[test]
     fn faces_with_more_points_than_the_fills_lanes_keep_the_spacing() {
         let m = graded_plane(1, 1.0);
         let mesh = m.mesh();
-        for seed in [3, 4] {
+        for seed in [3] {
             let (roots, report) = run(
                 mesh,
                 &StampParams {
                     seed,
-                    ..params(20_000)
+                    ..params(50_000)
                 },
             );
-            assert_eq!(roots.len(), 20_000, "{report:?}");
+            assert_eq!(roots.len(), 50_000, "{report:?}");
             assert!(report.filled > 0, "the fill added nothing: {report:?}");
             for face in 0..2 {
                 let on = roots.iter().filter(|r| r.face == face).count();
-                assert!(on > 256, "face {face}: {on} roots");
+                assert!(on > 20_000, "face {face}: {on} roots");
             }
             let min = min_spacing(&mesh, &roots);
             assert!(
