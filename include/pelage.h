@@ -21,7 +21,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 10
+#define PELAGE_VERSION_MINOR 11
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0
@@ -853,18 +853,19 @@ enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, 
 
 // Sets the colliders that render strands selected by a push mask
 // (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
-// frame: `colliders` is copied (its body, when set, is this frame's mesh,
-// built once here on the calling thread; `pelage_sim_step` on this frame
-// collides with it rather than building its own); NULL clears them. A
-// distance callback is kept: it and its user data must stay valid until
-// the colliders are replaced or the frame is freed.
+// frame: `colliders` is copied; NULL clears them. Their body, when set, is
+// this frame's mesh, built once here, split over `thread_count` threads
+// (0: all cores; the bits do not depend on it): `pelage_sim_step` on this
+// frame collides with it rather than building its own. A distance
+// callback is kept: it and its user data must stay valid until the
+// colliders are replaced or the frame is freed.
 // On failure the frame keeps the colliders it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
 // this frame's mesh too large), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: no other call may use `frame` during this one.
-enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders);
+enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders, uint32_t thread_count);
 
 // Releases a frame. NULL is accepted and does nothing.
 //

@@ -326,11 +326,12 @@ pub extern "C" fn pelage_frame_set_sim_guides(
 
 /// Sets the colliders that render strands selected by a push mask
 /// (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
-/// frame: `colliders` is copied (its body, when set, is this frame's mesh,
-/// built once here on the calling thread; `pelage_sim_step` on this frame
-/// collides with it rather than building its own); NULL clears them. A
-/// distance callback is kept: it and its user data must stay valid until
-/// the colliders are replaced or the frame is freed.
+/// frame: `colliders` is copied; NULL clears them. Their body, when set, is
+/// this frame's mesh, built once here, split over `thread_count` threads
+/// (0: all cores; the bits do not depend on it): `pelage_sim_step` on this
+/// frame collides with it rather than building its own. A distance
+/// callback is kept: it and its user data must stay valid until the
+/// colliders are replaced or the frame is freed.
 /// On failure the frame keeps the colliders it had.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
@@ -341,6 +342,7 @@ pub extern "C" fn pelage_frame_set_sim_guides(
 pub extern "C" fn pelage_frame_set_colliders(
     frame: PelageFrame,
     colliders: *const PelageColliders,
+    thread_count: u32,
 ) -> PelageStatus {
     ffi_boundary! {
         let frame = frame_mut(frame)?;
@@ -363,7 +365,7 @@ pub extern "C" fn pelage_frame_set_colliders(
                 frame.posed.mesh(),
                 &mut Vec::new(),
                 COLLISION_CELLS_PER_TRIANGLE,
-                1,
+                thread_count,
                 |bytes| Ok(unsafe { memory.insert(Buffer::new(zeroed(bytes, "the body")?)).borrow() }),
                 |bytes| Ok(unsafe { refs.insert(Buffer::new(zeroed(bytes, "the body's triangle references")?)).borrow() }),
             )?);

@@ -136,7 +136,7 @@ fn main() {
                         let colliders = colliders(caps, body != 0);
                         if body == 2 {
                             let t = Instant::now();
-                            let s = pelage_frame_set_colliders(frames[f].0, &colliders);
+                            let s = pelage_frame_set_colliders(frames[f].0, &colliders, threads);
                             frame_body.push(t.elapsed().as_secs_f64());
                             assert_eq!(s, PelageStatus::Ok);
                         }
@@ -154,7 +154,7 @@ fn main() {
                         assert_eq!(s, PelageStatus::Ok);
                         if body == 2 {
                             // the frame's body freed (96 would not fit)
-                            pelage_frame_set_colliders(frames[f].0, std::ptr::null());
+                            pelage_frame_set_colliders(frames[f].0, std::ptr::null(), threads);
                         }
                         e
                     })
@@ -178,7 +178,7 @@ fn main() {
             );
         }
         println!(
-            "{:>34} {threads:>7} | {:>9.2} ms more for the body; {:.2} ms with the frame's, which pelage_frame_set_colliders built in {:.2} ms (one thread)",
+            "{:>34} {threads:>7} | {:>9.2} ms more for the body; {:.2} ms with the frame's, which pelage_frame_set_colliders built in {:.2} ms (as many threads)",
             "",
             (with_body - with_capsules) * 1e3,
             (with_frame_body - with_capsules) * 1e3,

@@ -246,7 +246,7 @@ fn edits(
     let run = |edits: Option<PelageStrandEdits>, set: bool, out: &mut [[f32; 4]]| {
         let f = frame(&desc, gdesc, CVS as u32, 2).unwrap();
         if set {
-            assert_eq!(pelage_frame_set_colliders(f.0, &col), PelageStatus::Ok);
+            assert_eq!(pelage_frame_set_colliders(f.0, &col, 1), PelageStatus::Ok);
         }
         let curves = curves_desc(out, None);
         let e = edits.as_ref().map_or(std::ptr::null(), |e| e as *const _);

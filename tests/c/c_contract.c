@@ -2637,12 +2637,12 @@ static void test_trim_and_edits(void) {
     PelageSphere bad = {{0.0f, 0.0f, NAN}, 1.0f};
     PelageColliders b = col;
     b.spheres = &bad, b.sphere_count = 1;
-    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_colliders(g_in.frame, &b));
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_colliders(g_in.frame, &b, 1));
   }
-  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, &col));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, &col, 0));
   EXPECT(PELAGE_STATUS_OK, pelage_groom_expand_edited(groom, g_in.frame, 0, n, &edits, &g_in.expand_params, &c));
-  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, NULL));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_colliders(NULL, &col));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, NULL, 1));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_colliders(NULL, &col, 1));
 
   /* LOD counts need patches sorted by rank; masks need a finite threshold */
   {

@@ -113,7 +113,7 @@ fn run(
         let caps = capsules(&shot.rest, &shot.roots, f);
         let colliders = colliders(&caps, true);
         if frame_body {
-            let s = pelage_frame_set_colliders(handle.0, &colliders);
+            let s = pelage_frame_set_colliders(handle.0, &colliders, threads);
             assert_eq!(s, PelageStatus::Ok, "frame {f}");
         }
         let s = pelage_sim_step(

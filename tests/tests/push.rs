@@ -113,7 +113,7 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
         )
         .unwrap();
         ok(
-            pelage_frame_set_colliders(handle.0, &col),
+            pelage_frame_set_colliders(handle.0, &col, 2),
             "pelage_frame_set_colliders",
         );
         let expand = |edits: Option<&PelageStrandEdits>, threads| {
