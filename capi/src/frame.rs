@@ -359,15 +359,22 @@ pub extern "C" fn pelage_frame_set_colliders(
         let (mut body_memory, mut refs_memory, mut body) = (None, None, None);
         if host.body {
             let (memory, refs): (&mut Option<Buffer<u8>>, &mut Option<Buffer<u8>>) = (&mut body_memory, &mut refs_memory);
-            // SAFETY (both): each buffer is borrowed once, by the body made
-            // here, which FrameColliders drops before them.
             body = Some(body_in(
                 frame.posed.mesh(),
                 &mut Vec::new(),
                 COLLISION_CELLS_PER_TRIANGLE,
                 thread_count,
-                |bytes| Ok(unsafe { memory.insert(Buffer::new(zeroed(bytes, "the body")?)).borrow() }),
-                |bytes| Ok(unsafe { refs.insert(Buffer::new(zeroed(bytes, "the body's triangle references")?)).borrow() }),
+                |bytes| {
+                    let buffer = memory.insert(Buffer::new(zeroed(bytes, "the body")?));
+                    // SAFETY: the buffer is borrowed once, by the body made
+                    // here, which FrameColliders drops before it.
+                    Ok(unsafe { buffer.borrow() })
+                },
+                |bytes| {
+                    let buffer = refs.insert(Buffer::new(zeroed(bytes, "the body's triangle references")?));
+                    // SAFETY: as the body's buffer above.
+                    Ok(unsafe { buffer.borrow() })
+                },
             )?);
         }
         frame.push = Some(FrameColliders {

@@ -252,6 +252,14 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
             "frame {f} differs on one thread with the frame's body"
         );
     });
+    // the frame's body and the step split over 3 threads: the same bits
+    let split = SimHandle::new(&shot, &params);
+    run(&shot, &split, 0..24, 3, true, |f, _, posed, _| {
+        assert!(
+            posed == shot_bits[f as usize].as_slice(),
+            "frame {f} differs on 3 threads with the frame's body"
+        );
+    });
     // restored mid-shot in a new simulation: the same bits from there on
     let resumed = SimHandle::new(&shot, &params);
     assert_eq!(

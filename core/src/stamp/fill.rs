@@ -61,6 +61,13 @@ const FILL_GRID_CELL: f32 = 6.0;
 /// face with more tests them one by one), and most darts a face keeps
 /// that its later darts are tested against in lanes.
 pub(super) const OWN: usize = 1024;
+#[cfg(test)]
+std::thread_local! {
+    /// Faces whose darts a fill on this thread tested point by point (more
+    /// kept points than [`OWN`]), for the test that must reach that path.
+    pub(super) static POINT_BY_POINT: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
+}
+
 /// Lanes of [`Own::clashes`].
 const OWN_LANES: usize = 8;
 
@@ -253,6 +260,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 .filter(|&j| close(&cands[j]))
                 .map(|j| near[j].position);
             let in_lanes = own_lanes.set(own_points);
+            #[cfg(test)]
+            POINT_BY_POINT.with(|c| c.set(c.get() + !in_lanes as usize));
             kept_lanes.set(core::iter::empty());
             // each cut edge's strip reaches `r` from the edge, or the far
             // corner; its darts are numbered on after the last edge's. A

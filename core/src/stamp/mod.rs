@@ -848,6 +848,7 @@ mod tests {
         let m = graded_plane(1, 1.0);
         let mesh = m.mesh();
         for seed in [3] {
+            fill::POINT_BY_POINT.with(|c| c.set(0));
             let (roots, report) = run(
                 mesh,
                 &StampParams {
@@ -856,6 +857,10 @@ mod tests {
                 },
             );
             assert_eq!(roots.len(), 50_000, "{report:?}");
+            // both faces' darts took the point-by-point path (the stamp may
+            // take more than one pass)
+            let faces = fill::POINT_BY_POINT.with(|c| c.get());
+            assert!(faces >= 2, "{faces} faces tested point by point");
             assert!(report.filled > 0, "the fill added nothing: {report:?}");
             for face in 0..2 {
                 let on = roots.iter().filter(|r| r.face == face).count();

@@ -253,12 +253,20 @@ impl<'a> BodyParts<'a> {
     }
 
     /// The bytes [`set_total`](Self::set_total) takes for `total`
-    /// references; `InvalidArgument` when there are too many.
+    /// references, with room to align them in any memory;
+    /// `InvalidArgument` when there are too many.
     pub fn refs_bytes(total: u64) -> Result<usize, Error> {
-        match total < u64::from(u32::MAX) {
-            true => Ok(total as usize * size_of::<u32>()),
-            false => Err(Error::InvalidArgument("body grid is too large")),
+        let too_large = Error::InvalidArgument("body grid is too large");
+        if total >= u64::from(u32::MAX) {
+            return Err(too_large);
         }
+        let total = usize::try_from(total).map_err(|_| too_large)?;
+        if total.checked_mul(size_of::<u32>()).is_none() {
+            return Err(too_large);
+        }
+        let mut layout = ArenaLayout::new();
+        layout.add::<u32>(total);
+        Ok(layout.bytes())
     }
 
     /// The body, once every stage ran on every layer.
@@ -476,7 +484,9 @@ impl CapBall {
 }
 
 /// The grid a mesh's body will have, worked out before its memory is
-/// found: [`BodyPlan::bytes`] to size the arena, then [`Body::build`].
+/// found: [`BodyPlan::build_bytes`] sizes the arena of [`Body::build`];
+/// [`BodyPlan::bytes`] that of [`Body::parts`], whose references then take
+/// [`BodyParts::refs_bytes`] more.
 #[derive(Clone, Copy, Debug)]
 pub struct BodyPlan {
     shape: Shape,
@@ -1368,7 +1378,9 @@ mod tests {
                 .collect();
             let total: u64 = totals.iter().sum();
             let mut refs_memory = vec![0u8; BodyParts::refs_bytes(total).unwrap()];
-            let mut short = vec![0u8; refs_memory.len() - 1];
+            // (a vector's memory is aligned: the bytes of the references
+            // themselves, less one)
+            let mut short = vec![0u8; 4 * total as usize - 1];
             // short memory is refused, and leaves the parts to try again
             assert!(matches!(
                 parts.set_total(total, &mut Arena::new(&mut short)),
