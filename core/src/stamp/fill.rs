@@ -104,20 +104,9 @@ impl Own {
     /// Holds the `points`; false (and holds none) when there are more than
     /// [`OWN`].
     fn set(&mut self, points: impl Iterator<Item = [f32; 3]>) -> bool {
-        let mut n = 0;
-        for p in points {
-            if n == OWN {
-                (self.len, self.lanes, self.whole) = (0, 0, false);
-                return false;
-            }
-            (self.x[n], self.y[n], self.z[n]) = (p[0], p[1], p[2]);
-            n += 1;
-        }
-        (self.len, self.lanes, self.whole) = (n, n.div_ceil(OWN_LANES) * OWN_LANES, true);
-        for a in [&mut self.x, &mut self.y, &mut self.z] {
-            a[n..self.lanes].fill(f32::INFINITY);
-        }
-        true
+        (self.len, self.lanes, self.whole) = (0, 0, true);
+        points.for_each(|p| self.push(p));
+        self.whole
     }
 
     /// Holds `p` too; holds none from then on when [`OWN`] are held.

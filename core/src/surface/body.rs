@@ -295,6 +295,11 @@ impl BodyGrid<'_> {
         let shape = &self.shape;
         let [a0, a1, a2, b0, b1, b2] = self.spans[t].map(usize::from);
         let (a, b) = ([a0, a1, a2], [b0, b1, b2]);
+        let zs = a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1));
+        // another thread's layers: no plane to work out
+        if zs.is_empty() {
+            return;
+        }
         let [p, q, r, ..] = self.triangles[t].map(Vec3::from);
         let n = (q - p).cross(r - p);
         let weight = n.abs().element_sum();
@@ -315,7 +320,7 @@ impl BodyGrid<'_> {
         let thin = 64.0 * f32::EPSILON * e2 * (libm::sqrtf(e2) + 2.0 / shape.inv_cell);
         let reach = weight * (half + 4e-6 * (size + p.abs().max_element())) + thin;
         let skip = layers.start * shape.layer_cells();
-        for z in a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1)) {
+        for z in zs {
             for y in a[1]..=b[1] {
                 for x in a[0]..=b[0] {
                     if n.dot(shape.centre(x, y, z) - p).abs() <= reach {
@@ -947,45 +952,32 @@ impl Legs<'_> {
         };
         let spans = [span(0), span(1), span(2)];
         let (q1, q2) = (Vec3A::from(starts[1]), Vec3A::from(starts[2]));
-        let legs_of = |t: &Stored| {
+        let share = |t: &Stored| {
             let [.., lo, hi] = *t;
             let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
             let within = |q: Vec3A| (lo.cmple(q) & q.cmple(hi)).bitmask();
             // leg 0's line is (y, z) of starts[1], leg 1's (x, z) of it,
             // leg 2's (x, y) of starts[2]
             let (a, b) = (within(q1), within(q2));
-            (a & 6 == 6) as u32 | ((a & 5 == 5) as u32) << 1 | ((b & 3 == 3) as u32) << 2
-        };
-        let crossed = |t: &Stored, legs: u32| {
             let mut w = 0;
-            if legs & 1 != 0 {
+            if a & 6 == 6 {
                 w += counted(crossing::<0>(t, starts[0]), spans[0]);
             }
-            if legs & 2 != 0 {
+            if a & 5 == 5 {
                 w += counted(crossing::<1>(t, starts[1]), spans[1]);
             }
-            if legs & 4 != 0 {
+            if b & 3 == 3 {
                 w += counted(crossing::<2>(t, starts[2]), spans[2]);
             }
             w
         };
-        let mut w = 0;
         // the cell's own triangles, then the caps (none in most cells)
-        for &t in self.listed {
-            let t = &self.body.triangles[t as usize];
-            let legs = legs_of(t);
-            if legs != 0 {
-                w += crossed(t, legs);
-            }
-        }
+        let listed = self
+            .listed
+            .iter()
+            .map(|&t| &self.body.triangles[t as usize]);
         let near = self.met.iter().map(|&t| &self.body.caps[t as usize]);
-        for t in self.caps.iter().chain(near) {
-            let legs = legs_of(t);
-            if legs != 0 {
-                w += crossed(t, legs);
-            }
-        }
-        w
+        listed.map(share).sum::<i32>() + self.caps.iter().chain(near).map(share).sum::<i32>()
     }
 }
 
