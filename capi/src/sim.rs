@@ -3,7 +3,7 @@
 use crate::buffers::{bytes, bytes_mut, grow, req, req_mut, slice, strided, Float3Out};
 use crate::frame::frame_ref;
 use crate::status::Failure;
-use crate::threads::{cut_into, run_parts, split_in_chunks, thread_total};
+use crate::threads::{beside, cut_into, run_parts, split_in_chunks, split_pairs_in_chunks, thread_total};
 use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::dynamics::collision::{
@@ -11,10 +11,10 @@ use pelage_core::dynamics::collision::{
 };
 use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
-use pelage_core::dynamics::sim::{Sim, SimParams, Step};
+use pelage_core::dynamics::sim::{Sim, SimParams, Step, STATE_FLOATS};
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::{Body, BodyParts, BodyPlan, Rim};
-use pelage_core::{Arena, Mesh};
+use pelage_core::{Arena, Mesh, Strided};
 use std::ffi::c_void;
 use std::ops::Range;
 
@@ -141,6 +141,11 @@ pub(crate) struct SimBox {
     pub(crate) sim: Sim<'static>,
     /// The body of the last step that collided with the body.
     body: BodyMemory,
+    /// Each guide's state before a step that builds its body beside the
+    /// guides (to take that step back).
+    kept: Vec<f32>,
+    /// That step's guide curves before the push-out.
+    shaped: Vec<f32>,
 }
 
 fn sim_mut<'a>(sim: PelageSim) -> Result<&'a mut SimBox, Failure> {
@@ -212,7 +217,7 @@ pub extern "C" fn pelage_sim_new(
         // the rest mesh is read only while the simulation is made: the
         // guides' rest shapes and roots are copied into its memory
         let sim = Sim::new(mesh, &guides, &p, &mut Arena::new(memory))?;
-        *out = Box::into_raw(Box::new(SimBox { sim, body: BodyMemory::default() })).cast::<PelageSimTy>();
+        *out = Box::into_raw(Box::new(SimBox { sim, body: BodyMemory::default(), kept: Vec::new(), shaped: Vec::new() })).cast::<PelageSimTy>();
         Ok(())
     }
 }
@@ -383,21 +388,27 @@ impl BodyMemory {
         density: f32,
         thread_count: u32,
     ) -> Result<Body<'a>, Failure> {
+        let (parts, refs) = self.parts(mesh, density)?;
+        body_grid(parts, thread_count, refs)
+    }
+
+    /// [`body`](Self::body)'s stages that run on one thread, and the
+    /// memory the rest takes for the references.
+    fn parts<'a>(
+        &'a mut self,
+        mesh: &Mesh,
+        density: f32,
+    ) -> Result<(BodyParts<'a>, impl FnOnce(usize) -> Result<&'a mut [u8], Failure>), Failure> {
         let (grid, refs) = (&mut self.grid, &mut self.refs);
-        body_in(
-            mesh,
-            &mut self.rim,
-            density,
-            thread_count,
-            |bytes| {
-                grow(grid, bytes, 0, "the body")?;
-                Ok(grid)
-            },
-            |bytes| {
-                grow(refs, bytes, 0, "the body's triangle references")?;
-                Ok(refs)
-            },
-        )
+        let parts = body_parts(mesh, &mut self.rim, density, |bytes| {
+            grow(grid, bytes, 0, "the body")?;
+            Ok(grid)
+        })?;
+        Ok((parts, move |bytes| {
+            let refs = refs;
+            grow(refs, bytes, 0, "the body's triangle references")?;
+            Ok(refs.as_mut_slice())
+        }))
     }
 }
 
@@ -415,6 +426,17 @@ pub(crate) fn body_in<'a>(
     memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
     refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
+    body_grid(body_parts(mesh, rim_arena, density, memory)?, thread_count, refs_memory)
+}
+
+/// The stages of [`body_in`] that run on one thread: the rim, the grid's
+/// placement, the triangles copied.
+fn body_parts<'a>(
+    mesh: &Mesh,
+    rim_arena: &mut Vec<u8>,
+    density: f32,
+    memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
+) -> Result<BodyParts<'a>, Failure> {
     grow(
         rim_arena,
         Rim::required_bytes(mesh),
@@ -423,7 +445,16 @@ pub(crate) fn body_in<'a>(
     )?;
     let rim = Rim::refresh(mesh, &mut Arena::new(rim_arena))?;
     let plan = BodyPlan::with_density(mesh, &rim, density)?;
-    let mut parts = Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())?))?;
+    Ok(Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())?))?)
+}
+
+/// The stages of [`body_in`] split by layers over `thread_count` threads:
+/// the grid's triangles counted, listed, the cells classified.
+fn body_grid<'a>(
+    mut parts: BodyParts<'a>,
+    thread_count: u32,
+    refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
+) -> Result<Body<'a>, Failure> {
     let (layers, per) = (parts.layers(), parts.layer_cells());
     let threads = thread_total(thread_count).clamp(1, layers.max(1));
     let ranges: Vec<Range<usize>> = (0..threads)
@@ -529,6 +560,13 @@ pub extern "C" fn pelage_sim_step(
         let sim = sim_mut(sim)?;
         let frame = frame_ref(frame)?;
         let host = HostColliders::read(colliders)?;
+        let external = match external_points.is_null() {
+            true => None,
+            false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),
+        };
+        if host.body && frame.body().is_none() && thread_total(thread_count) > 1 {
+            return step_beside_body(sim, frame.posed(), &host, external, dt, thread_count);
+        }
         // the frame's own body, when its colliders have one, is this mesh's:
         // built once per frame, shared with the render strands' push-out
         let built;
@@ -541,10 +579,6 @@ pub extern "C" fn pelage_sim_step(
             }
         };
         let colliders = host.colliders(body);
-        let external = match external_points.is_null() {
-            true => None,
-            false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),
-        };
         let Step { context, blocks, snapshot } = sim.sim.begin(frame.posed(), &colliders, external, dt)?;
         let (n, per) = (snapshot.len(), context.block_floats());
         split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.advance(range.start, part))?;
@@ -556,6 +590,60 @@ pub extern "C" fn pelage_sim_step(
         split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.finish(range.start, part))?;
         Ok(())
     }
+}
+
+/// A step on several threads that builds its own body collider: the
+/// body's stages that run on one thread (rim, placement, copies) run
+/// beside the guides' advance, links and IK on the other threads; the
+/// grid's layers are then built over every thread, and the guides pushed
+/// out. The bits are those of building the body first. A failure once the
+/// guides have moved (the body refused, memory, a worker thread) takes the
+/// step back, so the simulation is as it was.
+fn step_beside_body(
+    sim: &mut SimBox,
+    frame: &PosedFrame,
+    host: &HostColliders,
+    external: Option<Strided<[f32; 3]>>,
+    dt: f32,
+    thread_count: u32,
+) -> Result<(), Failure> {
+    let SimBox { sim, body: memory, kept, shaped } = sim;
+    let (n, m) = (sim.len(), sim.points());
+    grow(kept, n * STATE_FLOATS, 0.0, "the state kept through a step")?;
+    grow(shaped, n * 3 * m, 0.0, "the guides' curves before the push-out")?;
+    let stepped = sim.has_stepped();
+    let shapes = host.colliders(None);
+    let Step { context, blocks, snapshot } = sim.begin(frame, &shapes, external, dt)?;
+    let per = context.block_floats();
+    context.keep(blocks, kept);
+    let guide_threads = thread_total(thread_count) as u32 - 1;
+    let mut step = || -> Result<(), Failure> {
+        let (parts, bent) = beside(
+            || memory.parts(frame.mesh(), COLLISION_CELLS_PER_TRIANGLE),
+            || -> Result<(), Failure> {
+                split_in_chunks(n, guide_threads, blocks, per, |range, part| context.advance(range.start, part))?;
+                for _ in 0..context.link_iterations() {
+                    context.snapshot(blocks, snapshot);
+                    let snapshot = &*snapshot;
+                    split_in_chunks(n, guide_threads, blocks, per, |range, part| context.relax(range.start, part, snapshot))?;
+                }
+                split_pairs_in_chunks(n, guide_threads, blocks, per, shaped, 3 * m, |range, part, out| context.shape(range.start, part, out))
+            },
+        )?;
+        bent?;
+        let (parts, refs) = parts?;
+        let body = body_grid(parts, thread_count, refs)?;
+        let colliders = host.colliders(Some(&body));
+        let shaped = &*shaped;
+        split_in_chunks(n, thread_count, blocks, per, |range, part| {
+            context.collide(range.start, part, &shaped[range.start * 3 * m..range.end * 3 * m], &colliders)
+        })
+    };
+    let done = step();
+    if done.is_err() {
+        sim.undo(kept, stepped);
+    }
+    done
 }
 
 /// Writes the posed guides of the last step (world space; all zero before

@@ -169,13 +169,28 @@ pub(crate) fn split_in_chunks<T: Send>(
     per: usize,
     work: impl Fn(Range<usize>, &mut [T]) + Sync,
 ) -> Result<(), Failure> {
+    split_pairs_in_chunks(n, thread_count, out, per, &mut [0u8; 0], 0, |range, part, _| work(range, part))
+}
+
+/// [`split_in_chunks`] with two outputs: `a` (`per_a` elements an item)
+/// and `b` (`per_b`), cut alike.
+pub(crate) fn split_pairs_in_chunks<A: Send, B: Send>(
+    n: usize,
+    thread_count: u32,
+    a: &mut [A],
+    per_a: usize,
+    b: &mut [B],
+    per_b: usize,
+    work: impl Fn(Range<usize>, &mut [A], &mut [B]) + Sync,
+) -> Result<(), Failure> {
     let threads = thread_total(thread_count).clamp(1, n.div_ceil(CHUNK).max(1));
     if threads == 1 {
-        work(0..n, out);
+        work(0..n, a, b);
         return Ok(());
     }
-    let parts: Vec<std::sync::Mutex<Option<&mut [T]>>> = out
-        .chunks_mut(CHUNK * per)
+    let chunks = n.div_ceil(CHUNK);
+    let parts: Vec<std::sync::Mutex<Option<(&mut [A], &mut [B])>>> = cut_chunks(a, CHUNK * per_a, chunks)
+        .zip(cut_chunks(b, CHUNK * per_b, chunks))
         .map(|p| std::sync::Mutex::new(Some(p)))
         .collect();
     let next = std::sync::atomic::AtomicUsize::new(0);
@@ -183,12 +198,45 @@ pub(crate) fn split_in_chunks<T: Send>(
         let c = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let Some(slot) = parts.get(c) else { break };
         // each chunk is taken once, by the thread that drew its number
-        if let Some(part) = slot.lock().ok().and_then(|mut p| p.take()) {
-            work(c * CHUNK..((c + 1) * CHUNK).min(n), part);
+        if let Some((a, b)) = slot.lock().ok().and_then(|mut p| p.take()) {
+            work(c * CHUNK..((c + 1) * CHUNK).min(n), a, b);
         }
     };
     split_over_threads(threads, threads as u32, &mut [0u8; 0], 0, |_, _| run())?;
     Ok(())
+}
+
+/// `s` cut into `chunks` parts of `size` elements (the last takes the
+/// rest; all empty when `s` is).
+fn cut_chunks<T>(s: &mut [T], size: usize, chunks: usize) -> impl Iterator<Item = &mut [T]> {
+    let mut rest = s;
+    (0..chunks).map(move |c| {
+        let take = if c + 1 == chunks { rest.len() } else { size.min(rest.len()) };
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
+        rest = tail;
+        mine
+    })
+}
+
+/// Runs `a` on a scoped thread while `b` runs on the calling thread, and
+/// returns both results.
+pub(crate) fn beside<A: Send, B>(
+    a: impl FnOnce() -> A + Send,
+    b: impl FnOnce() -> B,
+) -> Result<(A, B), Failure> {
+    std::thread::scope(|scope| {
+        let handle = std::thread::Builder::new().spawn_scoped(scope, a).map_err(|e| {
+            Failure::new(
+                PelageStatus::Panic,
+                format!("could not start a worker thread ({e})"),
+            )
+        })?;
+        let b = b();
+        let a = handle
+            .join()
+            .map_err(|_| Failure::new(PelageStatus::Panic, "a worker thread panicked"))?;
+        Ok((a, b))
+    })
 }
 
 /// Runs `work` on each of `parts` on scoped threads (the last on the

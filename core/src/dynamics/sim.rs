@@ -10,7 +10,10 @@
 //! over threads; any split gives the same bits): [`StepContext::advance`]
 //! (neutral pose, spring, target), the link relaxations
 //! ([`StepContext::snapshot`] then [`StepContext::relax`]), and
-//! [`StepContext::finish`] (IK, curve, push-out). The state that carries
+//! [`StepContext::finish`] (IK, curve, push-out; or [`StepContext::shape`]
+//! then [`StepContext::collide`], for a host that builds a collider while
+//! the guides bend, with [`StepContext::keep`] and [`Sim::undo`] to take
+//! the step back if that fails). The state that carries
 //! from step to step is a few floats per guide, saved to and restored
 //! from bytes ([`Sim::save`], [`Sim::restore`]).
 
@@ -339,6 +342,31 @@ impl<'a> Sim<'a> {
     fn block(&self, g: usize) -> &[f32] {
         let per = Self::block_floats(&self.params);
         &self.blocks[g * per..(g + 1) * per]
+    }
+
+    /// True when a step has begun since the simulation was made, reset or
+    /// restored (there are posed guides to read).
+    pub fn has_stepped(&self) -> bool {
+        self.stepped
+    }
+
+    /// Takes back a step that could not finish: every guide's state as
+    /// [`StepContext::keep`] saved it in `kept` before the step advanced
+    /// it ([`STATE_FLOATS`] per guide, all of them), and `stepped`, what
+    /// [`has_stepped`](Self::has_stepped) said before the step began. The
+    /// posed guides of the last step were not touched by a step that
+    /// shaped its guides apart ([`StepContext::shape`]), so the
+    /// simulation is as it was.
+    pub fn undo(&mut self, kept: &[f32], stepped: bool) {
+        let per = Self::block_floats(&self.params);
+        for (b, k) in self
+            .blocks
+            .chunks_exact_mut(per)
+            .zip(kept.chunks_exact(STATE_FLOATS))
+        {
+            b[..STATE_FLOATS].copy_from_slice(k);
+        }
+        self.stepped = stepped;
     }
 
     /// Forgets the motion: the next step starts from the neutral pose.
@@ -921,12 +949,73 @@ impl StepContext<'_> {
         }
     }
 
+    /// Copies the state of the guides whose blocks `blocks` holds into
+    /// `kept` ([`STATE_FLOATS`] per guide), before [`advance`](Self::advance)
+    /// overwrites it: what [`Sim::undo`] puts back when the step cannot
+    /// finish (a host that builds a collider while the guides bend).
+    pub fn keep(&self, blocks: &[f32], kept: &mut [f32]) {
+        for (b, k) in blocks
+            .chunks_exact(self.block)
+            .zip(kept.chunks_exact_mut(STATE_FLOATS))
+        {
+            k.copy_from_slice(&b[..STATE_FLOATS]);
+        }
+    }
+
     /// Phase 3 for the guides `first ..` whose blocks `blocks` holds: IK
-    /// toward the target, the Catmull-Rom curve, the push-out. The guides
-    /// whose target is in reach are solved [`ik::LANES`] at a time, in
-    /// the order they come; each one's result is its own whatever it is
-    /// solved with.
+    /// toward the target, the Catmull-Rom curve, the push-out from the
+    /// step's colliders. The same as [`shape`](Self::shape) then
+    /// [`collide`](Self::collide), without keeping the curves in between.
     pub fn finish(&self, first: usize, blocks: &mut [f32]) {
+        let m = self.params.points;
+        self.solve(first, blocks, |g, b, joints| {
+            let mut posed = [Vec3::ZERO; MAX_JOINTS];
+            self.curve(g, b, joints, &mut posed[..m]);
+            self.push(g, b, &mut posed[..m], self.colliders);
+        });
+    }
+
+    /// Phase 3 without its push-out, for a host that builds a collider
+    /// meanwhile: IK and the Catmull-Rom curve of the guides `first ..`
+    /// whose blocks `blocks` holds, written to `shaped` (in their root
+    /// frames, [`Sim::points`] float3 per guide) and not to the blocks,
+    /// whose posed guides stay those of the last step until
+    /// [`collide`](Self::collide).
+    pub fn shape(&self, first: usize, blocks: &mut [f32], shaped: &mut [f32]) {
+        let m = self.params.points;
+        self.solve(first, blocks, |g, b, joints| {
+            let mut posed = [Vec3::ZERO; MAX_JOINTS];
+            self.curve(g, b, joints, &mut posed[..m]);
+            let i = g - first;
+            let out = &mut shaped[i * 3 * m..(i + 1) * 3 * m];
+            for (o, p) in out.chunks_exact_mut(3).zip(&posed[..m]) {
+                o.copy_from_slice(&p.to_array());
+            }
+        });
+    }
+
+    /// The rest of phase 3 after [`shape`](Self::shape): the push-out of
+    /// the guides `first ..` whose blocks `blocks` holds and whose curves
+    /// `shaped` holds, from `colliders` (the step's, with a body built
+    /// meanwhile), into the blocks. The bits are [`finish`](Self::finish)'s
+    /// with those colliders.
+    pub fn collide(&self, first: usize, blocks: &mut [f32], shaped: &[f32], colliders: &Colliders) {
+        let m = self.params.points;
+        for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
+            let mut posed = [Vec3::ZERO; MAX_JOINTS];
+            for (p, s) in posed[..m].iter_mut().zip(shaped[i * 3 * m..].chunks_exact(3)) {
+                *p = Vec3::new(s[0], s[1], s[2]);
+            }
+            self.push(first + i, b, &mut posed[..m], colliders);
+        }
+    }
+
+    /// IK toward the target for the guides `first ..` whose blocks `blocks`
+    /// holds, handing `done` each guide's index, block and solved joints
+    /// (root frame). The guides whose target is in reach are solved
+    /// [`ik::LANES`] at a time, in the order they come; each one's result
+    /// is its own whatever it is solved with.
+    fn solve(&self, first: usize, blocks: &mut [f32], mut done: impl FnMut(usize, &mut [f32], &[Vec3])) {
         let j = self.params.joints;
         let mut joints = [Vec3::ZERO; MAX_JOINTS];
         let mut chains = ik::Chains::default();
@@ -945,7 +1034,7 @@ impl StepContext<'_> {
             let target = last_frame(b).to_local(Vec3::new(b[TARGET], b[TARGET + 1], b[TARGET + 2]));
             let lengths = &self.lengths[g * (j - 1)..(g + 1) * (j - 1)];
             if ik::stretch_if_unreachable(&mut joints[..j], lengths, target) {
-                self.complete(g, b, &joints[..j]);
+                done(g, b, &joints[..j]);
                 continue;
             }
             chains.load(
@@ -958,22 +1047,23 @@ impl StepContext<'_> {
             queued[waiting] = i;
             waiting += 1;
             if waiting == ik::LANES {
-                self.solve_queued(&mut chains, &queued, first, blocks);
+                self.solve_queued(&mut chains, &queued, first, blocks, &mut done);
                 waiting = 0;
             }
         }
-        self.solve_queued(&mut chains, &queued[..waiting], first, blocks);
+        self.solve_queued(&mut chains, &queued[..waiting], first, blocks, &mut done);
     }
 
     /// Solves the chains in `chains`, those of the guides `first + i` for
-    /// the `i` `queued` lists lane by lane, completes them, and empties
-    /// `chains`.
+    /// the `i` `queued` lists lane by lane, hands each to `done`, and
+    /// empties `chains`.
     fn solve_queued(
         &self,
         chains: &mut ik::Chains,
         queued: &[usize],
         first: usize,
         blocks: &mut [f32],
+        done: &mut impl FnMut(usize, &mut [f32], &[Vec3]),
     ) {
         if queued.is_empty() {
             return;
@@ -986,38 +1076,43 @@ impl StepContext<'_> {
                 *p = chains.joint(lane, k);
             }
             let b = &mut blocks[i * self.block..(i + 1) * self.block];
-            self.complete(first + i, b, &joints[..j]);
+            done(first + i, b, &joints[..j]);
         }
         chains.clear();
     }
 
-    /// Guide `g`'s posed points from its solved `joints` (root frame) into
-    /// its block `b`: the Catmull-Rom curve, the host's curves, the push-out.
-    fn complete(&self, g: usize, b: &mut [f32], joints: &[Vec3]) {
-        let (j, m) = (self.params.joints, self.params.points);
-        let mut posed = [Vec3::ZERO; MAX_JOINTS];
-        let frame = last_frame(b);
-        let reach = self.constants[g].reach;
-        spline::resample(joints, &mut posed[..m]);
+    /// Guide `g`'s curve from its solved `joints` (root frame; its block
+    /// `b` holds the frame): the Catmull-Rom curve through them, resampled
+    /// to `posed`, and the host's curves blended in.
+    fn curve(&self, g: usize, b: &[f32], joints: &[Vec3], posed: &mut [Vec3]) {
+        spline::resample(joints, posed);
         let share = self.constants[g].external;
         if let (Some(curves), true) = (self.external, share > 0.0) {
-            blend(&frame, curves, g, share, &mut posed[..m]);
+            blend(&last_frame(b), curves, g, share, posed);
         }
+    }
+
+    /// Guide `g`'s `posed` curve pushed out of `colliders` and written to
+    /// its block `b` as its posed points.
+    fn push(&self, g: usize, b: &mut [f32], posed: &mut [Vec3], colliders: &Colliders) {
+        let j = self.params.joints;
+        let frame = last_frame(b);
+        let reach = self.constants[g].reach;
         // the IK's products overflow for guides and moves near the
         // coordinate limit (lengths past ~1e9 each way): such a guide takes
         // its groomed shape rather than a non-finite point
-        let lost = !posed[..m].iter().all(|p| p.is_finite());
-        if lost || push_out(self.colliders, &frame, &mut posed[..m], reach) == PushOut::Stuck {
+        let lost = !posed.iter().all(|p| p.is_finite());
+        if lost || push_out(colliders, &frame, posed, reach) == PushOut::Stuck {
             // bent into a place no rotation leaves (a crease, a landing), or
             // lost: the groomed shape, pushed out in turn
             let mut rest = [Vec3::ZERO; MAX_JOINTS];
             for (k, p) in rest[..j].iter_mut().enumerate() {
                 *p = rest_joint(self.rest, j, g, k);
             }
-            spline::resample(&rest[..j], &mut posed[..m]);
-            push_out(self.colliders, &frame, &mut posed[..m], reach);
+            spline::resample(&rest[..j], posed);
+            push_out(colliders, &frame, posed, reach);
         }
-        for (k, p) in posed[..m].iter().enumerate() {
+        for (k, p) in posed.iter().enumerate() {
             b[POSED + 3 * k..POSED + 3 * k + 3].copy_from_slice(&p.to_array());
         }
     }
@@ -1732,6 +1827,57 @@ mod tests {
         step(&mut sim, &s.rest, &colliders, 1.0 / 24.0);
         assert_sound(&sim, "collided");
         assert_eq!(crossing(&sim), 0);
+
+        // the same step with its guides shaped while a body is "built"
+        // (begun without it), taken back, then run again and collided
+        // with every collider: the bits of the step above
+        let mut buf2 = vec![];
+        let mut apart = s.sim(&params(), &mut buf2);
+        step(&mut apart, &s.rest, &Colliders::default(), 1.0 / 24.0);
+        let saved = |sim: &Sim| {
+            let mut bytes = vec![0u8; sim.state_bytes()];
+            sim.save(&mut bytes).unwrap();
+            (bytes, posed(sim))
+        };
+        let before = saved(&apart);
+        let mut layout = ArenaLayout::new();
+        PosedFrame::layout(&mut layout, s.rest.p.len(), 1, 2);
+        let mut fbuf = vec![0u8; layout.bytes()];
+        let frame = PosedFrame::new(s.rest.mesh(), 1, 2, &mut Arena::new(&mut fbuf)).unwrap();
+        let shapes = Colliders {
+            body: None,
+            ..colliders
+        };
+        let m = apart.points();
+        let mut kept = vec![0.0f32; apart.len() * STATE_FLOATS];
+        let mut shaped = vec![0.0f32; apart.len() * 3 * m];
+        for undone in [true, false] {
+            let stepped = apart.has_stepped();
+            let Step {
+                context: ctx,
+                blocks,
+                snapshot,
+            } = apart.begin(&frame, &shapes, None, 1.0 / 24.0).unwrap();
+            let per = ctx.block_floats();
+            ctx.keep(blocks, &mut kept);
+            ctx.advance(0, blocks);
+            for _ in 0..ctx.link_iterations() {
+                ctx.snapshot(blocks, snapshot);
+                ctx.relax(0, blocks, snapshot);
+            }
+            // in two uneven ranges, as threads would
+            let cut = 7 * per;
+            ctx.shape(0, &mut blocks[..cut], &mut shaped[..7 * 3 * m]);
+            ctx.shape(7, &mut blocks[cut..], &mut shaped[7 * 3 * m..]);
+            if undone {
+                apart.undo(&kept, stepped);
+                assert!(saved(&apart) == before, "the step taken back");
+                continue;
+            }
+            ctx.collide(0, &mut blocks[..cut], &shaped[..7 * 3 * m], &colliders);
+            ctx.collide(7, &mut blocks[cut..], &shaped[7 * 3 * m..], &colliders);
+        }
+        assert!(saved(&apart) == saved(&sim), "shaped apart, then collided");
     }
 
     #[test]
