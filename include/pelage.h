@@ -1177,7 +1177,12 @@ void pelage_sim_free(PelageSim sim);
 // `thread_count` threads (0: all cores); the bits do not depend on it.
 // The body collider (`colliders->body`) is the frame's mesh: the body
 // `pelage_frame_set_colliders` built for the frame when it has one (the
-// same solid, built once per frame), else built here, every step.
+// same solid, built once per frame), else built here, every step: on
+// several threads, beside the guides' IK (the body's stages that run on
+// one thread run on one while the guides bend on the others), so the
+// body costs less than built first; a body that cannot be built then (no
+// triangle with area, memory) takes the step back, and the state is
+// unchanged, as when it is built first.
 // `external_points` (NULL: none) holds another simulator's curves, float3
 // world points `external_stride` bytes apart, points_per_guide per guide:
 // the guides `params.external` selects take their shape from them

@@ -3,7 +3,9 @@
 use crate::buffers::{bytes, bytes_mut, grow, req, req_mut, slice, strided, Float3Out};
 use crate::frame::frame_ref;
 use crate::status::Failure;
-use crate::threads::{beside, cut_into, run_parts, split_in_chunks, split_pairs_in_chunks, thread_total};
+use crate::threads::{
+    beside, cut_into, run_parts, split_in_chunks, split_pairs_in_chunks, thread_total,
+};
 use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::dynamics::collision::{
@@ -17,6 +19,7 @@ use pelage_core::surface::body::{Body, BodyParts, BodyPlan, Rim};
 use pelage_core::{Arena, Mesh, Strided};
 use std::ffi::c_void;
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The opaque object a `PelageSim` points to.
 // not repr(C): cbindgen declares it in C without a definition
@@ -389,7 +392,7 @@ impl BodyMemory {
         thread_count: u32,
     ) -> Result<Body<'a>, Failure> {
         let (parts, refs) = self.parts(mesh, density)?;
-        body_grid(parts, thread_count, refs)
+        body_grid(parts, thread_count, |bytes| refs.take(bytes))
     }
 
     /// [`body`](Self::body)'s stages that run on one thread, and the
@@ -398,17 +401,24 @@ impl BodyMemory {
         &'a mut self,
         mesh: &Mesh,
         density: f32,
-    ) -> Result<(BodyParts<'a>, impl FnOnce(usize) -> Result<&'a mut [u8], Failure>), Failure> {
-        let (grid, refs) = (&mut self.grid, &mut self.refs);
+    ) -> Result<(BodyParts<'a>, RefsMemory<'a>), Failure> {
+        let grid = &mut self.grid;
         let parts = body_parts(mesh, &mut self.rim, density, |bytes| {
             grow(grid, bytes, 0, "the body")?;
             Ok(grid)
         })?;
-        Ok((parts, move |bytes| {
-            let refs = refs;
-            grow(refs, bytes, 0, "the body's triangle references")?;
-            Ok(refs.as_mut_slice())
-        }))
+        Ok((parts, RefsMemory(&mut self.refs)))
+    }
+}
+
+/// The memory of a body's triangle references, to be sized once counted.
+struct RefsMemory<'a>(&'a mut Vec<u8>);
+
+impl<'a> RefsMemory<'a> {
+    /// `bytes` of it (grown as needed).
+    fn take(self, bytes: usize) -> Result<&'a mut [u8], Failure> {
+        grow(self.0, bytes, 0, "the body's triangle references")?;
+        Ok(self.0.as_mut_slice())
     }
 }
 
@@ -426,7 +436,11 @@ pub(crate) fn body_in<'a>(
     memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
     refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
-    body_grid(body_parts(mesh, rim_arena, density, memory)?, thread_count, refs_memory)
+    body_grid(
+        body_parts(mesh, rim_arena, density, memory)?,
+        thread_count,
+        refs_memory,
+    )
 }
 
 /// The stages of [`body_in`] that run on one thread: the rim, the grid's
@@ -445,58 +459,137 @@ fn body_parts<'a>(
     )?;
     let rim = Rim::refresh(mesh, &mut Arena::new(rim_arena))?;
     let plan = BodyPlan::with_density(mesh, &rim, density)?;
-    Ok(Body::parts(&plan, mesh, &rim, &mut Arena::new(memory(plan.bytes())?))?)
+    Ok(Body::parts(
+        &plan,
+        mesh,
+        &rim,
+        &mut Arena::new(memory(plan.bytes())?),
+    )?)
 }
 
 /// The stages of [`body_in`] split by layers over `thread_count` threads:
 /// the grid's triangles counted, listed, the cells classified.
 fn body_grid<'a>(
-    mut parts: BodyParts<'a>,
+    parts: BodyParts<'a>,
     thread_count: u32,
     refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
+    counted(parts, thread_total(thread_count), true, refs_memory)?.body()
+}
+
+/// A body grid with its triangles counted by layers, and the memory of its
+/// references taken: what is left of it is split alike.
+struct Counted<'a> {
+    parts: BodyParts<'a>,
+    /// The layers of each part of the split.
+    ranges: Vec<Range<usize>>,
+    /// Each part's cells and references.
+    cells: Vec<usize>,
+    totals: Vec<u64>,
+    /// Stages run.
+    listed: bool,
+    classified: bool,
+}
+
+/// Counts the triangles of `parts`' grid in layers split for `threads`
+/// threads, on as many threads or (`parallel` false) one after the other on
+/// this one, and takes the references' memory from `refs_memory`.
+fn counted<'a>(
+    mut parts: BodyParts<'a>,
+    threads: usize,
+    parallel: bool,
+    refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
+) -> Result<Counted<'a>, Failure> {
     let (layers, per) = (parts.layers(), parts.layer_cells());
-    let threads = thread_total(thread_count).clamp(1, layers.max(1));
+    let threads = threads.clamp(1, layers.max(1));
     let ranges: Vec<Range<usize>> = (0..threads)
         .map(|t| t * layers / threads..(t + 1) * layers / threads)
         .collect();
     let cells: Vec<usize> = ranges.iter().map(|l| l.len() * per).collect();
     let (grid, start, _, _) = parts.split();
-    let starts = cut_into(start, &cells);
-    let totals = run_parts(ranges.iter().cloned().zip(starts).collect(), |(l, part)| {
-        grid.count(l, part)
-    })?;
-    let total = totals.iter().sum();
-    let refs = refs_memory(BodyParts::refs_bytes(total)?)?;
-    parts.set_total(total, &mut Arena::new(refs))?;
-    let (grid, start, refs, class) = parts.split();
-    // each below the total, which set_total found below 2^32
-    let bases = totals.iter().scan(0u32, |sum, &t| {
-        let base = *sum;
-        *sum += t as u32;
-        Some(base)
-    });
-    let lists: Vec<usize> = totals.iter().map(|&t| t as usize).collect();
     let work: Vec<_> = ranges
         .iter()
         .cloned()
-        .zip(bases)
-        .zip(cut_into(&mut *start, &cells))
-        .zip(cut_into(refs, &lists))
+        .zip(cut_into(start, &cells))
         .collect();
-    run_parts(work, |(((l, base), start), refs)| {
-        grid.fill(l, base, start, refs)
-    })?;
-    let start = &*start;
-    run_parts(
-        ranges
+    let count = |(l, part): (Range<usize>, &mut [u32])| grid.count(l, part);
+    let totals = match parallel {
+        true => run_parts(work, count)?,
+        false => work.into_iter().map(count).collect(),
+    };
+    let total = totals.iter().sum();
+    let refs = refs_memory(BodyParts::refs_bytes(total)?)?;
+    parts.set_total(total, &mut Arena::new(refs))?;
+    Ok(Counted {
+        parts,
+        ranges,
+        cells,
+        totals,
+        listed: false,
+        classified: false,
+    })
+}
+
+/// A part of [`Counted::list`]'s work: its layers, its references' first
+/// index, its cells' starts and its references.
+type Listing<'p> = (Range<usize>, u32, &'p mut [u32], &'p mut [u32]);
+
+impl<'a> Counted<'a> {
+    /// Lists the grid's triangles, the parts of the split on as many
+    /// threads or (`parallel` false) one after the other on this one.
+    fn list(&mut self, parallel: bool) -> Result<(), Failure> {
+        let (ranges, cells) = (&self.ranges, &self.cells);
+        let (grid, start, refs, _) = self.parts.split();
+        // each below the total, which set_total found below 2^32
+        let bases = self.totals.iter().scan(0u32, |sum, &t| {
+            let base = *sum;
+            *sum += t as u32;
+            Some(base)
+        });
+        let lists: Vec<usize> = self.totals.iter().map(|&t| t as usize).collect();
+        let work: Vec<Listing> = ranges
             .iter()
             .cloned()
-            .zip(cut_into(class, &cells))
-            .collect(),
-        |(l, class)| grid.classify(l, start, class),
-    )?;
-    Ok(parts.finish())
+            .zip(bases)
+            .zip(cut_into(start, cells))
+            .zip(cut_into(refs, &lists))
+            .map(|(((layers, base), start), refs)| (layers, base, start, refs))
+            .collect();
+        let fill = |(layers, base, start, refs): Listing| grid.fill(layers, base, start, refs);
+        match parallel {
+            true => drop(run_parts(work, fill)?),
+            false => work.into_iter().for_each(fill),
+        }
+        self.listed = true;
+        Ok(())
+    }
+
+    /// Classifies the grid's cells (once [`list`](Self::list)ed), as
+    /// [`list`](Self::list) splits its work.
+    fn classify(&mut self, parallel: bool) -> Result<(), Failure> {
+        let (ranges, cells) = (&self.ranges, &self.cells);
+        let (grid, start, _, class) = self.parts.split();
+        let start = &*start;
+        let work: Vec<_> = ranges.iter().cloned().zip(cut_into(class, cells)).collect();
+        let sweep = |(l, class): (Range<usize>, &mut [u8])| grid.classify(l, start, class);
+        match parallel {
+            true => drop(run_parts(work, sweep)?),
+            false => work.into_iter().for_each(sweep),
+        }
+        self.classified = true;
+        Ok(())
+    }
+
+    /// The body, its stages not run yet run on the split's threads.
+    fn body(mut self) -> Result<Body<'a>, Failure> {
+        if !self.listed {
+            self.list(true)?;
+        }
+        if !self.classified {
+            self.classify(true)?;
+        }
+        Ok(self.parts.finish())
+    }
 }
 
 /// The host's distance callback as a core field.
@@ -527,7 +620,12 @@ impl SignedDistance for HostField {
 /// `thread_count` threads (0: all cores); the bits do not depend on it.
 /// The body collider (`colliders->body`) is the frame's mesh: the body
 /// `pelage_frame_set_colliders` built for the frame when it has one (the
-/// same solid, built once per frame), else built here, every step.
+/// same solid, built once per frame), else built here, every step: on
+/// several threads, beside the guides' IK (the body's stages that run on
+/// one thread run on one while the guides bend on the others), so the
+/// body costs less than built first; a body that cannot be built then (no
+/// triangle with area, memory) takes the step back, and the state is
+/// unchanged, as when it is built first.
 /// `external_points` (NULL: none) holds another simulator's curves, float3
 /// world points `external_stride` bytes apart, points_per_guide per guide:
 /// the guides `params.external` selects take their shape from them
@@ -607,36 +705,82 @@ fn step_beside_body(
     dt: f32,
     thread_count: u32,
 ) -> Result<(), Failure> {
-    let SimBox { sim, body: memory, kept, shaped } = sim;
+    let SimBox {
+        sim,
+        body: memory,
+        kept,
+        shaped,
+    } = sim;
     let (n, m) = (sim.len(), sim.points());
     grow(kept, n * STATE_FLOATS, 0.0, "the state kept through a step")?;
-    grow(shaped, n * 3 * m, 0.0, "the guides' curves before the push-out")?;
+    grow(
+        shaped,
+        n * 3 * m,
+        0.0,
+        "the guides' curves before the push-out",
+    )?;
     let stepped = sim.has_stepped();
     let shapes = host.colliders(None);
-    let Step { context, blocks, snapshot } = sim.begin(frame, &shapes, external, dt)?;
+    let Step {
+        context,
+        blocks,
+        snapshot,
+    } = sim.begin(frame, &shapes, external, dt)?;
     let per = context.block_floats();
     context.keep(blocks, kept);
-    let guide_threads = thread_total(thread_count) as u32 - 1;
+    let threads = thread_total(thread_count);
+    let guide_threads = threads as u32 - 1;
     let mut step = || -> Result<(), Failure> {
-        let (parts, bent) = beside(
-            || memory.parts(frame.mesh(), COLLISION_CELLS_PER_TRIANGLE),
+        let bending = AtomicBool::new(true);
+        let (counted, bent) = beside(
+            || -> Result<Counted, Failure> {
+                let (parts, refs) = memory.parts(frame.mesh(), COLLISION_CELLS_PER_TRIANGLE)?;
+                let mut counted = counted(parts, threads, false, |bytes| refs.take(bytes))?;
+                // the later stages too while the guides still bend, else
+                // over every thread once they are bent
+                if bending.load(Ordering::Relaxed) {
+                    counted.list(false)?;
+                }
+                if bending.load(Ordering::Relaxed) {
+                    counted.classify(false)?;
+                }
+                Ok(counted)
+            },
             || -> Result<(), Failure> {
-                split_in_chunks(n, guide_threads, blocks, per, |range, part| context.advance(range.start, part))?;
+                split_in_chunks(n, guide_threads, blocks, per, |range, part| {
+                    context.advance(range.start, part)
+                })?;
                 for _ in 0..context.link_iterations() {
                     context.snapshot(blocks, snapshot);
                     let snapshot = &*snapshot;
-                    split_in_chunks(n, guide_threads, blocks, per, |range, part| context.relax(range.start, part, snapshot))?;
+                    split_in_chunks(n, guide_threads, blocks, per, |range, part| {
+                        context.relax(range.start, part, snapshot)
+                    })?;
                 }
-                split_pairs_in_chunks(n, guide_threads, blocks, per, shaped, 3 * m, |range, part, out| context.shape(range.start, part, out))
+                let shaped = split_pairs_in_chunks(
+                    n,
+                    guide_threads,
+                    blocks,
+                    per,
+                    shaped,
+                    3 * m,
+                    |range, part, out| context.shape(range.start, part, out),
+                );
+                bending.store(false, Ordering::Relaxed);
+                shaped
             },
         )?;
         bent?;
-        let (parts, refs) = parts?;
-        let body = body_grid(parts, thread_count, refs)?;
+        let body = counted?.body()?;
         let colliders = host.colliders(Some(&body));
         let shaped = &*shaped;
         split_in_chunks(n, thread_count, blocks, per, |range, part| {
-            context.collide(range.start, part, &shaped[range.start * 3 * m..range.end * 3 * m], &colliders)
+            context.collide(
+                range.start,
+                part,
+                &shaped[range.start * 3 * m..range.end * 3 * m],
+                &colliders,
+            )
         })
     };
     let done = step();

@@ -169,7 +169,15 @@ pub(crate) fn split_in_chunks<T: Send>(
     per: usize,
     work: impl Fn(Range<usize>, &mut [T]) + Sync,
 ) -> Result<(), Failure> {
-    split_pairs_in_chunks(n, thread_count, out, per, &mut [0u8; 0], 0, |range, part, _| work(range, part))
+    split_pairs_in_chunks(
+        n,
+        thread_count,
+        out,
+        per,
+        &mut [0u8; 0],
+        0,
+        |range, part, _| work(range, part),
+    )
 }
 
 /// [`split_in_chunks`] with two outputs: `a` (`per_a` elements an item)
@@ -189,7 +197,7 @@ pub(crate) fn split_pairs_in_chunks<A: Send, B: Send>(
         return Ok(());
     }
     let chunks = n.div_ceil(CHUNK);
-    let parts: Vec<std::sync::Mutex<Option<(&mut [A], &mut [B])>>> = cut_chunks(a, CHUNK * per_a, chunks)
+    let parts: Vec<Chunk<A, B>> = cut_chunks(a, CHUNK * per_a, chunks)
         .zip(cut_chunks(b, CHUNK * per_b, chunks))
         .map(|p| std::sync::Mutex::new(Some(p)))
         .collect();
@@ -206,12 +214,19 @@ pub(crate) fn split_pairs_in_chunks<A: Send, B: Send>(
     Ok(())
 }
 
+/// A chunk of [`split_pairs_in_chunks`]'s outputs, until a thread takes it.
+type Chunk<'p, A, B> = std::sync::Mutex<Option<(&'p mut [A], &'p mut [B])>>;
+
 /// `s` cut into `chunks` parts of `size` elements (the last takes the
 /// rest; all empty when `s` is).
 fn cut_chunks<T>(s: &mut [T], size: usize, chunks: usize) -> impl Iterator<Item = &mut [T]> {
     let mut rest = s;
     (0..chunks).map(move |c| {
-        let take = if c + 1 == chunks { rest.len() } else { size.min(rest.len()) };
+        let take = if c + 1 == chunks {
+            rest.len()
+        } else {
+            size.min(rest.len())
+        };
         let (mine, tail) = std::mem::take(&mut rest).split_at_mut(take);
         rest = tail;
         mine
@@ -225,12 +240,14 @@ pub(crate) fn beside<A: Send, B>(
     b: impl FnOnce() -> B,
 ) -> Result<(A, B), Failure> {
     std::thread::scope(|scope| {
-        let handle = std::thread::Builder::new().spawn_scoped(scope, a).map_err(|e| {
-            Failure::new(
-                PelageStatus::Panic,
-                format!("could not start a worker thread ({e})"),
-            )
-        })?;
+        let handle = std::thread::Builder::new()
+            .spawn_scoped(scope, a)
+            .map_err(|e| {
+                Failure::new(
+                    PelageStatus::Panic,
+                    format!("could not start a worker thread ({e})"),
+                )
+            })?;
         let b = b();
         let a = handle
             .join()

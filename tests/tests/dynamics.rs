@@ -432,3 +432,53 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
     assert_eq!(status(&first, 1), PelageStatus::InvalidArgument);
     pelage_groom_free(groom);
 }
+
+#[test]
+fn a_step_that_cannot_build_its_body_changes_nothing() {
+    let shot = Shot::new();
+    let n = shot.roots.len();
+    let params = shot.params();
+    // a frame whose every vertex sits at one point: no triangle for a body
+    let mut collapsed = shot.rest.clone();
+    let at = collapsed.positions[0];
+    collapsed.positions.iter_mut().for_each(|p| *p = at);
+    let mut handle = null_mut();
+    let desc = mesh_desc(&collapsed);
+    let s = pelage_frame_new(&desc, n, JOINTS as u32, &mut handle);
+    assert_eq!(s, PelageStatus::Ok);
+    let collapsed = Frame(handle);
+    let caps = capsules(&shot.rest, &shot.roots, 3);
+    let with_body = colliders(&caps, true);
+    // the step building its own body before the guides move (one thread),
+    // beside them (two), and beside them split over two (three): each
+    // refused mid-shot, then on with the same bits as a shot never refused
+    let mut shots = vec![];
+    for threads in [1, 2, 3] {
+        let sim = SimHandle::new(&shot, &params);
+        run(&shot, &sim, 0..3, threads, false, |_, _, _, _| {});
+        let (state, posed) = (save(&sim), sim.read(n));
+        let s = pelage_sim_step(
+            sim.sim,
+            collapsed.0,
+            &with_body,
+            std::ptr::null(),
+            0,
+            1.0 / 24.0,
+            threads,
+        );
+        assert_eq!(s, PelageStatus::InvalidArgument, "{threads} threads");
+        assert!(save(&sim) == state, "the state changed ({threads} threads)");
+        assert!(
+            sim.read(n) == posed,
+            "the posed guides changed ({threads} threads)"
+        );
+        run(&shot, &sim, 3..6, threads, false, |_, _, _, _| {});
+        shots.push((save(&sim), sim.read(n)));
+    }
+    let never = SimHandle::new(&shot, &params);
+    run(&shot, &never, 0..6, 2, false, |_, _, _, _| {});
+    let reference = (save(&never), never.read(n));
+    for (k, bits) in shots.iter().enumerate() {
+        assert!(*bits == reference, "shot {k} differs");
+    }
+}

@@ -1003,7 +1003,10 @@ impl StepContext<'_> {
         let m = self.params.points;
         for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
             let mut posed = [Vec3::ZERO; MAX_JOINTS];
-            for (p, s) in posed[..m].iter_mut().zip(shaped[i * 3 * m..].chunks_exact(3)) {
+            for (p, s) in posed[..m]
+                .iter_mut()
+                .zip(shaped[i * 3 * m..].chunks_exact(3))
+            {
                 *p = Vec3::new(s[0], s[1], s[2]);
             }
             self.push(first + i, b, &mut posed[..m], colliders);
@@ -1015,7 +1018,12 @@ impl StepContext<'_> {
     /// (root frame). The guides whose target is in reach are solved
     /// [`ik::LANES`] at a time, in the order they come; each one's result
     /// is its own whatever it is solved with.
-    fn solve(&self, first: usize, blocks: &mut [f32], mut done: impl FnMut(usize, &mut [f32], &[Vec3])) {
+    fn solve(
+        &self,
+        first: usize,
+        blocks: &mut [f32],
+        mut done: impl FnMut(usize, &mut [f32], &[Vec3]),
+    ) {
         let j = self.params.joints;
         let mut joints = [Vec3::ZERO; MAX_JOINTS];
         let mut chains = ik::Chains::default();
