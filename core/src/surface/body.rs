@@ -130,6 +130,12 @@ impl Shape {
             .fold(0usize, usize::saturating_add)
     }
 
+    /// The largest coordinate magnitude in the grid, with two cells to
+    /// spare: what rounding is measured against.
+    fn reach(&self) -> f32 {
+        self.lo.abs().max(self.hi.abs()).max_element() + 2.0 / self.inv_cell
+    }
+
     fn cells(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
     }
@@ -305,20 +311,16 @@ impl BodyGrid<'_> {
         let weight = n.abs().element_sum();
         // half a cell and the bounds' pad, and room for rounding, in units
         // of n: n . (c - p) rounds by ~10 units in the last place of
-        // |n| (|c| + |p|) (4e-6 is over thirty); n itself, a cross product
-        // of differences, by ~3 of |e|^2 (e the longest edge) in each
-        // component, and a crossing `crossing` computes lies off the plane
-        // by up to ~12 of |e|^3 (its weights round like n): a thin
-        // triangle's computed crossings stray from its plane, and it is
-        // then kept in more cells
+        // |n| (|c| + |p|) (4e-6 is over thirty), and the crossings stray
+        // from the plane (see `stray`)
         let half = (0.5 + 1e-3) / shape.inv_cell;
-        let size = shape.lo.abs().max(shape.hi.abs()).max_element() + 2.0 / shape.inv_cell;
+        let size = shape.reach();
         let e2 = (q - p)
             .length_squared()
             .max((r - p).length_squared())
             .max((r - q).length_squared());
-        let thin = 64.0 * f32::EPSILON * e2 * (libm::sqrtf(e2) + 2.0 / shape.inv_cell);
-        let reach = weight * (half + 4e-6 * (size + p.abs().max_element())) + thin;
+        let reach =
+            weight * (half + 4e-6 * (size + p.abs().max_element())) + stray(e2, shape.inv_cell);
         let skip = layers.start * shape.layer_cells();
         for z in zs {
             for y in a[1]..=b[1] {
@@ -952,6 +954,13 @@ impl Legs<'_> {
         };
         let spans = [span(0), span(1), span(2)];
         let (q1, q2) = (Vec3A::from(starts[1]), Vec3A::from(starts[2]));
+        // the box of the legs (padded against rounding), whose sides a
+        // triangle's plane must not leave all on one side
+        let shape = &self.body.shape;
+        let cell = 1.0 / shape.inv_cell;
+        let mid = Vec3A::from((centre + p) * 0.5);
+        let half = Vec3A::from((p - centre).abs() * 0.5 + Vec3::splat(1e-3 * cell));
+        let size = shape.reach();
         let share = |t: &Stored| {
             let [.., lo, hi] = *t;
             let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
@@ -959,6 +968,37 @@ impl Legs<'_> {
             // leg 0's line is (y, z) of starts[1], leg 1's (x, z) of it,
             // leg 2's (x, y) of starts[2]
             let (a, b) = (within(q1), within(q2));
+            if a & 6 != 6 && a & 5 != 5 && b & 3 != 3 {
+                return 0;
+            }
+            // a counted crossing lies on a leg, in the box, and (as
+            // computed) within `stray` of the plane: a plane farther from
+            // the box's middle than the box reaches, with room for
+            // rounding n . (mid - corner) as the grid's lists have it,
+            // has none (the legs of most points in a cell pass its
+            // triangles by, though their lines meet the triangles'
+            // bounds)
+            let [c0, c1, c2, ..] = t.map(Vec3A::from);
+            let (e0, e1, e2) = (c1 - c0, c2 - c0, c2 - c1);
+            let n = e0.cross(e1);
+            let (weights, longest) = (
+                n.abs(),
+                e0.length_squared()
+                    .max(e1.length_squared())
+                    .max(e2.length_squared()),
+            );
+            let reach = weights.dot(half)
+                + weights.element_sum() * 4e-6 * (size + c0.abs().max_element())
+                + stray(longest, shape.inv_cell);
+            #[cfg(test)]
+            let reach = if UNCULLED.with(|u| u.get()) {
+                f32::INFINITY
+            } else {
+                reach
+            };
+            if libm::fabsf(n.dot(mid - c0)) > reach {
+                return 0;
+            }
             let mut w = 0;
             if a & 6 == 6 {
                 w += counted(crossing::<0>(t, starts[0]), spans[0]);
@@ -979,6 +1019,25 @@ impl Legs<'_> {
         let near = self.met.iter().map(|&t| &self.body.caps[t as usize]);
         listed.map(share).sum::<i32>() + self.caps.iter().chain(near).map(share).sum::<i32>()
     }
+}
+
+#[cfg(test)]
+std::thread_local! {
+    /// Queries on this thread test every triangle whose bounds a leg's
+    /// line meets, as before the planes culled them: the reference the
+    /// culled queries are compared with.
+    static UNCULLED: core::cell::Cell<bool> = const { core::cell::Cell::new(false) };
+}
+
+/// How far from a triangle's plane, in units of its computed normal `n`
+/// (as `n . (x - corner)` measures), a crossing [`crossing`] computes may
+/// seem to lie, for a triangle whose longest edge squared is `e2` in a
+/// grid of cells `1 / inv_cell` wide: n, a cross product of differences, rounds by
+/// ~3 units in the last place of |e|^2 in each component, and a computed
+/// crossing lies off the plane by up to ~12 of |e|^3 (its weights round
+/// like n). A thin triangle's crossings stray the most.
+fn stray(e2: f32, inv_cell: f32) -> f32 {
+    64.0 * f32::EPSILON * e2 * (libm::sqrtf(e2) + 2.0 / inv_cell)
 }
 
 /// A leg's share of a crossing `(h, step)` on its span `(lo, hi, sign)`.
@@ -1225,6 +1284,62 @@ mod tests {
             checked += crossing_by_edge::<2>(&t, p).is_some() as u32;
         }
         assert!(checked > 10_000, "{checked} crossings");
+    }
+
+    #[test]
+    fn planes_cull_only_triangles_no_leg_crosses() {
+        // slivers, a sphere moved far from the origin, and a lattice of
+        // small integers (points on edges and corners), at coarse to fine
+        // grids: points on and within rounding of the surface, and in
+        // cells it passes through, take the same winding number with the
+        // planes' cull and without it
+        let slivers = sphere(3, 1500);
+        let mut far = sphere(12, 24);
+        far.p.iter_mut().for_each(|p| p[0] += 3e4);
+        let mut lattice = sphere(6, 8);
+        lattice
+            .p
+            .iter_mut()
+            .for_each(|p| *p = p.map(|c| libm::roundf(c * 8.0) * 0.5));
+        for (m, scale) in [(&slivers, 1.0f32), (&far, 1.0), (&lattice, 4.0)] {
+            let mesh = m.mesh();
+            for density in [2.0, 8.0, 32.0] {
+                let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
+                let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
+                let plan = BodyPlan::with_density(&mesh, &rim, density).unwrap();
+                let mut memory = vec![0u8; plan.build_bytes(&mesh, &rim)];
+                let body = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
+                let mut differs = 0;
+                for i in 0..20_000u64 {
+                    let r = |c| rng::unit(23, i, Purpose::Uniform, c);
+                    let f = ((r(0) * mesh.triangle_count() as f32) as usize)
+                        .min(mesh.triangle_count() - 1);
+                    let [a, b, c] = mesh.corners(f);
+                    let (u, v) = match i % 4 {
+                        // a corner, an edge's middle
+                        0 => (0.0, 0.0),
+                        1 => (0.5, 0.0),
+                        _ => {
+                            let (u, v) = (r(1), r(2));
+                            if u + v > 1.0 {
+                                (1.0 - u, 1.0 - v)
+                            } else {
+                                (u, v)
+                            }
+                        }
+                    };
+                    let n = (b - a).cross(c - a).normalize_or_zero();
+                    let off = [0.0, 1e-6, 1e-3, 0.05][(i / 4 % 4) as usize] * scale;
+                    let p = a + (b - a) * u + (c - a) * v + n * (off * (r(3) * 2.0 - 1.0));
+                    let culled = body.capped_winding(p);
+                    UNCULLED.with(|u| u.set(true));
+                    let all = body.capped_winding(p);
+                    UNCULLED.with(|u| u.set(false));
+                    differs += (culled != all) as usize;
+                }
+                assert_eq!(differs, 0, "density {density}");
+            }
+        }
     }
 
     #[test]
