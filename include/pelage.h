@@ -1178,11 +1178,11 @@ void pelage_sim_free(PelageSim sim);
 // The body collider (`colliders->body`) is the frame's mesh: the body
 // `pelage_frame_set_colliders` built for the frame when it has one (the
 // same solid, built once per frame), else built here, every step: on
-// several threads, beside the guides' IK (the body's stages that run on
-// one thread run on one while the guides bend on the others), so the
-// body costs less than built first; a body that cannot be built then (no
-// triangle with area, memory) takes the step back, and the state is
-// unchanged, as when it is built first.
+// several threads, beside the guides' advance, links and IK (the body's
+// stages that run on one thread run on one while the guides bend on the
+// others), so the body costs less than built first; a body that cannot
+// be built then (no triangle with area, memory) takes the step back, and
+// the state is unchanged, as when it is built first.
 // `external_points` (NULL: none) holds another simulator's curves, float3
 // world points `external_stride` bytes apart, points_per_guide per guide:
 // the guides `params.external` selects take their shape from them
@@ -1195,7 +1195,8 @@ void pelage_sim_free(PelageSim sim);
 // made: reset or restore the simulation before stepping again.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
-// another mesh, the body grid too large, the external curves' count or
+// another mesh, the body grid too large, a body of a frame without a
+// triangle of area, the external curves' count or
 // stride, an external point not finite or beyond 1e9 where
 // `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //

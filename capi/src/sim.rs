@@ -13,7 +13,7 @@ use pelage_core::dynamics::collision::{
 };
 use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
-use pelage_core::dynamics::sim::{Sim, SimParams, Step, STATE_FLOATS};
+use pelage_core::dynamics::sim::{Sim, SimParams, Step, KEPT_FLOATS};
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::{Body, BodyParts, BodyPlan, Rim};
 use pelage_core::{Arena, Mesh, Strided};
@@ -483,8 +483,9 @@ struct Counted<'a> {
     parts: BodyParts<'a>,
     /// The layers of each part of the split.
     ranges: Vec<Range<usize>>,
-    /// Each part's cells and references.
+    /// Each part's cells.
     cells: Vec<usize>,
+    /// Each part's references.
     totals: Vec<u64>,
     /// Stages run.
     listed: bool,
@@ -567,6 +568,7 @@ impl<'a> Counted<'a> {
     /// Classifies the grid's cells (once [`list`](Self::list)ed), as
     /// [`list`](Self::list) splits its work.
     fn classify(&mut self, parallel: bool) -> Result<(), Failure> {
+        debug_assert!(self.listed, "cells classified before their lists");
         let (ranges, cells) = (&self.ranges, &self.cells);
         let (grid, start, _, class) = self.parts.split();
         let start = &*start;
@@ -621,11 +623,11 @@ impl SignedDistance for HostField {
 /// The body collider (`colliders->body`) is the frame's mesh: the body
 /// `pelage_frame_set_colliders` built for the frame when it has one (the
 /// same solid, built once per frame), else built here, every step: on
-/// several threads, beside the guides' IK (the body's stages that run on
-/// one thread run on one while the guides bend on the others), so the
-/// body costs less than built first; a body that cannot be built then (no
-/// triangle with area, memory) takes the step back, and the state is
-/// unchanged, as when it is built first.
+/// several threads, beside the guides' advance, links and IK (the body's
+/// stages that run on one thread run on one while the guides bend on the
+/// others), so the body costs less than built first; a body that cannot
+/// be built then (no triangle with area, memory) takes the step back, and
+/// the state is unchanged, as when it is built first.
 /// `external_points` (NULL: none) holds another simulator's curves, float3
 /// world points `external_stride` bytes apart, points_per_guide per guide:
 /// the guides `params.external` selects take their shape from them
@@ -638,7 +640,8 @@ impl SignedDistance for HostField {
 /// made: reset or restore the simulation before stepping again.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
-/// another mesh, the body grid too large, the external curves' count or
+/// another mesh, the body grid too large, a body of a frame without a
+/// triangle of area, the external curves' count or
 /// stride, an external point not finite or beyond 1e9 where
 /// `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
@@ -666,7 +669,10 @@ pub extern "C" fn pelage_sim_step(
             return step_beside_body(sim, frame.posed(), &host, external, dt, thread_count);
         }
         // the frame's own body, when its colliders have one, is this mesh's:
-        // built once per frame, shared with the render strands' push-out
+        // built once per frame, shared with the render strands' push-out;
+        // a bad input is reported before a body that cannot be built, as
+        // on several threads
+        sim.sim.check_step(frame.posed(), &host.colliders(None), external, dt)?;
         let built;
         let body = match (host.body, frame.body()) {
             (false, _) => None,
@@ -691,12 +697,14 @@ pub extern "C" fn pelage_sim_step(
 }
 
 /// A step on several threads that builds its own body collider: the
-/// body's stages that run on one thread (rim, placement, copies) run
-/// beside the guides' advance, links and IK on the other threads; the
-/// grid's layers are then built over every thread, and the guides pushed
-/// out. The bits are those of building the body first. A failure once the
-/// guides have moved (the body refused, memory, a worker thread) takes the
-/// step back, so the simulation is as it was.
+/// body's stages that run on one thread (rim, placement, copies, counts,
+/// and the lists and classes while the guides still bend) run beside the
+/// guides' advance, links and IK on the other threads; the rest of the
+/// grid is then built over every thread, and the guides pushed out. The
+/// bits are those of building the body first. A failure once the guides
+/// have moved and before the push-out (the body refused, memory, a
+/// spawned thread that could not start or panicked) takes the step back,
+/// so the simulation is as it was.
 fn step_beside_body(
     sim: &mut SimBox,
     frame: &PosedFrame,
@@ -712,7 +720,7 @@ fn step_beside_body(
         shaped,
     } = sim;
     let (n, m) = (sim.len(), sim.points());
-    grow(kept, n * STATE_FLOATS, 0.0, "the state kept through a step")?;
+    grow(kept, n * KEPT_FLOATS, 0.0, "the state kept through a step")?;
     grow(
         shaped,
         n * 3 * m,
@@ -730,64 +738,66 @@ fn step_beside_body(
     context.keep(blocks, kept);
     let threads = thread_total(thread_count);
     let guide_threads = threads as u32 - 1;
-    let mut step = || -> Result<(), Failure> {
-        let bending = AtomicBool::new(true);
-        let (counted, bent) = beside(
-            || -> Result<Counted, Failure> {
-                let (parts, refs) = memory.parts(frame.mesh(), COLLISION_CELLS_PER_TRIANGLE)?;
-                let mut counted = counted(parts, threads, false, |bytes| refs.take(bytes))?;
-                // the later stages too while the guides still bend, else
-                // over every thread once they are bent
-                if bending.load(Ordering::Relaxed) {
-                    counted.list(false)?;
-                }
+    let bending = AtomicBool::new(true);
+    let built = beside(
+        || -> Result<Counted, Failure> {
+            let (parts, refs) = memory.parts(frame.mesh(), COLLISION_CELLS_PER_TRIANGLE)?;
+            let mut counted = counted(parts, threads, false, |bytes| refs.take(bytes))?;
+            // the later stages too while the guides still bend, else
+            // over every thread once they are bent (the same bits)
+            if bending.load(Ordering::Relaxed) {
+                counted.list(false)?;
                 if bending.load(Ordering::Relaxed) {
                     counted.classify(false)?;
                 }
-                Ok(counted)
-            },
-            || -> Result<(), Failure> {
+            }
+            Ok(counted)
+        },
+        || -> Result<(), Failure> {
+            split_in_chunks(n, guide_threads, blocks, per, |range, part| {
+                context.advance(range.start, part)
+            })?;
+            for _ in 0..context.link_iterations() {
+                context.snapshot(blocks, snapshot);
+                let snapshot = &*snapshot;
                 split_in_chunks(n, guide_threads, blocks, per, |range, part| {
-                    context.advance(range.start, part)
+                    context.relax(range.start, part, snapshot)
                 })?;
-                for _ in 0..context.link_iterations() {
-                    context.snapshot(blocks, snapshot);
-                    let snapshot = &*snapshot;
-                    split_in_chunks(n, guide_threads, blocks, per, |range, part| {
-                        context.relax(range.start, part, snapshot)
-                    })?;
-                }
-                let shaped = split_pairs_in_chunks(
-                    n,
-                    guide_threads,
-                    blocks,
-                    per,
-                    shaped,
-                    3 * m,
-                    |range, part, out| context.shape(range.start, part, out),
-                );
-                bending.store(false, Ordering::Relaxed);
-                shaped
-            },
-        )?;
+            }
+            let shaped = split_pairs_in_chunks(
+                n,
+                guide_threads,
+                blocks,
+                per,
+                shaped,
+                3 * m,
+                |range, part, out| context.shape(range.start, part, out),
+            );
+            bending.store(false, Ordering::Relaxed);
+            shaped
+        },
+    )
+    .and_then(|(counted, bent)| {
         bent?;
-        let body = counted?.body()?;
-        let colliders = host.colliders(Some(&body));
-        let shaped = &*shaped;
-        split_in_chunks(n, thread_count, blocks, per, |range, part| {
-            context.collide(
-                range.start,
-                part,
-                &shaped[range.start * 3 * m..range.end * 3 * m],
-                &colliders,
-            )
-        })
+        counted?.body()
+    });
+    let body = match built {
+        Ok(body) => body,
+        Err(failure) => {
+            sim.undo(kept, stepped);
+            return Err(failure);
+        }
     };
-    let done = step();
-    if done.is_err() {
-        sim.undo(kept, stepped);
-    }
-    done
+    let shaped = &*shaped;
+    // a thread that cannot start here leaves the step half made (PANIC)
+    split_in_chunks(n, thread_count, blocks, per, |range, part| {
+        context.collide(
+            range.start,
+            part,
+            &shaped[range.start * 3 * m..range.end * 3 * m],
+            Some(&body),
+        )
+    })
 }
 
 /// Writes the posed guides of the last step (world space; all zero before

@@ -162,6 +162,8 @@ pub(crate) const CHUNK: usize = 256;
 /// work whose cost varies along the items (guides in a crease, or far from
 /// their target), where equal ranges would leave a thread idle. Each chunk
 /// is a pure function of its items, so the bits do not depend on who ran it.
+/// The last chunk's part of `out` takes whatever `out` holds past the
+/// others'.
 pub(crate) fn split_in_chunks<T: Send>(
     n: usize,
     thread_count: u32,
@@ -234,7 +236,9 @@ fn cut_chunks<T>(s: &mut [T], size: usize, chunks: usize) -> impl Iterator<Item 
 }
 
 /// Runs `a` on a scoped thread while `b` runs on the calling thread, and
-/// returns both results.
+/// returns both results. When the thread cannot start, `b` does not run
+/// (PANIC); a panic in `a` is PANIC once `b` is done, one in `b` unwinds
+/// once `a` is joined.
 pub(crate) fn beside<A: Send, B>(
     a: impl FnOnce() -> A + Send,
     b: impl FnOnce() -> B,

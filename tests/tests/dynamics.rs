@@ -449,14 +449,7 @@ fn a_step_that_cannot_build_its_body_changes_nothing() {
     let collapsed = Frame(handle);
     let caps = capsules(&shot.rest, &shot.roots, 3);
     let with_body = colliders(&caps, true);
-    // the step building its own body before the guides move (one thread),
-    // beside them (two), and beside them split over two (three): each
-    // refused mid-shot, then on with the same bits as a shot never refused
-    let mut shots = vec![];
-    for threads in [1, 2, 3] {
-        let sim = SimHandle::new(&shot, &params);
-        run(&shot, &sim, 0..3, threads, false, |_, _, _, _| {});
-        let (state, posed) = (save(&sim), sim.read(n));
+    let refused = |sim: &SimHandle, threads: u32| {
         let s = pelage_sim_step(
             sim.sim,
             collapsed.0,
@@ -466,7 +459,31 @@ fn a_step_that_cannot_build_its_body_changes_nothing() {
             1.0 / 24.0,
             threads,
         );
+        // SAFETY: pelage_last_error returns a valid NUL-terminated string
+        // that lives until the next failing call on this thread.
+        let message = unsafe { std::ffi::CStr::from_ptr(pelage_last_error()) };
         assert_eq!(s, PelageStatus::InvalidArgument, "{threads} threads");
+        let message = message.to_string_lossy();
+        assert!(message.contains("non-degenerate triangle"), "{message}");
+    };
+    // the step building its own body before the guides move (one thread),
+    // beside them (two), and beside them split over two (three): each
+    // refused as the first step (the simulation has then still not
+    // stepped) and mid-shot, then on with the same bits as a shot never
+    // refused
+    let mut shots = vec![];
+    for threads in [1, 2, 3] {
+        let sim = SimHandle::new(&shot, &params);
+        refused(&sim, threads);
+        let posing = handle_of(&shot, 0);
+        assert_eq!(
+            pelage_frame_set_sim_guides(posing.0, sim.sim, threads),
+            PelageStatus::InvalidArgument,
+            "a simulation whose only step was refused has no guides"
+        );
+        run(&shot, &sim, 0..3, threads, false, |_, _, _, _| {});
+        let (state, posed) = (save(&sim), sim.read(n));
+        refused(&sim, threads);
         assert!(save(&sim) == state, "the state changed ({threads} threads)");
         assert!(
             sim.read(n) == posed,
@@ -481,4 +498,10 @@ fn a_step_that_cannot_build_its_body_changes_nothing() {
     for (k, bits) in shots.iter().enumerate() {
         assert!(*bits == reference, "shot {k} differs");
     }
+}
+
+/// A frame of the shot's frame `f` posed with its groomed guides.
+fn handle_of(shot: &Shot, f: u32) -> Frame {
+    let guides = guides_desc(&shot.roots, &shot.points);
+    frame(&mesh_desc(&pose(&shot.rest, f)), &guides, JOINTS as u32, 1).unwrap()
 }

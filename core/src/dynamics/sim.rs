@@ -25,6 +25,7 @@ use super::spring::TipSpring;
 use crate::arena::{Arena, ArenaLayout};
 use crate::guides::Guides;
 use crate::interp::posed::{GuidePoints, PosedFrame, Posing};
+use crate::surface::body::Body;
 use crate::surface::frame::Frame;
 use crate::surface::map::ScalarMap;
 use crate::{Error, Mesh, Root, Strided};
@@ -126,6 +127,10 @@ const STARTED: usize = 24;
 pub const STATE_FLOATS: usize = 25;
 /// The spring target after links (world).
 const TARGET: usize = 25;
+/// Floats per guide [`StepContext::keep`] keeps and [`Sim::undo`] puts
+/// back: the state and the spring target, all a step writes before its
+/// push-out.
+pub const KEPT_FLOATS: usize = TARGET + 3;
 /// The posed points in the root frame.
 const POSED: usize = 28;
 
@@ -345,26 +350,28 @@ impl<'a> Sim<'a> {
     }
 
     /// True when a step has begun since the simulation was made, reset or
-    /// restored (there are posed guides to read).
+    /// restored, and was not taken back ([`undo`](Self::undo)): there are
+    /// posed guides to read.
     pub fn has_stepped(&self) -> bool {
         self.stepped
     }
 
-    /// Takes back a step that could not finish: every guide's state as
-    /// [`StepContext::keep`] saved it in `kept` before the step advanced
-    /// it ([`STATE_FLOATS`] per guide, all of them), and `stepped`, what
-    /// [`has_stepped`](Self::has_stepped) said before the step began. The
-    /// posed guides of the last step were not touched by a step that
-    /// shaped its guides apart ([`StepContext::shape`]), so the
-    /// simulation is as it was.
+    /// Takes back a step that could not finish, before its push-out
+    /// ([`StepContext::collide`]) began: every guide's state and spring
+    /// target as [`StepContext::keep`] saved them in `kept` before the step
+    /// advanced them ([`KEPT_FLOATS`] per guide, all of them), and
+    /// `stepped`, what [`has_stepped`](Self::has_stepped) said before the
+    /// step began. A step that shaped its guides apart
+    /// ([`StepContext::shape`]) wrote no posed point before its push-out,
+    /// so the simulation is then as it was.
     pub fn undo(&mut self, kept: &[f32], stepped: bool) {
         let per = Self::block_floats(&self.params);
         for (b, k) in self
             .blocks
             .chunks_exact_mut(per)
-            .zip(kept.chunks_exact(STATE_FLOATS))
+            .zip(kept.chunks_exact(KEPT_FLOATS))
         {
-            b[..STATE_FLOATS].copy_from_slice(k);
+            b[..KEPT_FLOATS].copy_from_slice(k);
         }
         self.stepped = stepped;
     }
@@ -485,21 +492,16 @@ impl<'a> Sim<'a> {
         scale < 0.5 * limit && closest > ((1e-5 * scale) * (1e-5 * scale)).max(1e-30)
     }
 
-    /// Checks the step's inputs and splits the simulation into what the
-    /// step's phases read and the per-guide blocks they write (see the
-    /// module docs); [`Sim::step`] runs every phase on one thread.
-    ///
-    /// `external` holds the host's curves for the guides the `external`
-    /// map selects (world space, `points` per guide, guide after guide;
-    /// checked finite and within 1e9 where the map is above 0); without
-    /// them, those guides keep pelage's dynamics.
-    pub fn begin<'s>(
-        &'s mut self,
-        frame: &'s PosedFrame,
-        colliders: &'s Colliders<'s>,
-        external: Option<Strided<'s, [f32; 3]>>,
+    /// The checks [`begin`](Self::begin) makes of a step's inputs, for a
+    /// host that has more to do before it begins (a body to build) and
+    /// would report a bad input first.
+    pub fn check_step(
+        &self,
+        frame: &PosedFrame,
+        colliders: &Colliders,
+        external: Option<Strided<[f32; 3]>>,
         dt: f32,
-    ) -> Result<Step<'s>, Error> {
+    ) -> Result<(), Error> {
         if !(MIN_DT..=1.0).contains(&dt) {
             return Err(Error::InvalidArgument("dt must be in [1e-5, 1] seconds"));
         }
@@ -533,6 +535,25 @@ impl<'a> Sim<'a> {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// Checks the step's inputs and splits the simulation into what the
+    /// step's phases read and the per-guide blocks they write (see the
+    /// module docs); [`Sim::step`] runs every phase on one thread.
+    ///
+    /// `external` holds the host's curves for the guides the `external`
+    /// map selects (world space, `points` per guide, guide after guide;
+    /// checked finite and within 1e9 where the map is above 0); without
+    /// them, those guides keep pelage's dynamics.
+    pub fn begin<'s>(
+        &'s mut self,
+        frame: &'s PosedFrame,
+        colliders: &'s Colliders<'s>,
+        external: Option<Strided<'s, [f32; 3]>>,
+        dt: f32,
+    ) -> Result<Step<'s>, Error> {
+        self.check_step(frame, colliders, external, dt)?;
         let block = Self::block_floats(&self.params);
         self.stepped = true;
         Ok(Step {
@@ -949,16 +970,17 @@ impl StepContext<'_> {
         }
     }
 
-    /// Copies the state of the guides whose blocks `blocks` holds into
-    /// `kept` ([`STATE_FLOATS`] per guide), before [`advance`](Self::advance)
-    /// overwrites it: what [`Sim::undo`] puts back when the step cannot
-    /// finish (a host that builds a collider while the guides bend).
+    /// Copies the state and spring target of the guides whose blocks
+    /// `blocks` holds into `kept` ([`KEPT_FLOATS`] per guide), before
+    /// [`advance`](Self::advance) overwrites them: what [`Sim::undo`] puts
+    /// back when the step cannot finish (a host that builds a collider
+    /// while the guides bend).
     pub fn keep(&self, blocks: &[f32], kept: &mut [f32]) {
         for (b, k) in blocks
             .chunks_exact(self.block)
-            .zip(kept.chunks_exact_mut(STATE_FLOATS))
+            .zip(kept.chunks_exact_mut(KEPT_FLOATS))
         {
-            k.copy_from_slice(&b[..STATE_FLOATS]);
+            k.copy_from_slice(&b[..KEPT_FLOATS]);
         }
     }
 
@@ -978,9 +1000,10 @@ impl StepContext<'_> {
     /// Phase 3 without its push-out, for a host that builds a collider
     /// meanwhile: IK and the Catmull-Rom curve of the guides `first ..`
     /// whose blocks `blocks` holds, written to `shaped` (in their root
-    /// frames, [`Sim::points`] float3 per guide) and not to the blocks,
-    /// whose posed guides stay those of the last step until
-    /// [`collide`](Self::collide).
+    /// frames, [`Sim::points`] float3 per guide) and not to the blocks
+    /// (only read here; mutable as [`finish`](Self::finish)'s, which
+    /// shares the IK's driver), whose posed guides stay those of the last
+    /// step until [`collide`](Self::collide).
     pub fn shape(&self, first: usize, blocks: &mut [f32], shaped: &mut [f32]) {
         let m = self.params.points;
         self.solve(first, blocks, |g, b, joints| {
@@ -996,10 +1019,15 @@ impl StepContext<'_> {
 
     /// The rest of phase 3 after [`shape`](Self::shape): the push-out of
     /// the guides `first ..` whose blocks `blocks` holds and whose curves
-    /// `shaped` holds, from `colliders` (the step's, with a body built
-    /// meanwhile), into the blocks. The bits are [`finish`](Self::finish)'s
-    /// with those colliders.
-    pub fn collide(&self, first: usize, blocks: &mut [f32], shaped: &[f32], colliders: &Colliders) {
+    /// `shaped` holds, from the step's colliders with `body` (built
+    /// meanwhile) as their body, into the blocks. The bits are
+    /// [`finish`](Self::finish)'s with that body.
+    pub fn collide(&self, first: usize, blocks: &mut [f32], shaped: &[f32], body: Option<&Body>) {
+        let colliders = Colliders {
+            body,
+            ..*self.colliders
+        };
+        let colliders = &colliders;
         let m = self.params.points;
         for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
             let mut posed = [Vec3::ZERO; MAX_JOINTS];
@@ -1836,18 +1864,17 @@ mod tests {
         assert_sound(&sim, "collided");
         assert_eq!(crossing(&sim), 0);
 
-        // the same step with its guides shaped while a body is "built"
-        // (begun without it), taken back, then run again and collided
-        // with every collider: the bits of the step above
+        // the same steps with their guides shaped while a body is "built"
+        // (begun without it), each taken back once (the first, before
+        // the simulation ever stepped, too), then run again and collided
+        // with every collider: the bits of the steps above
         let mut buf2 = vec![];
         let mut apart = s.sim(&params(), &mut buf2);
-        step(&mut apart, &s.rest, &Colliders::default(), 1.0 / 24.0);
         let saved = |sim: &Sim| {
             let mut bytes = vec![0u8; sim.state_bytes()];
             sim.save(&mut bytes).unwrap();
-            (bytes, posed(sim))
+            (bytes, posed(sim), sim.has_stepped(), sim.target(3))
         };
-        let before = saved(&apart);
         let mut layout = ArenaLayout::new();
         PosedFrame::layout(&mut layout, s.rest.p.len(), 1, 2);
         let mut fbuf = vec![0u8; layout.bytes()];
@@ -1857,15 +1884,24 @@ mod tests {
             ..colliders
         };
         let m = apart.points();
-        let mut kept = vec![0.0f32; apart.len() * STATE_FLOATS];
+        let mut kept = vec![0.0f32; apart.len() * KEPT_FLOATS];
         let mut shaped = vec![0.0f32; apart.len() * 3 * m];
-        for undone in [true, false] {
+        let mut before = saved(&apart);
+        for (undone, with) in [
+            (true, &Colliders::default()),
+            (false, &Colliders::default()),
+            (true, &shapes),
+            (false, &shapes),
+        ] {
+            if undone {
+                before = saved(&apart);
+            }
             let stepped = apart.has_stepped();
             let Step {
                 context: ctx,
                 blocks,
                 snapshot,
-            } = apart.begin(&frame, &shapes, None, 1.0 / 24.0).unwrap();
+            } = apart.begin(&frame, with, None, 1.0 / 24.0).unwrap();
             let per = ctx.block_floats();
             ctx.keep(blocks, &mut kept);
             ctx.advance(0, blocks);
@@ -1882,8 +1918,9 @@ mod tests {
                 assert!(saved(&apart) == before, "the step taken back");
                 continue;
             }
-            ctx.collide(0, &mut blocks[..cut], &shaped[..7 * 3 * m], &colliders);
-            ctx.collide(7, &mut blocks[cut..], &shaped[7 * 3 * m..], &colliders);
+            let body = (!with.spheres.is_empty()).then_some(&body);
+            ctx.collide(0, &mut blocks[..cut], &shaped[..7 * 3 * m], body);
+            ctx.collide(7, &mut blocks[cut..], &shaped[7 * 3 * m..], body);
         }
         assert!(saved(&apart) == saved(&sim), "shaped apart, then collided");
     }

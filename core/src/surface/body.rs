@@ -130,8 +130,9 @@ impl Shape {
             .fold(0usize, usize::saturating_add)
     }
 
-    /// The largest coordinate magnitude in the grid, with two cells to
-    /// spare: what rounding is measured against.
+    /// The largest coordinate magnitude of the triangles' bounds, and two
+    /// cells more: what rounding is measured against (surface cells lie
+    /// within a cell of the bounds).
     fn reach(&self) -> f32 {
         self.lo.abs().max(self.hi.abs()).max_element() + 2.0 / self.inv_cell
     }
@@ -974,8 +975,9 @@ impl Legs<'_> {
             // a counted crossing lies on a leg, in the box, and (as
             // computed) within `stray` of the plane: a plane farther from
             // the box's middle than the box reaches, with room for
-            // rounding n . (mid - corner) as the grid's lists have it,
-            // has none (the legs of most points in a cell pass its
+            // rounding mid, mid - corner, n . (mid - corner) and the
+            // crossing's own coordinate as the grid's lists have it (the
+            // 4e-6 term, ~10 units in the last place against ~33), has none (the legs of most points in a cell pass its
             // triangles by, though their lines meet the triangles'
             // bounds)
             let [c0, c1, c2, ..] = t.map(Vec3A::from);
@@ -997,6 +999,8 @@ impl Legs<'_> {
                 reach
             };
             if libm::fabsf(n.dot(mid - c0)) > reach {
+                #[cfg(test)]
+                CULLED.with(|c| c.set(c.get() + 1));
                 return 0;
             }
             let mut w = 0;
@@ -1027,15 +1031,20 @@ std::thread_local! {
     /// line meets, as before the planes culled them: the reference the
     /// culled queries are compared with.
     static UNCULLED: core::cell::Cell<bool> = const { core::cell::Cell::new(false) };
+    /// Triangles the planes culled on this thread.
+    static CULLED: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
 }
 
 /// How far from a triangle's plane, in units of its computed normal `n`
 /// (as `n . (x - corner)` measures), a crossing [`crossing`] computes may
 /// seem to lie, for a triangle whose longest edge squared is `e2` in a
-/// grid of cells `1 / inv_cell` wide: n, a cross product of differences, rounds by
-/// ~3 units in the last place of |e|^2 in each component, and a computed
-/// crossing lies off the plane by up to ~12 of |e|^3 (its weights round
-/// like n). A thin triangle's crossings stray the most.
+/// grid of cells `1 / inv_cell` wide. `n`, a cross product of
+/// differences, rounds by ~3 units in the last place of |e|^2 in each
+/// component, and that error grows with the distance from the corner it
+/// is measured at: up to the triangle's size and two cells (a crossing in
+/// a cell the triangle's bounds reach). A computed crossing also lies off
+/// the plane by up to ~12 units of |e|^3 (its weights round like n). A
+/// thin triangle's crossings stray the most.
 fn stray(e2: f32, inv_cell: f32) -> f32 {
     64.0 * f32::EPSILON * e2 * (libm::sqrtf(e2) + 2.0 / inv_cell)
 }
@@ -1288,11 +1297,12 @@ mod tests {
 
     #[test]
     fn planes_cull_only_triangles_no_leg_crosses() {
-        // slivers, a sphere moved far from the origin, and a lattice of
-        // small integers (points on edges and corners), at coarse to fine
-        // grids: points on and within rounding of the surface, and in
-        // cells it passes through, take the same winding number with the
-        // planes' cull and without it
+        // slivers, a sphere moved far from the origin, a lattice of small
+        // integers (points on edges and corners) and a sphere with a hole
+        // (its cap's triangles culled too), at coarse to fine grids:
+        // points on and within rounding of the surface, and in cells it
+        // passes through, take the same winding number with the planes'
+        // cull and without it
         let slivers = sphere(3, 1500);
         let mut far = sphere(12, 24);
         far.p.iter_mut().for_each(|p| p[0] += 3e4);
@@ -1301,7 +1311,16 @@ mod tests {
             .p
             .iter_mut()
             .for_each(|p| *p = p.map(|c| libm::roundf(c * 8.0) * 0.5));
-        for (m, scale) in [(&slivers, 1.0f32), (&far, 1.0), (&lattice, 4.0)] {
+        let holed = holed_sphere(0.7);
+        // (3e4 from the origin the room for rounding is wider than a
+        // cell there: nothing is culled)
+        let meshes = [
+            (&slivers, 1.0f32, true),
+            (&far, 1.0, false),
+            (&lattice, 4.0, true),
+            (&holed, 1.0, true),
+        ];
+        for (m, scale, culls) in meshes {
             let mesh = m.mesh();
             for density in [2.0, 8.0, 32.0] {
                 let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
@@ -1310,6 +1329,7 @@ mod tests {
                 let mut memory = vec![0u8; plan.build_bytes(&mesh, &rim)];
                 let body = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
                 let mut differs = 0;
+                CULLED.with(|c| c.set(0));
                 for i in 0..20_000u64 {
                     let r = |c| rng::unit(23, i, Purpose::Uniform, c);
                     let f = ((r(0) * mesh.triangle_count() as f32) as usize)
@@ -1338,6 +1358,8 @@ mod tests {
                     differs += (culled != all) as usize;
                 }
                 assert_eq!(differs, 0, "density {density}");
+                let culled = CULLED.with(|c| c.get());
+                assert_eq!(culled > 1000, culls, "{culled} culled at density {density}");
             }
         }
     }
