@@ -514,10 +514,7 @@ fn counted<'a>(
         .zip(cut_into(start, &cells))
         .collect();
     let count = |(l, part): (Range<usize>, &mut [u32])| grid.count(l, part);
-    let totals = match parallel {
-        true => run_parts(work, count)?,
-        false => work.into_iter().map(count).collect(),
-    };
+    let totals = run_parts_if(parallel, work, count)?;
     let total = totals.iter().sum();
     let refs = refs_memory(BodyParts::refs_bytes(total)?)?;
     parts.set_total(total, &mut Arena::new(refs))?;
@@ -529,6 +526,18 @@ fn counted<'a>(
         listed: false,
         classified: false,
     })
+}
+
+/// [`run_parts`] when `parallel`, else each part in turn on this thread.
+fn run_parts_if<P: Send, R: Send>(
+    parallel: bool,
+    parts: Vec<P>,
+    work: impl Fn(P) -> R + Sync,
+) -> Result<Vec<R>, Failure> {
+    match parallel {
+        true => run_parts(parts, work),
+        false => Ok(parts.into_iter().map(work).collect()),
+    }
 }
 
 /// A part of [`Counted::list`]'s work: its layers, its references' first
@@ -557,10 +566,7 @@ impl<'a> Counted<'a> {
             .map(|(((layers, base), start), refs)| (layers, base, start, refs))
             .collect();
         let fill = |(layers, base, start, refs): Listing| grid.fill(layers, base, start, refs);
-        match parallel {
-            true => drop(run_parts(work, fill)?),
-            false => work.into_iter().for_each(fill),
-        }
+        run_parts_if(parallel, work, fill)?;
         self.listed = true;
         Ok(())
     }
@@ -574,10 +580,7 @@ impl<'a> Counted<'a> {
         let start = &*start;
         let work: Vec<_> = ranges.iter().cloned().zip(cut_into(class, cells)).collect();
         let sweep = |(l, class): (Range<usize>, &mut [u8])| grid.classify(l, start, class);
-        match parallel {
-            true => drop(run_parts(work, sweep)?),
-            false => work.into_iter().for_each(sweep),
-        }
+        run_parts_if(parallel, work, sweep)?;
         self.classified = true;
         Ok(())
     }
@@ -669,15 +672,15 @@ pub extern "C" fn pelage_sim_step(
             return step_beside_body(sim, frame.posed(), &host, external, dt, thread_count);
         }
         // the frame's own body, when its colliders have one, is this mesh's:
-        // built once per frame, shared with the render strands' push-out;
-        // a bad input is reported before a body that cannot be built, as
-        // on several threads
-        sim.sim.check_step(frame.posed(), &host.colliders(None), external, dt)?;
+        // built once per frame, shared with the render strands' push-out
         let built;
         let body = match (host.body, frame.body()) {
             (false, _) => None,
             (true, Some(body)) => Some(body),
             (true, None) => {
+                // a bad input is reported before a body that cannot be
+                // built, as on several threads
+                sim.sim.check_step(frame.posed(), &host.colliders(None), external, dt)?;
                 built = sim.body.body(frame.posed().mesh(), COLLISION_CELLS_PER_TRIANGLE, thread_count)?;
                 Some(&built)
             }

@@ -94,6 +94,24 @@ impl Drop for SimHandle {
     }
 }
 
+/// One step of 1/24 s of `sim` on `frame` with `colliders`.
+fn step(
+    sim: &SimHandle,
+    frame: PelageFrame,
+    colliders: &PelageColliders,
+    threads: u32,
+) -> PelageStatus {
+    pelage_sim_step(
+        sim.sim,
+        frame,
+        colliders,
+        std::ptr::null(),
+        0,
+        1.0 / 24.0,
+        threads,
+    )
+}
+
 /// Steps `sim` through frames `range` of the shot with `threads`, calling
 /// `each` with every frame's posed mesh and the simulated guides. With
 /// `frame_body`, each frame builds its body first (as a host that also
@@ -116,15 +134,7 @@ fn run(
             let s = pelage_frame_set_colliders(handle.0, &colliders, threads);
             assert_eq!(s, PelageStatus::Ok, "frame {f}");
         }
-        let s = pelage_sim_step(
-            sim.sim,
-            handle.0,
-            &colliders,
-            std::ptr::null(),
-            0,
-            1.0 / 24.0,
-            threads,
-        );
+        let s = step(sim, handle.0, &colliders, threads);
         assert_eq!(s, PelageStatus::Ok, "frame {f}");
         each(f, &mesh, &sim.read(shot.roots.len()), &caps);
     }
@@ -450,15 +460,7 @@ fn a_step_that_cannot_build_its_body_changes_nothing() {
     let caps = capsules(&shot.rest, &shot.roots, 3);
     let with_body = colliders(&caps, true);
     let refused = |sim: &SimHandle, threads: u32| {
-        let s = pelage_sim_step(
-            sim.sim,
-            collapsed.0,
-            &with_body,
-            std::ptr::null(),
-            0,
-            1.0 / 24.0,
-            threads,
-        );
+        let s = step(sim, collapsed.0, &with_body, threads);
         // SAFETY: pelage_last_error returns a valid NUL-terminated string
         // that lives until the next failing call on this thread.
         let message = unsafe { std::ffi::CStr::from_ptr(pelage_last_error()) };

@@ -1164,6 +1164,15 @@ mod tests {
         Body::new(mesh, &mut Arena::new(buf)).unwrap()
     }
 
+    /// The body of `mesh` at `density` cells per triangle, in `buf`.
+    fn build_at<'a>(mesh: &Mesh, density: f32, buf: &'a mut Vec<u8>) -> Body<'a> {
+        let mut rim_memory = vec![0u8; Rim::required_bytes(mesh)];
+        let rim = Rim::new(mesh, &mut Arena::new(&mut rim_memory)).unwrap();
+        let plan = BodyPlan::with_density(mesh, &rim, density).unwrap();
+        *buf = vec![0u8; plan.build_bytes(mesh, &rim)];
+        Body::build(&plan, mesh, &rim, &mut Arena::new(buf)).unwrap()
+    }
+
     /// One edge at a time, with branches: what [`edges`] computes in lanes.
     fn edge(a: [f32; 3], b: [f32; 3], p: [f32; 3]) -> (f32, bool) {
         let swap = (a[1], a[2]) > (b[1], b[2]);
@@ -1213,11 +1222,8 @@ mod tests {
         let m = sphere(3, 1500);
         let mesh = m.mesh();
         for density in [2.0, 32.0] {
-            let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
-            let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
-            let plan = BodyPlan::with_density(&mesh, &rim, density).unwrap();
-            let mut memory = vec![0u8; plan.build_bytes(&mesh, &rim)];
-            let body = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
+            let mut memory = vec![];
+            let body = build_at(&mesh, density, &mut memory);
             let mut inside = 0;
             for i in 0..1500u64 {
                 let r = |c| rng::unit(17, i, Purpose::Uniform, c);
@@ -1323,11 +1329,8 @@ mod tests {
         for (m, scale, culls) in meshes {
             let mesh = m.mesh();
             for density in [2.0, 8.0, 32.0] {
-                let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
-                let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
-                let plan = BodyPlan::with_density(&mesh, &rim, density).unwrap();
-                let mut memory = vec![0u8; plan.build_bytes(&mesh, &rim)];
-                let body = Body::build(&plan, &mesh, &rim, &mut Arena::new(&mut memory)).unwrap();
+                let mut memory = vec![];
+                let body = build_at(&mesh, density, &mut memory);
                 let mut differs = 0;
                 CULLED.with(|c| c.set(0));
                 for i in 0..20_000u64 {
