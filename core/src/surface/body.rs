@@ -307,21 +307,11 @@ impl BodyGrid<'_> {
         if zs.is_empty() {
             return;
         }
-        let [p, q, r, ..] = self.triangles[t].map(Vec3::from);
-        let n = (q - p).cross(r - p);
-        let weight = n.abs().element_sum();
-        // half a cell and the bounds' pad, and room for rounding, in units
-        // of n: n . (c - p) rounds by ~10 units in the last place of
-        // |n| (|c| + |p|) (4e-6 is over thirty), and the crossings stray
-        // from the plane (see `stray`)
+        let t = &self.triangles[t];
+        let (p, n) = (Vec3::from(t.corners[0]), Vec3::from(t.normal));
+        // half a cell and the bounds' pad, and the plane's slack
         let half = (0.5 + 1e-3) / shape.inv_cell;
-        let size = shape.reach();
-        let e2 = (q - p)
-            .length_squared()
-            .max((r - p).length_squared())
-            .max((r - q).length_squared());
-        let reach =
-            weight * (half + 4e-6 * (size + p.abs().max_element())) + stray(e2, shape.inv_cell);
+        let reach = n.abs().element_sum() * half + t.slack;
         let skip = layers.start * shape.layer_cells();
         for z in zs {
             for y in a[1]..=b[1] {
@@ -394,7 +384,7 @@ impl BodyGrid<'_> {
         let skip = layers.start * shape.layer_cells();
         class.fill(0);
         for t in self.triangles.iter().chain(self.caps) {
-            let [.., lo, hi] = *t;
+            let (lo, hi) = t.bounds();
             // the rows whose line may pass within the bounds (one more each
             // way: `crossing` decides exactly)
             let first = shape.cell_of(Vec3::from(lo) - 0.5 / shape.inv_cell);
@@ -629,7 +619,7 @@ impl<'a> Body<'a> {
             if !(lo.cmpge(shape.lo).all() && hi.cmple(shape.hi).all()) {
                 return Err(another);
             }
-            *t = [a, b, c, lo, hi].map(Into::into);
+            *t = Stored::new([a, b, c], &shape);
             let (a, b) = shape.cell_range(lo, hi);
             // at most MAX_DIM + 4 cells a side
             *span = [a[0], a[1], a[2], b[0], b[1], b[2]].map(|c| c as u16);
@@ -637,7 +627,7 @@ impl<'a> Body<'a> {
         if solid.next().is_some() {
             return Err(another);
         }
-        cap(mesh, rim, caps, loops);
+        cap(mesh, rim, &shape, caps, loops);
         Ok(BodyParts {
             grid: BodyGrid {
                 shape,
@@ -739,7 +729,7 @@ impl<'a> Body<'a> {
                     continue;
                 }
                 for t in fan {
-                    let [.., tlo, thi] = self.caps[t];
+                    let (tlo, thi) = self.caps[t].bounds();
                     let meets = Vec3::from(tlo).cmple(hi).all() && Vec3::from(thi).cmpge(lo).all();
                     if meets {
                         if listed < met.len() {
@@ -891,7 +881,7 @@ impl<'a> Body<'a> {
 /// not meet it).
 #[inline]
 fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
-    let [p, q, r, ..] = t.map(Vec3::from);
+    let [p, q, r] = t.corners.map(Vec3::from);
     let (e1, e2) = (q - p, r - p);
     let h = d.cross(e2);
     let det = e1.dot(h);
@@ -906,9 +896,47 @@ fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)).then_some(along)
 }
 
-/// A triangle as stored: its three corners, then the low and the high
-/// corner of its bounds.
-type Stored = [[f32; 3]; 5];
+/// A triangle as stored: its corners, and its plane as the grid's lists
+/// and the queries cull by it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct Stored {
+    corners: [[f32; 3]; 3],
+    /// The computed normal `n = (c1 - c0) x (c2 - c0)`, unnormalized.
+    normal: [f32; 3],
+    /// How far a crossing computed with the triangle may seem to lie from
+    /// its plane, as `n . (x - c0)` measures: the rounding of that measure
+    /// at the coordinates of the grid (the 4e-6 term, ~33 units in the last
+    /// place where ~10 are needed), and [`stray`].
+    slack: f32,
+}
+
+impl Stored {
+    /// Triangle `corners` in a grid of shape `shape`.
+    fn new(corners: [Vec3; 3], shape: &Shape) -> Self {
+        let [c0, c1, c2] = corners.map(Vec3A::from);
+        let (e0, e1, e2) = (c1 - c0, c2 - c0, c2 - c1);
+        let n = e0.cross(e1);
+        let longest = e0
+            .length_squared()
+            .max(e1.length_squared())
+            .max(e2.length_squared());
+        let slack = n.abs().element_sum() * 4e-6 * (shape.reach() + c0.abs().max_element())
+            + stray(longest, shape.inv_cell);
+        Stored {
+            corners: corners.map(Into::into),
+            normal: n.into(),
+            slack,
+        }
+    }
+
+    /// The low and the high corner of the triangle's bounds.
+    #[inline]
+    fn bounds(&self) -> (Vec3A, Vec3A) {
+        let [a, b, c] = self.corners.map(Vec3A::from);
+        (a.min(b).min(c), a.max(b).max(c))
+    }
+}
 
 /// The cells a triangle's bounds touch: the first and the last along x, y
 /// and z.
@@ -961,10 +989,25 @@ impl Legs<'_> {
         let cell = 1.0 / shape.inv_cell;
         let mid = Vec3A::from((centre + p) * 0.5);
         let half = Vec3A::from((p - centre).abs() * 0.5 + Vec3::splat(1e-3 * cell));
-        let size = shape.reach();
         let share = |t: &Stored| {
-            let [.., lo, hi] = *t;
-            let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+            let n = Vec3A::from(t.normal);
+            // a counted crossing lies on a leg, in the box, and (as
+            // computed) within the plane's slack of it: a plane farther
+            // from the box's middle than the box reaches has none (the
+            // legs of most points in a cell pass its triangles by)
+            let reach = n.abs().dot(half) + t.slack;
+            #[cfg(test)]
+            let reach = if UNCULLED.with(|u| u.get()) {
+                f32::INFINITY
+            } else {
+                reach
+            };
+            if libm::fabsf(n.dot(mid - Vec3A::from(t.corners[0]))) > reach {
+                #[cfg(test)]
+                CULLED.with(|c| c.set(c.get() + 1));
+                return 0;
+            }
+            let (lo, hi) = t.bounds();
             let within = |q: Vec3A| (lo.cmple(q) & q.cmple(hi)).bitmask();
             // leg 0's line is (y, z) of starts[1], leg 1's (x, z) of it,
             // leg 2's (x, y) of starts[2]
@@ -972,46 +1015,15 @@ impl Legs<'_> {
             if a & 6 != 6 && a & 5 != 5 && b & 3 != 3 {
                 return 0;
             }
-            // a counted crossing lies on a leg, in the box, and (as
-            // computed) within `stray` of the plane: a plane farther from
-            // the box's middle than the box reaches, with room for
-            // rounding mid, mid - corner, n . (mid - corner) and the
-            // crossing's own coordinate as the grid's lists have it (the
-            // 4e-6 term, ~10 units in the last place against ~33), has none (the legs of most points in a cell pass its
-            // triangles by, though their lines meet the triangles'
-            // bounds)
-            let [c0, c1, c2, ..] = t.map(Vec3A::from);
-            let (e0, e1, e2) = (c1 - c0, c2 - c0, c2 - c1);
-            let n = e0.cross(e1);
-            let (weights, longest) = (
-                n.abs(),
-                e0.length_squared()
-                    .max(e1.length_squared())
-                    .max(e2.length_squared()),
-            );
-            let reach = weights.dot(half)
-                + weights.element_sum() * 4e-6 * (size + c0.abs().max_element())
-                + stray(longest, shape.inv_cell);
-            #[cfg(test)]
-            let reach = if UNCULLED.with(|u| u.get()) {
-                f32::INFINITY
-            } else {
-                reach
-            };
-            if libm::fabsf(n.dot(mid - c0)) > reach {
-                #[cfg(test)]
-                CULLED.with(|c| c.set(c.get() + 1));
-                return 0;
-            }
             let mut w = 0;
             if a & 6 == 6 {
-                w += counted(crossing::<0>(t, starts[0]), spans[0]);
+                w += counted(crossing_within::<0>(t, starts[0]), spans[0]);
             }
             if a & 5 == 5 {
-                w += counted(crossing::<1>(t, starts[1]), spans[1]);
+                w += counted(crossing_within::<1>(t, starts[1]), spans[1]);
             }
             if b & 3 == 3 {
-                w += counted(crossing::<2>(t, starts[2]), spans[2]);
+                w += counted(crossing_within::<2>(t, starts[2]), spans[2]);
             }
             w
         };
@@ -1069,12 +1081,21 @@ fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
     let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
     // a line strictly outside the triangle's bounds misses it, perturbed or
     // not; most lines through a cell miss most of its triangles
-    let [.., lo, hi] = t;
+    let (lo, hi) = t.bounds();
     if p[j] < lo[j] || p[j] > hi[j] || p[k] < lo[k] || p[k] > hi[k] {
         return None;
     }
+    crossing_within::<AXIS>(t, p)
+}
+
+/// [`crossing`] for a line through `p` that lies within the triangle's
+/// bounds (on the two axes other than `AXIS`).
+#[inline]
+fn crossing_within<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
+    let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
+    let [a, b, c] = t.corners;
     let turn = |v: [f32; 3]| [v[AXIS], v[j], v[k]];
-    let (a, b, c, p) = (turn(t[0]), turn(t[1]), turn(t[2]), turn(p.to_array()));
+    let (a, b, c, p) = (turn(a), turn(b), turn(c), turn(p.to_array()));
     // the edges b -> c, c -> a, a -> b in lanes 0, 1, 2
     let from = [b, c, a];
     let to = [c, a, b];
@@ -1121,15 +1142,14 @@ fn edges(from: [f32x4; 2], to: [f32x4; 2], p: [f32; 2]) -> (f32x4, i32) {
 /// Fills `caps` with the fans that close `rim`'s loops on `mesh`: for a
 /// boundary edge `a -> b` of a loop whose corners have the mean `m`, the
 /// triangle `(b, a, m)`, which runs the edge the other way.
-fn cap(mesh: &Mesh, rim: &Rim, caps: &mut [Stored], loops: &mut [CapBall]) {
+fn cap(mesh: &Mesh, rim: &Rim, shape: &Shape, caps: &mut [Stored], loops: &mut [CapBall]) {
     let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
     let mut next = 0;
     for (k, ball) in loops.iter_mut().enumerate() {
         let (mean, radius) = rim.ball(k, mesh);
         for e in rim.loop_edges(k) {
             let (a, b) = (at(e[0]), at(e[1]));
-            let (lo, hi) = (a.min(b).min(mean), a.max(b).max(mean));
-            caps[next] = [b, a, mean, lo, hi].map(Into::into);
+            caps[next] = Stored::new([b, a, mean], shape);
             next += 1;
         }
         *ball = CapBall {
@@ -1144,7 +1164,7 @@ fn cap(mesh: &Mesh, rim: &Rim, caps: &mut [Stored], loops: &mut [CapBall]) {
 /// Strackee), positive when `p` sees its back.
 fn solid_angle(t: &Stored, p: Vec3) -> f64 {
     let [a, b, c] = [0, 1, 2].map(|i| {
-        let v = Vec3::from(t[i]) - p;
+        let v = Vec3::from(t.corners[i]) - p;
         glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64)
     });
     let (la, lb, lc) = (a.length(), b.length(), c.length());
@@ -1193,15 +1213,24 @@ mod tests {
         }
     }
 
+    /// A stored triangle for the tests of what reads only its corners.
+    fn corners_only(corners: [Vec3; 3]) -> Stored {
+        Stored {
+            corners: corners.map(Into::into),
+            ..Stored::default()
+        }
+    }
+
     /// [`crossing`] from [`edge`].
     fn crossing_by_edge<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
         let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
-        let [.., lo, hi] = t;
+        let (lo, hi) = t.bounds();
         if p[j] < lo[j] || p[j] > hi[j] || p[k] < lo[k] || p[k] > hi[k] {
             return None;
         }
         let turn = |v: [f32; 3]| [v[AXIS], v[j], v[k]];
-        let (a, b, c, p) = (turn(t[0]), turn(t[1]), turn(t[2]), turn(p.to_array()));
+        let [a, b, c] = t.corners;
+        let (a, b, c, p) = (turn(a), turn(b), turn(c), turn(p.to_array()));
         let (w0, s0) = edge(b, c, p);
         let (w1, s1) = edge(c, a, p);
         let (w2, s2) = edge(a, b, p);
@@ -1278,7 +1307,7 @@ mod tests {
             let corners: [[f32; 3]; 3] = core::array::from_fn(|_| [value(), value(), value()]);
             let p = Vec3::new(value(), value(), value());
             let [a, b, c] = corners.map(Vec3::from);
-            let t: Stored = [a, b, c, a.min(b).min(c), a.max(b).max(c)].map(Into::into);
+            let t = corners_only([a, b, c]);
             let same = |x: Option<(f32, i32)>, y: Option<(f32, i32)>| match (x, y) {
                 (Some((h, s)), Some((g, r))) => h.to_bits() == g.to_bits() && s == r,
                 (None, None) => true,
@@ -1455,7 +1484,7 @@ mod tests {
         let total: f64 = (0..mesh.triangle_count())
             .map(|f| {
                 let [a, b, c] = mesh.corners(f);
-                solid_angle(&[a, b, c, a, a].map(Into::into), p)
+                solid_angle(&corners_only([a, b, c]), p)
             })
             .sum();
         total / (4.0 * core::f64::consts::PI)
