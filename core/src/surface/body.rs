@@ -989,12 +989,12 @@ impl Legs<'_> {
         let cell = 1.0 / shape.inv_cell;
         let mid = Vec3A::from((centre + p) * 0.5);
         let half = Vec3A::from((p - centre).abs() * 0.5 + Vec3::splat(1e-3 * cell));
-        let share = |t: &Stored| {
+        // a counted crossing lies on a leg, in the box, and (as computed)
+        // within the plane's slack of it: a plane farther from the box's
+        // middle than the box reaches has none (the legs of most points in
+        // a cell pass its triangles by)
+        let culled = |t: &Stored| {
             let n = Vec3A::from(t.normal);
-            // a counted crossing lies on a leg, in the box, and (as
-            // computed) within the plane's slack of it: a plane farther
-            // from the box's middle than the box reaches has none (the
-            // legs of most points in a cell pass its triangles by)
             let reach = n.abs().dot(half) + t.slack;
             #[cfg(test)]
             let reach = if UNCULLED.with(|u| u.get()) {
@@ -1002,11 +1002,12 @@ impl Legs<'_> {
             } else {
                 reach
             };
-            if libm::fabsf(n.dot(mid - Vec3A::from(t.corners[0]))) > reach {
-                #[cfg(test)]
-                CULLED.with(|c| c.set(c.get() + 1));
-                return 0;
-            }
+            let culled = libm::fabsf(n.dot(mid - Vec3A::from(t.corners[0]))) > reach;
+            #[cfg(test)]
+            CULLED.with(|c| c.set(c.get() + culled as usize));
+            culled
+        };
+        let share = |t: &Stored| {
             let (lo, hi) = t.bounds();
             let within = |q: Vec3A| (lo.cmple(q) & q.cmple(hi)).bitmask();
             // leg 0's line is (y, z) of starts[1], leg 1's (x, z) of it,
@@ -1027,13 +1028,22 @@ impl Legs<'_> {
             }
             w
         };
-        // the cell's own triangles, then the caps (none in most cells)
-        let listed = self
-            .listed
-            .iter()
-            .map(|&t| &self.body.triangles[t as usize]);
+        // the cell's own triangles, then the caps (none in most cells); the
+        // cull in the loops, the rest (for few) apart
+        let mut w = 0;
+        for &t in self.listed {
+            let t = &self.body.triangles[t as usize];
+            if !culled(t) {
+                w += share(t);
+            }
+        }
         let near = self.met.iter().map(|&t| &self.body.caps[t as usize]);
-        listed.map(share).sum::<i32>() + self.caps.iter().chain(near).map(share).sum::<i32>()
+        for t in self.caps.iter().chain(near) {
+            if !culled(t) {
+                w += share(t);
+            }
+        }
+        w
     }
 }
 
