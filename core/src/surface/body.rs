@@ -308,10 +308,10 @@ impl BodyGrid<'_> {
             return;
         }
         let t = &self.triangles[t];
-        let (p, n) = (Vec3::from(t.corners[0]), Vec3::from(t.normal));
+        let (p, n) = (t.corner(), Vec3::from(t.normal()));
         // half a cell and the bounds' pad, and the plane's slack
         let half = (0.5 + 1e-3) / shape.inv_cell;
-        let reach = n.abs().element_sum() * half + t.slack;
+        let reach = n.abs().element_sum() * half + t.slack();
         let skip = layers.start * shape.layer_cells();
         for z in zs {
             for y in a[1]..=b[1] {
@@ -881,7 +881,7 @@ impl<'a> Body<'a> {
 /// not meet it).
 #[inline]
 fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
-    let [p, q, r] = t.corners.map(Vec3::from);
+    let [p, q, r] = t.corners().map(Vec3::from);
     let (e1, e2) = (q - p, r - p);
     let h = d.cross(e2);
     let det = e1.dot(h);
@@ -896,19 +896,22 @@ fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)).then_some(along)
 }
 
-/// A triangle as stored: its corners, and its plane as the grid's lists
-/// and the queries cull by it.
-#[repr(C)]
+/// A triangle as stored, a cache line each: its corners, and its plane as
+/// the grid's lists and the queries cull by it, the plane first.
+#[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct Stored {
-    corners: [[f32; 3]; 3],
-    /// The computed normal `n = (c1 - c0) x (c2 - c0)`, unnormalized.
-    normal: [f32; 3],
-    /// How far a crossing computed with the triangle may seem to lie from
-    /// its plane, as `n . (x - c0)` measures: the rounding of that measure
-    /// at the coordinates of the grid (the 4e-6 term, ~33 units in the last
-    /// place where ~10 are needed), and [`stray`].
-    slack: f32,
+    /// The first corner `c0`, and the plane's slack: how far a crossing
+    /// computed with the triangle may seem to lie from its plane, as
+    /// `n . (x - c0)` measures (the rounding of that measure at the
+    /// coordinates of the grid, the 4e-6 term, ~33 units in the last place
+    /// where ~10 are needed; and [`stray`]).
+    first: [f32; 4],
+    /// The computed normal `n = (c1 - c0) x (c2 - c0)`, unnormalized (and
+    /// a zero).
+    normal: [f32; 4],
+    /// The second and the third corner (and a zero each).
+    rest: [[f32; 4]; 2],
 }
 
 impl Stored {
@@ -924,16 +927,48 @@ impl Stored {
         let slack = n.abs().element_sum() * 4e-6 * (shape.reach() + c0.abs().max_element())
             + stray(longest, shape.inv_cell);
         Stored {
-            corners: corners.map(Into::into),
-            normal: n.into(),
-            slack,
+            first: c0.extend(slack).into(),
+            normal: n.extend(0.0).into(),
+            rest: [c1.extend(0.0).into(), c2.extend(0.0).into()],
         }
+    }
+
+    /// The first corner.
+    #[inline]
+    fn corner(&self) -> Vec3 {
+        Vec3::from_slice(&self.first)
+    }
+
+    /// The first corner, as a vector type.
+    #[inline]
+    fn corner_a(&self) -> Vec3A {
+        Vec3A::from_vec4(glam::Vec4::from_array(self.first))
+    }
+
+    /// The normal.
+    #[inline]
+    fn normal(&self) -> Vec3A {
+        Vec3A::from_vec4(glam::Vec4::from_array(self.normal))
+    }
+
+    /// The slack (see `first`).
+    #[inline]
+    fn slack(&self) -> f32 {
+        self.first[3]
+    }
+
+    /// The three corners.
+    #[inline]
+    fn corners(&self) -> [[f32; 3]; 3] {
+        let xyz = |v: &[f32; 4]| [v[0], v[1], v[2]];
+        [xyz(&self.first), xyz(&self.rest[0]), xyz(&self.rest[1])]
     }
 
     /// The low and the high corner of the triangle's bounds.
     #[inline]
     fn bounds(&self) -> (Vec3A, Vec3A) {
-        let [a, b, c] = self.corners.map(Vec3A::from);
+        let [a, b, c] = [self.first, self.rest[0], self.rest[1]]
+            .map(|v| Vec3A::from_vec4(glam::Vec4::from_array(v)));
         (a.min(b).min(c), a.max(b).max(c))
     }
 }
@@ -994,15 +1029,15 @@ impl Legs<'_> {
         // middle than the box reaches has none (the legs of most points in
         // a cell pass its triangles by)
         let culled = |t: &Stored| {
-            let n = Vec3A::from(t.normal);
-            let reach = n.abs().dot(half) + t.slack;
+            let n = t.normal();
+            let reach = n.abs().dot(half) + t.slack();
             #[cfg(test)]
             let reach = if UNCULLED.with(|u| u.get()) {
                 f32::INFINITY
             } else {
                 reach
             };
-            let culled = libm::fabsf(n.dot(mid - Vec3A::from(t.corners[0]))) > reach;
+            let culled = libm::fabsf(n.dot(mid - t.corner_a())) > reach;
             #[cfg(test)]
             CULLED.with(|c| c.set(c.get() + culled as usize));
             culled
@@ -1103,7 +1138,7 @@ fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
 #[inline]
 fn crossing_within<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
     let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
-    let [a, b, c] = t.corners;
+    let [a, b, c] = t.corners();
     let turn = |v: [f32; 3]| [v[AXIS], v[j], v[k]];
     let (a, b, c, p) = (turn(a), turn(b), turn(c), turn(p.to_array()));
     // the edges b -> c, c -> a, a -> b in lanes 0, 1, 2
@@ -1174,7 +1209,7 @@ fn cap(mesh: &Mesh, rim: &Rim, shape: &Shape, caps: &mut [Stored], loops: &mut [
 /// Strackee), positive when `p` sees its back.
 fn solid_angle(t: &Stored, p: Vec3) -> f64 {
     let [a, b, c] = [0, 1, 2].map(|i| {
-        let v = Vec3::from(t.corners[i]) - p;
+        let v = Vec3::from(t.corners()[i]) - p;
         glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64)
     });
     let (la, lb, lc) = (a.length(), b.length(), c.length());
@@ -1225,8 +1260,10 @@ mod tests {
 
     /// A stored triangle for the tests of what reads only its corners.
     fn corners_only(corners: [Vec3; 3]) -> Stored {
+        let [a, b, c] = corners.map(|v| v.extend(0.0).into());
         Stored {
-            corners: corners.map(Into::into),
+            first: a,
+            rest: [b, c],
             ..Stored::default()
         }
     }
@@ -1239,7 +1276,7 @@ mod tests {
             return None;
         }
         let turn = |v: [f32; 3]| [v[AXIS], v[j], v[k]];
-        let [a, b, c] = t.corners;
+        let [a, b, c] = t.corners();
         let (a, b, c, p) = (turn(a), turn(b), turn(c), turn(p.to_array()));
         let (w0, s0) = edge(b, c, p);
         let (w1, s1) = edge(c, a, p);
