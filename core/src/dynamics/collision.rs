@@ -7,7 +7,9 @@
 //! deforming body itself (its inside test), and a host's signed distance
 //! field (a level set, a cloth's distance: anything that answers distances).
 
-use crate::interp::lift::{first_clear, lift, none_inside, toward_normal, LIFT_STEP, LIFT_STEPS};
+use crate::interp::lift::{
+    first_clear, lift, none_inside, toward_normal, Turn, LIFT_STEP, LIFT_STEPS,
+};
 use crate::surface::body::Body;
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
@@ -328,13 +330,28 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
             out[j] = Vec3::new(tx[j], ty[j], tz[j]);
         }
     };
+    // a trial turns the point found inside last (the hint) first: most
+    // leave it inside, and it answers alone (as `clear` answers then)
     let mut clear = |w: Vec2| {
-        let mut trial = [Vec3::ZERO; MAX_POINTS];
-        turned(w, &mut trial[..n]);
-        for (p, l) in world.iter_mut().zip(&trial[..n]) {
-            *p = frame.to_world(*l);
+        let turn = Turn::new(w.into());
+        let at = |j: usize| {
+            let (x, y, z) = match turn {
+                Some(turn) => turn.apply(x[j], y[j], z[j]),
+                None => (x[j], y[j], z[j]),
+            };
+            frame.to_world(Vec3::new(x, y, z))
+        };
+        let first = hint.min(n - 2);
+        if near.in_shape(at(1 + first)) {
+            return false;
         }
-        near.clear(&world[1..n], &mut hint)
+        for (j, p) in world[..n].iter_mut().enumerate() {
+            *p = at(j);
+        }
+        let points = &world[1..n];
+        none_inside(points.len(), &mut hint, |j| {
+            j != first && near.in_shape(points[j])
+        }) && near.field_clear(points)
     };
     let (toward, to_normal) = toward_normal(local[n - 1]);
     let lifted = first_clear(to_normal, 1, |a| clear(toward * a)).map(|a| toward * a);

@@ -19,19 +19,51 @@ pub(crate) const LIFT_STEP: f32 = FRAC_PI_2 / LIFT_STEPS as f32;
 /// the root, fixed per strand at rest in the strand's own frame, so it
 /// follows the body and does not depend on the pose.
 pub(crate) fn lift(w: [f32; 2], x: &mut [f32], y: &mut [f32], z: &mut [f32]) {
-    let angle = sqrt::sqrtf(w[0] * w[0] + w[1] * w[1]);
-    // a vector too small to square turns nothing (and has no axis)
-    if angle == 0.0 {
-        return;
+    if let Some(turn) = Turn::new(w) {
+        for j in 0..x.len() {
+            (x[j], y[j], z[j]) = turn.apply(x[j], y[j], z[j]);
+        }
     }
-    let (kx, ky) = (w[0] / angle, w[1] / angle);
-    let (s, c) = libm::sincosf(angle);
-    for j in 0..x.len() {
-        let (vx, vy, vz) = (x[j], y[j], z[j]);
+}
+
+/// The rotation [`lift`] makes, worked out once for points turned one at a
+/// time: each comes out with the bits [`lift`] gives it.
+#[derive(Clone, Copy)]
+pub(crate) struct Turn {
+    kx: f32,
+    ky: f32,
+    s: f32,
+    c: f32,
+}
+
+impl Turn {
+    /// The rotation by `(w.x, w.y, 0)`; none for a vector too small to
+    /// square, which turns nothing (and has no axis).
+    #[inline]
+    pub(crate) fn new(w: [f32; 2]) -> Option<Turn> {
+        let angle = sqrt::sqrtf(w[0] * w[0] + w[1] * w[1]);
+        if angle == 0.0 {
+            return None;
+        }
+        let (s, c) = libm::sincosf(angle);
+        Some(Turn {
+            kx: w[0] / angle,
+            ky: w[1] / angle,
+            s,
+            c,
+        })
+    }
+
+    /// The point `(vx, vy, vz)` turned.
+    #[inline]
+    pub(crate) fn apply(&self, vx: f32, vy: f32, vz: f32) -> (f32, f32, f32) {
+        let Turn { kx, ky, s, c } = *self;
         let along = (kx * vx + ky * vy) * (1.0 - c);
-        x[j] = vx * c + ky * vz * s + kx * along;
-        y[j] = vy * c - kx * vz * s + ky * along;
-        z[j] = vz * c + (kx * vy - ky * vx) * s;
+        (
+            vx * c + ky * vz * s + kx * along,
+            vy * c - kx * vz * s + ky * along,
+            vz * c + (kx * vy - ky * vx) * s,
+        )
     }
 }
 
