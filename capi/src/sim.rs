@@ -700,9 +700,9 @@ pub extern "C" fn pelage_sim_step(
 }
 
 /// A step on several threads that builds its own body collider: the
-/// body's stages that run on one thread (rim, placement, copies, counts,
-/// and the lists and classes while the guides still bend) run beside the
-/// guides' advance, links and IK on the other threads; the rest of the
+/// body's stages that run on one thread (rim, placement, copies; then,
+/// while the guides still bend, the counts, lists and classes) run beside
+/// the guides' advance, links and IK on the other threads; the rest of the
 /// grid is then built over every thread, and the guides pushed out. The
 /// bits are those of building the body first. A failure once the guides
 /// have moved and before the push-out (the body refused, memory, a
@@ -743,18 +743,21 @@ fn step_beside_body(
     let guide_threads = threads as u32 - 1;
     let bending = AtomicBool::new(true);
     let built = beside(
-        || -> Result<Counted, Failure> {
+        || -> Result<Built, Failure> {
             let (parts, refs) = memory.parts(frame.mesh(), COLLISION_CELLS_PER_TRIANGLE)?;
-            let mut counted = counted(parts, threads, false, |bytes| refs.take(bytes))?;
             // the later stages too while the guides still bend, else
             // over every thread once they are bent (the same bits)
+            if !bending.load(Ordering::Relaxed) {
+                return Ok(Built::Placed(parts, refs));
+            }
+            let mut counted = counted(parts, threads, false, |bytes| refs.take(bytes))?;
             if bending.load(Ordering::Relaxed) {
                 counted.list(false)?;
                 if bending.load(Ordering::Relaxed) {
                     counted.classify(false)?;
                 }
             }
-            Ok(counted)
+            Ok(Built::Counted(counted))
         },
         || -> Result<(), Failure> {
             split_in_chunks(n, guide_threads, blocks, per, |range, part| {
@@ -780,9 +783,12 @@ fn step_beside_body(
             shaped
         },
     )
-    .and_then(|(counted, bent)| {
+    .and_then(|(built, bent)| {
         bent?;
-        counted?.body()
+        match built? {
+            Built::Placed(parts, refs) => body_grid(parts, thread_count, |bytes| refs.take(bytes)),
+            Built::Counted(counted) => counted.body(),
+        }
     });
     let body = match built {
         Ok(body) => body,
@@ -801,6 +807,15 @@ fn step_beside_body(
             Some(&body),
         )
     })
+}
+
+/// How far a step's body thread built the body while the guides bent: the
+/// stages it did not run then run on every thread.
+enum Built<'a> {
+    /// The grid placed and its triangles copied.
+    Placed(BodyParts<'a>, RefsMemory<'a>),
+    /// Its triangles counted too, and maybe listed and classified.
+    Counted(Counted<'a>),
 }
 
 /// Writes the posed guides of the last step (world space; all zero before
