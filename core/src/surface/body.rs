@@ -383,7 +383,19 @@ impl BodyGrid<'_> {
         let shape = &self.shape;
         let skip = layers.start * shape.layer_cells();
         class.fill(0);
-        for t in self.triangles.iter().chain(self.caps) {
+        // a triangle's rows lie within a layer of its span (the caps have
+        // none)
+        let spans = self
+            .spans
+            .iter()
+            .map(Some)
+            .chain(self.caps.iter().map(|_| None));
+        for (t, span) in self.triangles.iter().chain(self.caps).zip(spans) {
+            if span.is_some_and(|s| {
+                usize::from(s[5]) + 1 < layers.start || usize::from(s[2]) > layers.end
+            }) {
+                continue;
+            }
             let (lo, hi) = t.bounds();
             // the rows whose line may pass within the bounds (one more each
             // way: `crossing` decides exactly)
@@ -396,7 +408,13 @@ impl BodyGrid<'_> {
             let zs = rows(2);
             for z in (*zs.start()).max(layers.start)..=(*zs.end()).min(layers.end.wrapping_sub(1)) {
                 for y in rows(1) {
-                    let Some((h, step)) = crossing::<0>(t, shape.centre(0, y, z)) else {
+                    let at = shape.centre(0, y, z);
+                    // a line strictly outside the bounds misses the
+                    // triangle, perturbed or not
+                    if at.y < lo.y || at.y > hi.y || at.z < lo.z || at.z > hi.z {
+                        continue;
+                    }
+                    let Some((h, step)) = crossing_within::<0>(t, at) else {
                         continue;
                     };
                     // the first centre at or past the crossing
@@ -1093,7 +1111,7 @@ std::thread_local! {
 }
 
 /// How far from a triangle's plane, in units of its computed normal `n`
-/// (as `n . (x - corner)` measures), a crossing [`crossing`] computes may
+/// (as `n . (x - corner)` measures), a crossing [`crossing_within`] computes may
 /// seem to lie, for a triangle whose longest edge squared is `e2` in a
 /// grid of cells `1 / inv_cell` wide. `n`, a cross product of
 /// differences, rounds by ~3 units in the last place of |e|^2 in each
@@ -1120,21 +1138,10 @@ fn counted(crossing: Option<(f32, i32)>, (lo, hi, sign): (f32, f32, i32)) -> i32
 /// there going along the axis: +1 entering the triangle's back (its normal
 /// against the axis), -1 leaving through its front. The coordinates are
 /// rotated so `AXIS` comes first; every triangle sharing an edge rotates it
-/// alike.
-#[inline]
-fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
-    let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
-    // a line strictly outside the triangle's bounds misses it, perturbed or
-    // not; most lines through a cell miss most of its triangles
-    let (lo, hi) = t.bounds();
-    if p[j] < lo[j] || p[j] > hi[j] || p[k] < lo[k] || p[k] > hi[k] {
-        return None;
-    }
-    crossing_within::<AXIS>(t, p)
-}
-
-/// [`crossing`] for a line through `p` that lies within the triangle's
-/// bounds (on the two axes other than `AXIS`).
+/// alike. For a line within the triangle's bounds on the other two axes:
+/// one strictly outside them misses the triangle, perturbed or not, and the
+/// callers pass it by first (most lines through a cell miss most of its
+/// triangles).
 #[inline]
 fn crossing_within<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
     let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
@@ -1256,6 +1263,17 @@ mod tests {
         } else {
             (e, positive)
         }
+    }
+
+    /// [`crossing_within`] for any line: none for a line outside the
+    /// bounds.
+    fn crossing<const AXIS: usize>(t: &Stored, p: Vec3) -> Option<(f32, i32)> {
+        let (j, k) = ((AXIS + 1) % 3, (AXIS + 2) % 3);
+        let (lo, hi) = t.bounds();
+        if p[j] < lo[j] || p[j] > hi[j] || p[k] < lo[k] || p[k] > hi[k] {
+            return None;
+        }
+        crossing_within::<AXIS>(t, p)
     }
 
     /// A stored triangle for the tests of what reads only its corners.
