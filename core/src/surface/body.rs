@@ -158,13 +158,18 @@ impl Shape {
     /// thousandth of a cell so that a crossing computed with rounding still
     /// lands in a listed cell.
     fn cell_range(&self, lo: Vec3, hi: Vec3) -> ([usize; 3], [usize; 3]) {
-        let pad = Vec3::splat(1e-3 / self.inv_cell);
-        let (lo, hi) = (self.cell_of(lo - pad), self.cell_of(hi + pad));
-        let clamp = |v: i32, k: usize| v.clamp(0, self.dims[k] as i32 - 1) as usize;
-        (
-            [clamp(lo[0], 0), clamp(lo[1], 1), clamp(lo[2], 2)],
-            [clamp(hi[0], 0), clamp(hi[1], 1), clamp(hi[2], 2)],
-        )
+        let pad = Vec3A::splat(1e-3 / self.inv_cell);
+        let last = Vec3A::from(self.dims.map(|d| (d - 1) as f32));
+        // clamped into the grid first, the coordinate's floor is its
+        // truncation: the cell of `cell_of`, clamped
+        let cell = |p: Vec3A| {
+            let c = ((p - Vec3A::from(self.origin)) * self.inv_cell)
+                .max(Vec3A::ZERO)
+                .min(last)
+                .as_ivec3();
+            [c.x as usize, c.y as usize, c.z as usize]
+        };
+        (cell(Vec3A::from(lo) - pad), cell(Vec3A::from(hi) + pad))
     }
 
     #[inline]
