@@ -335,18 +335,19 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
     let mut clear = |w: Vec2| {
         let turn = Turn::new(w.into());
         let at = |j: usize| {
-            let (x, y, z) = match turn {
+            let (tx, ty, tz) = match turn {
                 Some(turn) => turn.apply(x[j], y[j], z[j]),
                 None => (x[j], y[j], z[j]),
             };
-            frame.to_world(Vec3::new(x, y, z))
+            frame.to_world(Vec3::new(tx, ty, tz))
         };
         let first = hint.min(n - 2);
-        if near.in_shape(at(1 + first)) {
+        let tried = at(1 + first);
+        if near.in_shape(tried) {
             return false;
         }
-        for (j, p) in world[..n].iter_mut().enumerate() {
-            *p = at(j);
+        for (j, p) in world[1..n].iter_mut().enumerate() {
+            *p = if j == first { tried } else { at(1 + j) };
         }
         let points = &world[1..n];
         none_inside(points.len(), &mut hint, |j| {

@@ -308,7 +308,7 @@ impl BodyGrid<'_> {
         let [a0, a1, a2, b0, b1, b2] = self.spans[t].map(usize::from);
         let (a, b) = ([a0, a1, a2], [b0, b1, b2]);
         let zs = a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1));
-        // another thread's layers: no plane to work out
+        // another thread's layers: the triangle is not read
         if zs.is_empty() {
             return;
         }
@@ -403,7 +403,7 @@ impl BodyGrid<'_> {
             }
             let (lo, hi) = t.bounds();
             // the rows whose line may pass within the bounds (one more each
-            // way: `crossing` decides exactly)
+            // way: the bounds and `crossing_within` decide exactly)
             let first = shape.cell_of(Vec3::from(lo) - 0.5 / shape.inv_cell);
             let last = shape.cell_of(Vec3::from(hi) - 0.5 / shape.inv_cell);
             let rows = |k: usize| {
@@ -412,11 +412,15 @@ impl BodyGrid<'_> {
             };
             let zs = rows(2);
             for z in (*zs.start()).max(layers.start)..=(*zs.end()).min(layers.end.wrapping_sub(1)) {
+                // a line strictly outside the bounds misses the triangle,
+                // perturbed or not
+                let at_z = shape.centre(0, 0, z).z;
+                if at_z < lo.z || at_z > hi.z {
+                    continue;
+                }
                 for y in rows(1) {
                     let at = shape.centre(0, y, z);
-                    // a line strictly outside the bounds misses the
-                    // triangle, perturbed or not
-                    if at.y < lo.y || at.y > hi.y || at.z < lo.z || at.z > hi.z {
+                    if at.y < lo.y || at.y > hi.y {
                         continue;
                     }
                     let Some((h, step)) = crossing_within::<0>(t, at) else {
@@ -921,7 +925,7 @@ fn meet(t: &Stored, a: Vec3, d: Vec3) -> Option<f32> {
 
 /// A triangle as stored, a cache line each: its corners, and its plane as
 /// the grid's lists and the queries cull by it, the plane first.
-#[repr(C, align(16))]
+#[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct Stored {
     /// The first corner `c0`, and the plane's slack: how far a crossing
@@ -962,7 +966,8 @@ impl Stored {
         Vec3::from_slice(&self.first)
     }
 
-    /// The first corner, as a vector type.
+    /// The first corner, as a vector type (its fourth lane holds the
+    /// slack: fine for the three-lane operations it takes part in).
     #[inline]
     fn corner_a(&self) -> Vec3A {
         Vec3A::from_vec4(glam::Vec4::from_array(self.first))
@@ -1018,10 +1023,12 @@ impl Legs<'_> {
     /// <= to, and counts negated when to < h <= from (as the sweep counts
     /// them).
     ///
-    /// One pass over the triangles serves the three legs: a triangle's
-    /// bounds say at once which legs' lines may pass through it (most miss
-    /// all three), where a pass per leg branched on every triangle thrice.
-    /// The sum is of integers, so the order does not change it.
+    /// One pass over the triangles serves the three legs: a triangle whose
+    /// plane the legs' box lies wholly beside is passed by first, with its
+    /// stored plane alone; for the rest, the bounds say at once which legs'
+    /// lines may pass through it (most miss all three), where a pass per
+    /// leg branched on every triangle thrice. The sum is of integers, so
+    /// the order does not change it.
     #[inline]
     fn crossings(&self, centre: Vec3) -> i32 {
         let p = self.to;
@@ -1086,8 +1093,9 @@ impl Legs<'_> {
             }
             w
         };
-        // the cell's own triangles, then the caps (none in most cells); the
-        // cull in the loops, the rest (for few) apart
+        // the cell's own triangles, then the caps (none in most cells): the
+        // cheap plane cull inline, the bounds and crossings apart for the
+        // few left
         let mut w = 0;
         for &t in self.listed {
             let t = &self.body.triangles[t as usize];
@@ -1116,8 +1124,8 @@ std::thread_local! {
 }
 
 /// How far from a triangle's plane, in units of its computed normal `n`
-/// (as `n . (x - corner)` measures), a crossing [`crossing_within`] computes may
-/// seem to lie, for a triangle whose longest edge squared is `e2` in a
+/// (as `n . (x - corner)` measures), a crossing [`crossing_within`]
+/// computes may seem to lie, for a triangle whose longest edge squared is `e2` in a
 /// grid of cells `1 / inv_cell` wide. `n`, a cross product of
 /// differences, rounds by ~3 units in the last place of |e|^2 in each
 /// component, and that error grows with the distance from the corner it
@@ -1220,8 +1228,8 @@ fn cap(mesh: &Mesh, rim: &Rim, shape: &Shape, caps: &mut [Stored], loops: &mut [
 /// The signed solid angle triangle `t` subtends at `p` (Van Oosterom and
 /// Strackee), positive when `p` sees its back.
 fn solid_angle(t: &Stored, p: Vec3) -> f64 {
-    let [a, b, c] = [0, 1, 2].map(|i| {
-        let v = Vec3::from(t.corners()[i]) - p;
+    let [a, b, c] = t.corners().map(|corner| {
+        let v = Vec3::from(corner) - p;
         glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64)
     });
     let (la, lb, lc) = (a.length(), b.length(), c.length());
