@@ -38,6 +38,7 @@
 use crate::arena::{Arena, ArenaLayout};
 use crate::surface::grid::floor_i32;
 pub use crate::surface::rim::Rim;
+use crate::surface::rim::SolidBounds;
 use crate::{Error, Mesh};
 use core::ops::Range;
 use glam::{Vec3, Vec3A};
@@ -82,14 +83,16 @@ impl Shape {
     /// not degenerate).
     fn of(mesh: &Mesh, density: f32, solid: impl Fn(usize) -> bool) -> Result<Shape, Error> {
         mesh.check()?;
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        let mut triangles = 0;
+        let mut bounds = SolidBounds::EMPTY;
         for f in (0..mesh.triangle_count()).filter(|&f| solid(f)) {
-            for c in mesh.corners(f) {
-                (lo, hi) = (lo.min(c), hi.max(c));
-            }
-            triangles += 1;
+            bounds.add(mesh.corners(f));
         }
+        Self::of_bounds(bounds, density)
+    }
+
+    /// The grid over triangles of bounds `bounds`.
+    fn of_bounds(bounds: SolidBounds, density: f32) -> Result<Shape, Error> {
+        let (lo, hi, triangles) = (Vec3::from(bounds.lo), Vec3::from(bounds.hi), bounds.count);
         if triangles == 0 {
             return Err(Error::InvalidArgument(
                 "a body needs at least one non-degenerate triangle",
@@ -521,8 +524,10 @@ pub struct BodyPlan {
 }
 
 impl BodyPlan {
-    /// Validates `mesh` and places the grid; `rim` is the mesh's boundary
-    /// (see [`Rim`] for when it must be found again).
+    /// Validates `mesh` and places the grid; `rim` is the mesh's boundary,
+    /// found or refreshed on the mesh as it is now (the grid is placed by
+    /// the bounds of the solid triangles it found; see [`Rim`] for when it
+    /// must be found again).
     pub fn of(mesh: &Mesh, rim: &Rim) -> Result<Self, Error> {
         Self::with_density(mesh, rim, CELLS_PER_TRIANGLE)
     }
@@ -540,7 +545,9 @@ impl BodyPlan {
             ));
         }
         rim.check_mesh(mesh)?;
-        let shape = Shape::of(mesh, cells_per_triangle, |f| rim.is_solid(f))?;
+        mesh.check()?;
+        // the rim found its solid triangles' bounds with them
+        let shape = Shape::of_bounds(rim.solid_bounds(), cells_per_triangle)?;
         Ok(BodyPlan {
             shape,
             cap_triangles: rim.edge_count(),

@@ -28,6 +28,8 @@ pub struct Mesh<'a> {
 /// One read of a face's corners (see [`Mesh::shape`]).
 #[derive(Clone, Copy, Debug)]
 pub struct FaceShape {
+    /// The corners.
+    pub corners: [Vec3; 3],
     /// Corner 0 to 1, corner 0 to 2, corner 1 to 2.
     pub edges: [Vec3; 3],
     /// The cross product of the first two edges: along the normal, twice
@@ -240,6 +242,7 @@ impl<'a> Mesh<'a> {
         let degenerate =
             i == j || j == k || i == k || twice_area.is_nan() || twice_area <= 1e-6 * size;
         FaceShape {
+            corners: [a, b, c],
             edges,
             cross,
             degenerate,

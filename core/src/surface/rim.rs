@@ -19,7 +19,7 @@
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::{Error, Mesh};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// The boundary loops of a mesh, in caller-provided memory.
 #[derive(Clone, Copy, Debug)]
@@ -37,6 +37,36 @@ pub struct Rim<'a> {
     /// Vertices and triangles of the mesh it was found on.
     vertices: usize,
     triangles: usize,
+    /// The bounds of the solid triangles' corners, and their number.
+    solid_bounds: SolidBounds,
+}
+
+/// The bounds of a mesh's solid triangles (their corners), and how many
+/// there are: found with the solid triangles, as a body's grid is placed
+/// by them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SolidBounds {
+    pub(crate) lo: Vec3A,
+    pub(crate) hi: Vec3A,
+    pub(crate) count: usize,
+}
+
+impl SolidBounds {
+    /// No triangle yet.
+    pub(crate) const EMPTY: SolidBounds = SolidBounds {
+        lo: Vec3A::INFINITY,
+        hi: Vec3A::NEG_INFINITY,
+        count: 0,
+    };
+
+    /// Takes in a solid triangle's `corners`.
+    #[inline]
+    pub(crate) fn add(&mut self, corners: [Vec3; 3]) {
+        for c in corners.map(Vec3A::from) {
+            (self.lo, self.hi) = (self.lo.min(c), self.hi.max(c));
+        }
+        self.count += 1;
+    }
 }
 
 /// `keys` (`[low end, high end, direction, 0]`, ends below `vertices`)
@@ -127,7 +157,7 @@ impl<'a> Kept<'a> {
         ]
     }
 
-    fn rim(self, mesh: &Mesh, edges: usize, loops: usize) -> Rim<'a> {
+    fn rim(self, mesh: &Mesh, edges: usize, loops: usize, solid_bounds: SolidBounds) -> Rim<'a> {
         Rim {
             weld: self.weld,
             edges: &self.edges[..edges],
@@ -135,27 +165,36 @@ impl<'a> Kept<'a> {
             solid: self.solid,
             vertices: mesh.positions.len(),
             triangles: mesh.triangle_count(),
+            solid_bounds,
         }
     }
 
     /// Whether the rim kept here is `mesh`'s: found for the same indices,
     /// the same triangles degenerate, and the same vertices welded (each
     /// at its welded vertex's position, and no two welded vertices at one
-    /// position), which is all a rim depends on. `table` is scratch.
-    fn still_fits(&self, mesh: &Mesh, table: &mut [u32]) -> bool {
+    /// position), which is all a rim depends on; and if so, the bounds of
+    /// its solid triangles. `table` is scratch.
+    fn still_fits(&self, mesh: &Mesh, table: &mut [u32]) -> Option<SolidBounds> {
         let [magic, _, _, _, edges, loops] = *self.header;
         let fits = magic == MAGIC
             && self.header[..4] == self.header(mesh, 0, 0)[..4]
             && edges <= self.edges.len() as u64
             && loops < self.starts.len() as u64;
         if !fits {
-            return false;
+            return None;
         }
         if (0..mesh.triangle_count()).any(|f| self.indices[f] != mesh.triangles.get(f)) {
-            return false;
+            return None;
         }
-        if (0..mesh.triangle_count()).any(|f| self.solid[f] != !mesh.is_degenerate(f) as u8) {
-            return false;
+        let mut bounds = SolidBounds::EMPTY;
+        for f in 0..mesh.triangle_count() {
+            let shape = mesh.shape(f);
+            if self.solid[f] != !shape.degenerate as u8 {
+                return None;
+            }
+            if !shape.degenerate {
+                bounds.add(shape.corners);
+            }
         }
         let key = |v: u32| mesh.positions.get(v as usize).map(|c| (c + 0.0).to_bits());
         // a vertex is welded to itself or a lower index
@@ -164,7 +203,7 @@ impl<'a> Kept<'a> {
             w <= v && key(v) == key(w)
         });
         if !weld_ok {
-            return false;
+            return None;
         }
         // the welded vertices at distinct positions: an open-addressed set
         table.fill(u32::MAX);
@@ -181,12 +220,12 @@ impl<'a> Kept<'a> {
                         table[h] = v;
                         break;
                     }
-                    u if key(u) == key(v) => return false,
+                    u if key(u) == key(v) => return None,
                     _ => h += 1,
                 }
             }
         }
-        true
+        Some(bounds)
     }
 }
 
@@ -231,9 +270,11 @@ impl<'a> Rim<'a> {
         // fits in the keys' scratch
         let slots = (2 * mesh.positions.len()).max(2).next_power_of_two();
         let words = bytemuck::cast_slice_mut::<[u32; 4], u32>(keys);
-        if slots <= words.len() && kept.still_fits(mesh, &mut words[..slots]) {
-            let [.., edges, loops] = *kept.header;
-            return Ok(kept.rim(mesh, edges as usize, loops as usize));
+        if slots <= words.len() {
+            if let Some(bounds) = kept.still_fits(mesh, &mut words[..slots]) {
+                let [.., edges, loops] = *kept.header;
+                return Ok(kept.rim(mesh, edges as usize, loops as usize, bounds));
+            }
         }
         Self::find(mesh, kept, keys, arena)
     }
@@ -285,12 +326,15 @@ impl<'a> Rim<'a> {
         // direction: after sorting, an edge's copies are adjacent
         let mut n = 0;
         let solid = &mut *kept.solid;
+        let mut bounds = SolidBounds::EMPTY;
         for (f, t) in mesh.triangles.iter().enumerate() {
             kept.indices[f] = t;
-            solid[f] = !mesh.is_degenerate(f) as u8;
-            if solid[f] == 0 {
+            let shape = mesh.shape(f);
+            solid[f] = !shape.degenerate as u8;
+            if shape.degenerate {
                 continue;
             }
+            bounds.add(shape.corners);
             let [a, b, c] = t.map(|v| weld[v as usize]);
             for (from, to) in [(a, b), (b, c), (c, a)] {
                 if from != to {
@@ -355,7 +399,7 @@ impl<'a> Rim<'a> {
         }
         starts[loops] = written as u32;
         *kept.header = kept.header(mesh, written, loops);
-        Ok(kept.rim(mesh, written, loops))
+        Ok(kept.rim(mesh, written, loops, bounds))
     }
 
     /// Number of boundary edges.
@@ -403,6 +447,12 @@ impl<'a> Rim<'a> {
     /// The welded index of vertex `v`: the lowest index at its position.
     pub fn welded(&self, v: u32) -> u32 {
         self.weld[v as usize]
+    }
+
+    /// The bounds of the solid triangles of the mesh the rim was found
+    /// (or refreshed) on, and their number.
+    pub(crate) fn solid_bounds(&self) -> SolidBounds {
+        self.solid_bounds
     }
 
     /// Checks that `mesh` has the counts of the mesh the rim was found on.
