@@ -166,11 +166,11 @@ impl Shape {
         // clamped into the grid first, the coordinate's floor is its
         // truncation: the cell of `cell_of`, clamped
         let cell = |p: Vec3A| {
-            let c = ((p - Vec3A::from(self.origin)) * self.inv_cell)
+            let q = ((p - Vec3A::from(self.origin)) * self.inv_cell)
                 .max(Vec3A::ZERO)
-                .min(last)
-                .as_ivec3();
-            [c.x as usize, c.y as usize, c.z as usize]
+                .min(last);
+            let [x, y, z, _] = f32x4::from(q.extend(0.0).to_array()).trunc_int().to_array();
+            [x as usize, y as usize, z as usize]
         };
         (cell(Vec3A::from(lo) - pad), cell(Vec3A::from(hi) + pad))
     }
@@ -647,13 +647,14 @@ impl<'a> Body<'a> {
         let class = arena.alloc::<u8>(cells)?;
 
         let mut solid = (0..mesh.triangle_count()).filter(|&f| rim.is_solid(f));
+        let reach = shape.reach();
         for (t, span) in triangles.iter_mut().zip(spans.iter_mut()) {
             let [a, b, c] = mesh.corners(solid.next().ok_or(another)?);
             let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
             if !(lo.cmpge(shape.lo).all() && hi.cmple(shape.hi).all()) {
                 return Err(another);
             }
-            *t = Stored::new([a, b, c], &shape);
+            *t = Stored::new([a, b, c], reach, shape.inv_cell);
             let (a, b) = shape.cell_range(lo, hi);
             // at most MAX_DIM + 4 cells a side
             *span = [a[0], a[1], a[2], b[0], b[1], b[2]].map(|c| c as u16);
@@ -949,8 +950,10 @@ struct Stored {
 }
 
 impl Stored {
-    /// Triangle `corners` in a grid of shape `shape`.
-    fn new(corners: [Vec3; 3], shape: &Shape) -> Self {
+    /// Triangle `corners` in a grid of cells `1 / inv_cell` wide whose
+    /// coordinates reach `reach` ([`Shape::reach`]).
+    #[inline]
+    fn new(corners: [Vec3; 3], reach: f32, inv_cell: f32) -> Self {
         let [c0, c1, c2] = corners.map(Vec3A::from);
         let (e0, e1, e2) = (c1 - c0, c2 - c0, c2 - c1);
         let n = e0.cross(e1);
@@ -958,8 +961,8 @@ impl Stored {
             .length_squared()
             .max(e1.length_squared())
             .max(e2.length_squared());
-        let slack = n.abs().element_sum() * 4e-6 * (shape.reach() + c0.abs().max_element())
-            + stray(longest, shape.inv_cell);
+        let slack = n.abs().element_sum() * 4e-6 * (reach + c0.abs().max_element())
+            + stray(longest, inv_cell);
         Stored {
             first: c0.extend(slack).into(),
             normal: n.extend(0.0).into(),
@@ -1221,7 +1224,7 @@ fn cap(mesh: &Mesh, rim: &Rim, shape: &Shape, caps: &mut [Stored], loops: &mut [
         let (mean, radius) = rim.ball(k, mesh);
         for e in rim.loop_edges(k) {
             let (a, b) = (at(e[0]), at(e[1]));
-            caps[next] = Stored::new([b, a, mean], shape);
+            caps[next] = Stored::new([b, a, mean], shape.reach(), shape.inv_cell);
             next += 1;
         }
         *ball = CapBall {
