@@ -231,7 +231,7 @@ impl<'a> Mesh<'a> {
     #[inline]
     pub fn shape(&self, face: usize) -> FaceShape {
         let [i, j, k] = self.triangles.get(face);
-        let [a, b, c] = self.corners(face);
+        let [a, b, c] = [i, j, k].map(|v| Vec3::from(self.positions.get(v as usize)));
         let edges = [b - a, c - a, c - b];
         let cross = edges[0].cross(edges[1]);
         let twice_area = cross.length();
