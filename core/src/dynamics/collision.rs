@@ -7,9 +7,7 @@
 //! deforming body itself (its inside test), and a host's signed distance
 //! field (a level set, a cloth's distance: anything that answers distances).
 
-use crate::interp::lift::{
-    first_clear, lift, none_inside, toward_normal, Turn, LIFT_STEP, LIFT_STEPS,
-};
+use crate::interp::lift::{first_clear, none_inside, toward_normal, Turn, LIFT_STEP, LIFT_STEPS};
 use crate::surface::body::Body;
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
@@ -317,30 +315,11 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
     if near.clear(&world[1..n], &mut hint) {
         return PushOut::Clear;
     }
-    let mut x = [0.0f32; MAX_POINTS];
-    let mut y = [0.0f32; MAX_POINTS];
-    let mut z = [0.0f32; MAX_POINTS];
-    for (j, l) in local[..n].iter().enumerate() {
-        (x[j], y[j], z[j]) = (l.x, l.y, l.z);
-    }
-    let turned = |w: Vec2, out: &mut [Vec3]| {
-        let (mut tx, mut ty, mut tz) = (x, y, z);
-        lift(w.into(), &mut tx[..n], &mut ty[..n], &mut tz[..n]);
-        for j in 0..n {
-            out[j] = Vec3::new(tx[j], ty[j], tz[j]);
-        }
-    };
     // a trial turns the point found inside last (the hint) first: most
     // leave it inside, and it answers alone (as `clear` answers then)
     let mut clear = |w: Vec2| {
         let turn = Turn::new(w.into());
-        let at = |j: usize| {
-            let (tx, ty, tz) = match turn {
-                Some(turn) => turn.apply(x[j], y[j], z[j]),
-                None => (x[j], y[j], z[j]),
-            };
-            frame.to_world(Vec3::new(tx, ty, tz))
-        };
+        let at = |j: usize| frame.to_world(turned(turn, local[j]));
         let first = hint.min(n - 2);
         let tried = at(1 + first);
         if near.in_shape(tried) {
@@ -366,11 +345,26 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
             })
         })
     });
-    turned(chosen.unwrap_or(toward * to_normal), &mut local[..n]);
+    let turn = Turn::new(chosen.unwrap_or(toward * to_normal).into());
+    for l in &mut local[..n] {
+        *l = turned(turn, *l);
+    }
     if chosen.is_some() {
         PushOut::Freed
     } else {
         PushOut::Stuck
+    }
+}
+
+/// Root-frame point `l` turned by `turn` about the root (none: unchanged),
+/// with the bits [`lift`](crate::interp::lift::lift) gives it.
+fn turned(turn: Option<Turn>, l: Vec3) -> Vec3 {
+    match turn {
+        Some(turn) => {
+            let (x, y, z) = turn.apply(l.x, l.y, l.z);
+            Vec3::new(x, y, z)
+        }
+        None => l,
     }
 }
 

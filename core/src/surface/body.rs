@@ -1135,8 +1135,8 @@ std::thread_local! {
 
 /// How far from a triangle's plane, in units of its computed normal `n`
 /// (as `n . (x - corner)` measures), a crossing [`crossing_within`]
-/// computes may seem to lie, for a triangle whose longest edge squared is `e2` in a
-/// grid of cells `1 / inv_cell` wide. `n`, a cross product of
+/// computes may seem to lie, for a triangle whose longest edge squared is
+/// `e2` in a grid of cells `1 / inv_cell` wide. `n`, a cross product of
 /// differences, rounds by ~3 units in the last place of |e|^2 in each
 /// component, and that error grows with the distance from the corner it
 /// is measured at: up to the triangle's size and two cells (a crossing in
@@ -1219,12 +1219,13 @@ fn edges(from: [f32x4; 2], to: [f32x4; 2], p: [f32; 2]) -> (f32x4, i32) {
 /// triangle `(b, a, m)`, which runs the edge the other way.
 fn cap(mesh: &Mesh, rim: &Rim, shape: &Shape, caps: &mut [Stored], loops: &mut [CapBall]) {
     let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
+    let reach = shape.reach();
     let mut next = 0;
     for (k, ball) in loops.iter_mut().enumerate() {
         let (mean, radius) = rim.ball(k, mesh);
         for e in rim.loop_edges(k) {
             let (a, b) = (at(e[0]), at(e[1]));
-            caps[next] = Stored::new([b, a, mean], shape.reach(), shape.inv_cell);
+            caps[next] = Stored::new([b, a, mean], reach, shape.inv_cell);
             next += 1;
         }
         *ball = CapBall {
