@@ -8,7 +8,7 @@ use crate::threads::{split_over_threads, split_with_progress, Progress};
 use crate::{
     PelageFrame, PelageProgressFn, PelageRoot, PelageStatus, PelageStrandBinding, PelageStrandGroom,
 };
-use pelage_core::dynamics::collision::Colliders;
+use pelage_core::collide::Colliders;
 use pelage_core::interp::expand::ExpandJob;
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::interp::strand::{EndPoints, ExpandParams};

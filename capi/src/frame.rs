@@ -9,7 +9,7 @@ use crate::{PelageColliders, PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::cache::groom_file::Groom;
 use pelage_core::cache::guide_cache::{GuideCache, BLOCK};
-use pelage_core::dynamics::collision::{
+use pelage_core::collide::{
     Capsule, Colliders, Plane, SignedDistance, Sphere, COLLISION_CELLS_PER_TRIANGLE,
 };
 use pelage_core::dynamics::sim::PosedFaults;

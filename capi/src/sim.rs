@@ -8,7 +8,7 @@ use crate::threads::{
 };
 use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
-use pelage_core::dynamics::collision::{
+use pelage_core::collide::{
     Capsule, Colliders, Plane, SignedDistance, Sphere, COLLISION_CELLS_PER_TRIANGLE,
 };
 use pelage_core::dynamics::ik::IkParams;

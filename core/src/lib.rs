@@ -35,6 +35,8 @@
 
 pub mod arena;
 pub mod cache;
+pub mod collide;
+pub mod curve;
 pub mod dynamics;
 pub mod error;
 pub mod guides;

@@ -6,7 +6,7 @@
 mod scene;
 
 use libfuzzer_sys::fuzz_target;
-use pelage_core::dynamics::collision::Colliders;
+use pelage_core::collide::Colliders;
 use pelage_core::dynamics::sim::{Sim, SimParams};
 use pelage_core::guides::{CvLayout, Guides};
 use pelage_core::{Arena, ArenaLayout, Mesh, Strided};

@@ -8,7 +8,7 @@
 //! simulated guides. The paper: 7 frames/s for the simulation alone.
 
 use pelage::*;
-use pelage_core::dynamics::collision::COLLISION_CELLS_PER_TRIANGLE;
+use pelage_core::collide::COLLISION_CELLS_PER_TRIANGLE;
 use pelage_core::interp::groom::{GroomMaps, StrandGroom};
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::body::{Body, BodyPlan, Rim};

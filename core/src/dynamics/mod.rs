@@ -8,9 +8,9 @@
 //!
 //! One module per step of the paper: [`spring`] (3.1, the tip), [`ik`]
 //! (3.1, the joints), [`spline`] (3.1, the output curve), [`links`] (3.2),
-//! [`collision`] (3.3); [`sim`] holds the state and runs the steps.
+//! the push-out of 3.3 is shared geometry ([`crate::collide`]); [`sim`] holds
+//! the state and runs the steps.
 
-pub mod collision;
 pub mod ik;
 pub mod links;
 pub mod sim;

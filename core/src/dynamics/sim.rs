@@ -17,12 +17,12 @@
 //! from step to step is a few floats per guide, saved to and restored
 //! from bytes ([`Sim::save`], [`Sim::restore`]).
 
-use super::collision::{push_out, Colliders, PushOut};
 use super::ik::{self, IkParams};
 use super::links::{LinkParams, Links};
 use super::spline;
 use super::spring::TipSpring;
 use crate::arena::{Arena, ArenaLayout};
+use crate::collide::{push_out, Colliders, PushOut};
 use crate::guides::Guides;
 use crate::interp::posed::{GuidePoints, PosedFrame, Posing};
 use crate::surface::body::Body;
@@ -1157,7 +1157,7 @@ impl StepContext<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::collision::{Capsule, Plane, SignedDistance, Sphere};
+    use crate::collide::{Capsule, Plane, SignedDistance, Sphere};
     use crate::guides::CvLayout;
     use crate::surface::body::Body;
     use crate::testmesh::{roots, sphere, straight_guides, TestMesh};

@@ -9,13 +9,13 @@
 //! records or their bounds, the output), then runs any ranges of strands
 //! without a further check or failure, on any threads.
 
-use crate::dynamics::collision::{push_out_curve, Colliders};
+use crate::collide::{push_out_curve, Colliders};
+use crate::curve::{cut, WHOLE};
 use crate::interp::posed::PosedFrame;
 use crate::interp::strand::{strand_n, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
 use crate::interp::strands::{StrandBounds, Strands};
 use crate::surface::frame::FaceBasis;
 use crate::surface::frame::{self, Frame, FRAME_LANES};
-use crate::trim::{self, length::cut};
 use crate::Error;
 use core::ops::Range;
 
@@ -91,7 +91,7 @@ impl<'r, 'a> ExpandJob<'r, 'a> {
     }
 
     /// The same job, each strand cut at its stored length in `lengths`
-    /// (one per strand, [`trim::WHOLE`] for none; see [`trim::length`]).
+    /// (one per strand, [`WHOLE`] for none; see [`crate::trim::length`]).
     pub fn trimmed(self, lengths: &'r [u16]) -> Result<Self, Error> {
         if lengths.len() < self.strands.len() {
             return Err(Error::OutputTooSmall {
@@ -296,9 +296,9 @@ impl Filler<'_, '_> {
             &mut self.lanes,
             curve,
         );
-        let length = self.trim.map_or(trim::WHOLE, |t| t[s]);
+        let length = self.trim.map_or(WHOLE, |t| t[s]);
         let push = self.push.filter(|p| p.mask[s] != 0);
-        if length == trim::WHOLE && push.is_none() {
+        if length == WHOLE && push.is_none() {
             return;
         }
         let pinned = self.params.end_points == EndPoints::Pinned;

@@ -5,7 +5,7 @@
 pub mod bind;
 pub mod expand;
 pub mod groom;
-pub(crate) mod lift;
+pub mod params;
 pub mod patch;
 pub mod posed;
 pub mod settle;

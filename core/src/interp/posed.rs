@@ -9,7 +9,7 @@
 
 use crate::arena::{Arena, ArenaLayout};
 use crate::guides::Guides;
-use crate::interp::strand::{ExpandParams, MAX_STRAND_POINTS};
+use crate::interp::params::{ExpandParams, MAX_STRAND_POINTS};
 use crate::surface::frame::{self, Frame, FRAME_LANES};
 use crate::{Error, Mesh, Root};
 use glam::Vec3;

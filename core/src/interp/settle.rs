@@ -13,9 +13,9 @@
 //! for creases where the interpolated normal grazes the surface), and last
 //! are shortened; any left inside are counted, never hidden.
 
+use crate::collide::lift::{first_clear, none_inside, toward_normal, LIFT_STEP, LIFT_STEPS};
 use crate::interp::bind::StrandBinding;
 use crate::interp::groom::StrandGroom;
-use crate::interp::lift::{first_clear, none_inside, toward_normal, LIFT_STEP, LIFT_STEPS};
 use crate::interp::posed::PosedFrame;
 use crate::interp::strand::{strand, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
 use crate::interp::strands::{check_strands, Strands};

@@ -1,6 +1,6 @@
 //! Where each posed guide first meets the cloth or a collider.
 
-use crate::dynamics::collision::{Colliders, Near};
+use crate::collide::{Colliders, Near};
 use crate::interp::posed::PosedFrame;
 use crate::surface::body::Body;
 use crate::Error;
@@ -107,7 +107,7 @@ pub(crate) fn first_meet(
 mod tests {
     use super::*;
     use crate::arena::{Arena, ArenaLayout};
-    use crate::dynamics::collision::{Plane, Sphere};
+    use crate::collide::{Plane, Sphere};
     use crate::guides::{CvLayout, Guides};
     use crate::interp::bind::{bind, BindParams, StrandBinding};
     use crate::interp::expand::ExpandJob;

@@ -16,5 +16,5 @@
 pub mod length;
 pub mod meet;
 
-pub use length::WHOLE;
+pub use crate::curve::WHOLE;
 pub use meet::TrimRecord;

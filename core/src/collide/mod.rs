@@ -1,21 +1,24 @@
 //! Colliders and the push-out (paper 3.3): a posed guide with a point
 //! inside a collider is rotated rigidly about its root, toward its normal,
 //! by the smallest tried angle that frees every point (the rotation and the
-//! search are settle's, `interp::lift`).
+//! search are shared with settle: `lift`). Colliders are shared geometry:
+//! the guide dynamics, the render strands' push-out and trimming all use them.
 //!
 //! Colliders: spheres, capsules and half-spaces (planes) given per step, the
 //! deforming body itself (its inside test), and a host's signed distance
 //! field (a level set, a cloth's distance: anything that answers distances).
 
-use crate::interp::lift::{first_clear, none_inside, toward_normal, Turn, LIFT_STEP, LIFT_STEPS};
+pub(crate) mod lift;
+
+use crate::curve::{cut, WHOLE};
 use crate::surface::body::Body;
 use crate::surface::frame::Frame;
 use crate::surface::mesh::MAX_COORDINATE;
-use crate::trim::length::{cut, WHOLE};
 use crate::Error;
 use bytemuck::{Pod, Zeroable};
 use core::f32::consts::FRAC_PI_2;
 use glam::{Vec2, Vec3, Vec3A};
+use lift::{first_clear, none_inside, toward_normal, Turn, LIFT_STEP, LIFT_STEPS};
 
 /// Cells per triangle of the body grid built per frame for collisions, by a
 /// step or for a frame's colliders (see
@@ -357,7 +360,7 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
 }
 
 /// Root-frame point `l` turned by `turn` about the root (none: unchanged),
-/// with the bits [`lift`](crate::interp::lift::lift) gives it.
+/// with the bits [`lift`](crate::collide::lift::lift) gives it.
 fn turned(turn: Option<Turn>, l: Vec3) -> Vec3 {
     match turn {
         Some(turn) => {
