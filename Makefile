@@ -1,43 +1,67 @@
 # pelage: one command runs the demo, one runs every test (see README.md).
-# Both install the Debian packages they need when they are missing.
+# Each installs the Debian packages it needs when they are missing: the demo
+# only what configuring and building the demo takes, the tests the rest.
 
 BUILD ?= build
 JOBS ?= 2
-APT_PACKAGES := cmake g++ pkg-config libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev libopenvdb-dev libboost-dev valgrind binutils python3-venv slurm-wlm munge
-EMBEDDED_TARGET := thumbv7em-none-eabihf
-
 FUZZ_SECONDS ?= 60
 
-.PHONY: demo farm-demo test deps rust-test rust-lint rust-miri rust-fuzz cmake-test header-check bench
+# What each entry point installs (Debian packages, then rustup targets).
+# The demo configures CMake with the tests off, so it needs no test package.
+DEPS_demo := cmake g++ binutils libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev
+DEPS_farm := $(DEPS_demo) slurm-wlm munge
+DEPS_test := $(DEPS_farm) pkg-config libopenvdb-dev libboost-dev valgrind python3-venv
+RUST_TARGETS_test := thumbv7em-none-eabihf
+EMBEDDED_TARGET := thumbv7em-none-eabihf
 
-demo: deps
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+.PHONY: demo farm-demo test deps deps-demo deps-farm deps-test rust-test rust-lint rust-miri \
+        rust-fuzz cmake-test header-check bench
+
+# A build tree that is already configured keeps its settings (after `make
+# test` it has the tests on, and their packages are installed); a new one is
+# configured with the tests off, so the demo needs none of their packages.
+DEMO_CONFIGURE = cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release \
+  $(if $(wildcard $(BUILD)/CMakeCache.txt),,-DPELAGE_BUILD_TESTS=OFF)
+
+demo: deps-demo
+	$(DEMO_CONFIGURE)
 	cmake --build $(BUILD) -j$(JOBS) --target demo
 	cd $(BUILD) && ./cpp_examples/demo
 
 # A short shot through Slurm: a one-node cluster on this machine (farm/cluster.sh),
 # the simulation, the shot pass and a job array of render tasks (farm/shot.sh);
-# the frames land in $(BUILD)/farm_demo/frame_NNNN.png.
+# the frames land in $(BUILD)/farm_demo/frame_NNNN.png. The cluster is stopped
+# afterwards unless it was already up, or FARM_KEEP=1 is given.
 FARM_FRAMES ?= 8
 FARM_HAIRS ?= 200000
 FARM_CHUNK ?= 2
-farm-demo: deps
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+FARM_KEEP ?= 0
+farm-demo: deps-farm
+	$(DEMO_CONFIGURE)
 	cmake --build $(BUILD) -j$(JOBS) --target shot
-	farm/cluster.sh
-	farm/shot.sh $(BUILD)/cpp_examples/shot $(BUILD)/assets/creature.obj $(BUILD)/farm_demo \
-	  $(FARM_FRAMES) $(FARM_HAIRS) $(FARM_CHUNK)
+	@was_up=0; if farm/cluster.sh status; then was_up=1; fi; \
+	farm/cluster.sh && farm/shot.sh $(BUILD)/cpp_examples/shot $(BUILD)/assets/creature.obj \
+	  $(BUILD)/farm_demo $(FARM_FRAMES) $(FARM_HAIRS) $(FARM_CHUNK); rc=$$?; \
+	if [ $$was_up = 1 ] || [ "$(FARM_KEEP)" = 1 ]; then \
+	  echo "farm-demo: the cluster stays up (munged, slurmctld, slurmd); stop it with: farm/cluster.sh stop"; \
+	else farm/cluster.sh stop && echo "farm-demo: cluster stopped"; fi; \
+	exit $$rc
 
-test: deps rust-lint rust-test rust-miri rust-fuzz cmake-test header-check
+test: deps-test rust-lint rust-test rust-miri rust-fuzz cmake-test header-check
 
-deps:
-	@missing=""; for p in $(APT_PACKAGES); do \
+# Installs the Debian packages and rustup targets of DEPS_<name> and
+# RUST_TARGETS_<name> that are missing (the one recipe for every list).
+deps-demo deps-farm deps-test: deps-%:
+	@missing=""; for p in $(DEPS_$*); do \
 	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
 	if [ -n "$$missing" ]; then \
 	  echo "installing:$$missing"; \
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
 	fi
-	@rustup target list --installed | grep -qx $(EMBEDDED_TARGET) || rustup target add $(EMBEDDED_TARGET)
+	@for t in $(RUST_TARGETS_$*); do \
+	  rustup target list --installed | grep -qx $$t || rustup target add $$t; done
+
+deps: deps-test
 
 rust-lint:
 	cargo fmt --all -- --check
@@ -60,7 +84,7 @@ rust-fuzz:
 	fuzz/run.sh $(FUZZ_SECONDS)
 
 cmake-test:
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPELAGE_BUILD_TESTS=ON
 	cmake --build $(BUILD) -j$(JOBS)
 	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)
 
@@ -68,5 +92,7 @@ cmake-test:
 header-check:
 	git diff --exit-code -- include/pelage.h
 
+# Every benchmark's tables, printed to the terminal.
 bench:
 	cargo bench --locked -p pelage-tests
+
