@@ -7,7 +7,8 @@
 # the node is up. Anything that does not come up fails with the logs.
 #
 #   farm/cluster.sh         bring the cluster up (nothing to do when it is)
-#   farm/cluster.sh status  succeeds when it is up
+#   farm/cluster.sh status  prints the state of each daemon and of the node;
+#                           succeeds when the cluster is up
 #   farm/cluster.sh stop    stop the three daemons (by their pid files)
 set -euo pipefail
 
@@ -37,7 +38,29 @@ up() {
   running /run/slurmctld.pid && running /run/slurmd.pid &&
     [[ $(sinfo -h -N -o %t 2>/dev/null) =~ ^(idle|mix|alloc)$ ]]
 }
-if [ "${1:-}" = status ]; then up; exit; fi
+# One line: the node's state as slurmctld sees it and each daemon running
+# (with its pid) or not; the exit status says whether the cluster is up.
+status() {
+  local names=(slurmd slurmctld munged) daemons="" node="unknown (slurmctld not running)" i
+  for i in "${!pids[@]}"; do
+    if running "${pids[$i]}"; then
+      daemons+="${daemons:+, }${names[$i]} running (pid $(cat "${pids[$i]}"))"
+    else
+      daemons+="${daemons:+, }${names[$i]} not running"
+    fi
+  done
+  if running /run/slurmctld.pid; then
+    node=$(sinfo -h -N -o '%N %t' 2>/dev/null | head -n 1 || true)
+    node=${node:-"not known to slurmctld"}
+  fi
+  if up; then
+    echo "cluster.sh: up: node $node; $daemons"
+  else
+    echo "cluster.sh: down: node $node; $daemons"
+    return 1
+  fi
+}
+if [ "${1:-}" = status ]; then status; exit; fi
 
 [ "$(id -u)" = 0 ] || fail "needs root (it installs packages and starts daemons)"
 
