@@ -15,7 +15,7 @@ RUST_TARGETS_test := thumbv7em-none-eabihf
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
 .PHONY: demo farm-demo test deps deps-demo deps-farm deps-test rust-test rust-lint rust-miri \
-        rust-fuzz cmake-test header-check bench
+        rust-fuzz cmake-test header-check bench perf
 
 # A build tree that is already configured keeps its settings (after `make
 # test` it has the tests on, and their packages are installed); a new one is
@@ -96,3 +96,8 @@ header-check:
 bench:
 	cargo bench --locked -p pelage-tests
 
+# Every benchmark run, its tables written to docs/PERFORMANCE.md with the
+# machine and the date (BENCHES="stamp cache" runs only those).
+BENCHES ?=
+perf:
+	tests/perf/report.sh $(BENCHES)
