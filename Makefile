@@ -14,8 +14,8 @@ DEPS_test := $(DEPS_farm) pkg-config libopenvdb-dev libboost-dev valgrind python
 RUST_TARGETS_test := thumbv7em-none-eabihf
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
-.PHONY: demo farm-demo test deps deps-demo deps-farm deps-test rust-test rust-lint rust-miri \
-        rust-fuzz cmake-test header-check bench perf
+.PHONY: demo farm-demo test deps deps-demo deps-farm deps-test docs-check rust-test rust-lint \
+        rust-miri rust-fuzz cmake-test header-check bench perf
 
 # A build tree that is already configured keeps its settings (after `make
 # test` it has the tests on, and their packages are installed); a new one is
@@ -47,7 +47,7 @@ farm-demo: deps-farm
 	else farm/cluster.sh stop && echo "farm-demo: cluster stopped"; fi; \
 	exit $$rc
 
-test: deps-test rust-lint rust-test rust-miri rust-fuzz cmake-test header-check
+test: deps-test docs-check rust-lint rust-test rust-miri rust-fuzz cmake-test header-check
 
 # Installs the Debian packages and rustup targets of DEPS_<name> and
 # RUST_TARGETS_<name> that are missing (the one recipe for every list).
@@ -87,6 +87,18 @@ cmake-test:
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPELAGE_BUILD_TESTS=ON
 	cmake --build $(BUILD) -j$(JOBS)
 	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)
+
+# The README stays one or two screens, and its C snippet is cpp_examples/minimal.c's
+# own lines (each line of the snippet but "/* ... */" must appear there).
+README_MAX_LINES := 300
+docs-check:
+	@n=$$(wc -l < README.md); [ $$n -le $(README_MAX_LINES) ] || \
+	  { echo "README.md: $$n lines, more than $(README_MAX_LINES)"; exit 1; }
+	@awk '/^```c$$/ { c = 1; next } /^```/ { c = 0 } c && !/\/\* \.\.\. \*\// && NF' README.md | \
+	  sed 's/^[[:space:]]*//' | while IFS= read -r line; do \
+	    grep -qF -- "$$line" cpp_examples/minimal.c || \
+	      { echo "README.md's C snippet has a line cpp_examples/minimal.c does not: $$line"; exit 1; }; \
+	  done
 
 # The committed header must be exactly what the build generates.
 header-check:
