@@ -347,13 +347,6 @@ typedef struct PelageCurves {
   uint32_t *curve_ids;
 } PelageCurves;
 
-// Simulated guides: the state of the tip springs across frames, the rest
-// shapes, the tip links. Created by `pelage_sim_new` in memory the host
-// provides (sized by `pelage_sim_query`), stepped frame by frame by
-// `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
-// bytes; released by `pelage_sim_free`.
-typedef struct PelageSimTy *PelageSim;
-
 // A solid sphere collider.
 typedef struct PelageSphere {
   // Centre.
@@ -624,6 +617,13 @@ typedef struct PelageSimParams {
   struct PelageMap external;
 } PelageSimParams;
 
+// Simulated guides: the state of the tip springs across frames, the rest
+// shapes, the tip links. Created by `pelage_sim_new` in memory the host
+// provides (sized by `pelage_sim_query`), stepped frame by frame by
+// `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
+// bytes; released by `pelage_sim_free`.
+typedef struct PelageSimTy *PelageSim;
+
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
   // Number of roots wanted on the whole mesh (at most 2^28; unused when
@@ -825,31 +825,6 @@ enum PelageStatus pelage_frame_new(const struct PelageMeshDesc *mesh, size_t gui
 //
 // Thread safety: no other call may use `frame` during this one.
 enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct PelageGuidesDesc *guides, uint32_t thread_count);
-
-// Poses `frame`'s guides with `sim`'s posed guides of the last step,
-// without copying them out: the bits and the statuses of pelage_sim_read
-// then pelage_frame_set_guides (with the simulation's roots), in less
-// time. The frame must be of the simulation's mesh (its counts) with the
-// simulation's points_per_guide points per strand, made for as many
-// guides as the simulation has; `sim` must have stepped since it was
-// created, reset or restored (after a PANIC from pelage_sim_step, reset
-// or restore it first: a half-made step is not refused here). Split over
-// `thread_count` threads (0: all cores); the bits do not depend on it. The
-// guides are checked as they are written: when one is refused, the frame
-// has no guides (expansions from it are refused) until guides are set
-// again; when the frame or the simulation is refused (the counts, no
-// step yet), the frame keeps the guides it had.
-//
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
-// another point or guide count, no step yet; a simulated guide with a
-// point beyond 1e9 or of zero length, on a collapsed root triangle, as
-// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
-// step), PANIC (also when a worker thread cannot start: the frame then
-// has no guides until guides are set again).
-//
-// Thread safety: no other call may use `frame` during this one; `sim` may
-// be read by other calls meanwhile (not stepped, reset or restored).
-enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, uint32_t thread_count);
 
 // Sets the colliders that render strands selected by a push mask
 // (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
@@ -1203,6 +1178,31 @@ void pelage_sim_free(PelageSim sim);
 // Thread safety: no other call may use `sim` during this one; the frame
 // may be read by other calls meanwhile.
 enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct PelageColliders *colliders, const void *external_points, size_t external_stride, float dt, uint32_t thread_count);
+
+// Poses `frame`'s guides with `sim`'s posed guides of the last step,
+// without copying them out: the bits and the statuses of pelage_sim_read
+// then pelage_frame_set_guides (with the simulation's roots), in less
+// time. The frame must be of the simulation's mesh (its counts) with the
+// simulation's points_per_guide points per strand, made for as many
+// guides as the simulation has; `sim` must have stepped since it was
+// created, reset or restored (after a PANIC from pelage_sim_step, reset
+// or restore it first: a half-made step is not refused here). Split over
+// `thread_count` threads (0: all cores); the bits do not depend on it. The
+// guides are checked as they are written: when one is refused, the frame
+// has no guides (expansions from it are refused) until guides are set
+// again; when the frame or the simulation is refused (the counts, no
+// step yet), the frame keeps the guides it had.
+//
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
+// another point or guide count, no step yet; a simulated guide with a
+// point beyond 1e9 or of zero length, on a collapsed root triangle, as
+// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
+// step), PANIC (also when a worker thread cannot start: the frame then
+// has no guides until guides are set again).
+//
+// Thread safety: no other call may use `frame` during this one; `sim` may
+// be read by other calls meanwhile (not stepped, reset or restored).
+enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, uint32_t thread_count);
 
 // Writes the posed guides of the last step (world space; all zero before
 // the first step and after pelage_sim_reset; after pelage_sim_restore,

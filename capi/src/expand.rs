@@ -2,7 +2,7 @@
 //! descriptors, and the one-call `pelage_expand`.
 
 use crate::buffers::{bytes_mut, req, req_mut, slice, slice_mut};
-use crate::frame::frame_ref;
+use crate::handles::object;
 use crate::status::Failure;
 use crate::threads::{split_over_threads, split_with_progress, Progress};
 use crate::{
@@ -187,7 +187,7 @@ pub extern "C" fn pelage_expand(
     curves: *const PelageCurves,
 ) -> PelageStatus {
     ffi_boundary! {
-        let frame = frame_ref(frame)?;
+        let frame = object(frame)?;
         let all = req(strands, "strands")?.view()?;
         let p = req(params, "params")?;
         // every record is checked before any range writes

@@ -1,8 +1,10 @@
 //! The frame handle: one frame's deformed mesh and posed guides, prepared
 //! once and read by any number of expansions.
 
+use crate::body::body_in;
 use crate::buffers::{collected, grow, req, req_mut, zeroed};
-use crate::sim::{body_in, sim_ref, HostColliders, HostField, PelageSim};
+use crate::colliders::{HostColliders, HostField};
+use crate::handles::{free, into_handle, object_mut, Handle};
 use crate::status::Failure;
 use crate::threads::{split_in_chunks, split_over_threads};
 use crate::{PelageColliders, PelageGuidesDesc, PelageMeshDesc, PelageStatus};
@@ -12,7 +14,6 @@ use pelage_core::cache::guide_cache::{GuideCache, BLOCK};
 use pelage_core::collide::{
     Capsule, Colliders, Plane, SignedDistance, Sphere, COLLISION_CELLS_PER_TRIANGLE,
 };
-use pelage_core::dynamics::sim::PosedFaults;
 use pelage_core::surface::body::Body;
 
 use pelage_core::interp::posed::PosedFrame;
@@ -58,6 +59,11 @@ impl<T> Drop for Buffer<T> {
         // SAFETY: from Box::into_raw in `new`, freed once, here.
         drop(unsafe { Box::from_raw(self.0) });
     }
+}
+
+impl Handle for PelageFrameTy {
+    type Object = Frame;
+    const NAME: &'static str = "frame";
 }
 
 /// What a [`PelageFrame`] points to.
@@ -113,6 +119,11 @@ impl Frame {
         &self.posed
     }
 
+    /// The posed frame, to pose its guides.
+    pub(crate) fn posed_mut(&mut self) -> &mut PosedFrame<'static> {
+        &mut self.posed
+    }
+
     /// Decodes shutter sample `sample` of `cache` into this frame's guides,
     /// checked whole first, over `thread_count` threads: unpacked by runs
     /// of whole blocks into the frame's scratch, then posed by chunks.
@@ -165,19 +176,6 @@ impl Frame {
         decoding.finish();
         Ok(())
     }
-}
-
-/// The frame behind a handle, or NULL_PARAMETER. A non-NULL handle must
-/// come from `pelage_frame_new` and not be freed yet (the header's
-/// contract), so it points to a live `Frame`.
-pub(crate) fn frame_ref<'a>(frame: PelageFrame) -> Result<&'a Frame, Failure> {
-    req(frame.cast::<Frame>().cast_const(), "frame")
-}
-
-/// The frame behind a handle, for a call that changes it (see
-/// [`frame_ref`]); the header forbids other calls on it meanwhile.
-pub(crate) fn frame_mut<'a>(frame: PelageFrame) -> Result<&'a mut Frame, Failure> {
-    req_mut(frame.cast::<Frame>(), "frame")
 }
 
 /// Copies a host buffer into a heap buffer (OUT_OF_MEMORY naming `what`).
@@ -243,7 +241,7 @@ pub extern "C" fn pelage_frame_new(
             _normals: normals,
             _arena: arena,
         });
-        *out = Box::into_raw(frame).cast::<PelageFrameTy>();
+        *out = into_handle(frame);
         Ok(())
     }
 }
@@ -267,7 +265,7 @@ pub extern "C" fn pelage_frame_set_guides(
     thread_count: u32,
 ) -> PelageStatus {
     ffi_boundary! {
-        let frame = frame_mut(frame)?;
+        let frame = object_mut(frame)?;
         let guides = req(guides, "guides")?.view()?;
         let posing = frame.posed.posing(&guides)?;
         let filler = posing.filler;
@@ -276,50 +274,6 @@ pub extern "C" fn pelage_frame_set_guides(
             filler.fill(range.start, part)
         })?;
         posing.finish();
-        Ok(())
-    }
-}
-
-/// Poses `frame`'s guides with `sim`'s posed guides of the last step,
-/// without copying them out: the bits and the statuses of pelage_sim_read
-/// then pelage_frame_set_guides (with the simulation's roots), in less
-/// time. The frame must be of the simulation's mesh (its counts) with the
-/// simulation's points_per_guide points per strand, made for as many
-/// guides as the simulation has; `sim` must have stepped since it was
-/// created, reset or restored (after a PANIC from pelage_sim_step, reset
-/// or restore it first: a half-made step is not refused here). Split over
-/// `thread_count` threads (0: all cores); the bits do not depend on it. The
-/// guides are checked as they are written: when one is refused, the frame
-/// has no guides (expansions from it are refused) until guides are set
-/// again; when the frame or the simulation is refused (the counts, no
-/// step yet), the frame keeps the guides it had.
-///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
-/// another point or guide count, no step yet; a simulated guide with a
-/// point beyond 1e9 or of zero length, on a collapsed root triangle, as
-/// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
-/// step), PANIC (also when a worker thread cannot start: the frame then
-/// has no guides until guides are set again).
-///
-/// Thread safety: no other call may use `frame` during this one; `sim` may
-/// be read by other calls meanwhile (not stepped, reset or restored).
-#[no_mangle]
-pub extern "C" fn pelage_frame_set_sim_guides(
-    frame: PelageFrame,
-    sim: PelageSim,
-    thread_count: u32,
-) -> PelageStatus {
-    ffi_boundary! {
-        let frame = frame_mut(frame)?;
-        let sim = &sim_ref(sim)?.sim;
-        let posing = sim.posing(&mut frame.posed)?;
-        let filler = posing.filler;
-        let per = filler.floats_per_guide();
-        let faults = split_over_threads(sim.len(), thread_count, &mut *posing.data, per, |range, part| {
-            filler.fill(range.start, part);
-            sim.posed_faults(range)
-        })?;
-        posing.finish_checked(faults.into_iter().fold(PosedFaults::default(), PosedFaults::then))?;
         Ok(())
     }
 }
@@ -345,7 +299,7 @@ pub extern "C" fn pelage_frame_set_colliders(
     thread_count: u32,
 ) -> PelageStatus {
     ffi_boundary! {
-        let frame = frame_mut(frame)?;
+        let frame = object_mut(frame)?;
         if colliders.is_null() {
             frame.push = None;
             return Ok(());
@@ -395,14 +349,5 @@ pub extern "C" fn pelage_frame_set_colliders(
 /// Thread safety: no other call may use `frame` during or after this one.
 #[no_mangle]
 pub extern "C" fn pelage_frame_free(frame: PelageFrame) {
-    if frame.is_null() {
-        return;
-    }
-    // dropping plain buffers cannot panic; the boundary is kept so that no
-    // exported body can unwind into the host
-    let _ = std::panic::catch_unwind(|| {
-        // SAFETY: `frame` came from pelage_frame_new and is freed once, as
-        // the header requires.
-        drop(unsafe { Box::from_raw(frame.cast::<Frame>()) });
-    });
+    free(frame);
 }

@@ -3,7 +3,7 @@
 
 use crate::buffers::{bytes, bytes_mut, collected, req, req_mut, slice, slice_mut};
 use crate::expand::PelageStrands;
-use crate::frame::frame_ref;
+use crate::handles::object;
 use crate::status::Failure;
 use crate::{PelageFrame, PelageRoot, PelageStatus, PelageStrandBinding, PelageStrandGroom};
 use bytemuck::{Pod, Zeroable};
@@ -105,7 +105,7 @@ pub extern "C" fn pelage_groom_file_write(
     ffi_boundary! {
         let written = req_mut(written, "written")?;
         let desc = req(desc, "desc")?;
-        let frame = frame_ref(desc.rest_frame)?.posed();
+        let frame = object(desc.rest_frame)?.posed();
         if !frame.is_posed() {
             return Err(Failure::new(PelageStatus::InvalidArgument, "the rest frame has no guides"));
         }

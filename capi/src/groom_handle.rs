@@ -3,7 +3,7 @@
 
 use crate::buffers::{collected, req, req_mut, slice};
 use crate::expand::{run, Edits};
-use crate::frame::frame_ref;
+use crate::handles::{free, into_handle, object, Handle};
 use crate::status::Failure;
 use crate::{PelageCurves, PelageExpandParams, PelageFrame, PelageStatus, PelageStrands};
 use pelage_core::interp::bind::StrandBinding;
@@ -23,6 +23,11 @@ pub struct PelageGroomTy {
 /// `pelage_groom_new`, released by `pelage_groom_free`; immutable between.
 pub type PelageGroom = *mut PelageGroomTy;
 
+impl Handle for PelageGroomTy {
+    type Object = Groom;
+    const NAME: &'static str = "groom";
+}
+
 /// What a [`PelageGroom`] points to.
 pub(crate) struct Groom {
     roots: Vec<Root>,
@@ -39,13 +44,6 @@ impl Groom {
             grooms: &self.grooms,
         }
     }
-}
-
-/// The groom behind a handle, or NULL_PARAMETER. A non-NULL handle must
-/// come from `pelage_groom_new` and not be freed yet (the header's
-/// contract), so it points to a live `Groom`.
-pub(crate) fn groom_ref<'a>(groom: PelageGroom) -> Result<&'a Groom, Failure> {
-    req(groom.cast::<Groom>().cast_const(), "groom")
 }
 
 /// Creates a groom from render strands (roots, bindings from `pelage_bind`,
@@ -74,7 +72,7 @@ pub extern "C" fn pelage_groom_new(
             grooms: collected(strands.grooms.iter().copied(), strands.grooms.len(), "the groom values")?,
             bounds,
         });
-        *out = Box::into_raw(groom).cast::<PelageGroomTy>();
+        *out = into_handle(groom);
         Ok(())
     }
 }
@@ -84,16 +82,7 @@ pub extern "C" fn pelage_groom_new(
 /// Thread safety: no other call may use `groom` during or after this one.
 #[no_mangle]
 pub extern "C" fn pelage_groom_free(groom: PelageGroom) {
-    if groom.is_null() {
-        return;
-    }
-    // a panic while dropping plain vectors cannot happen; the boundary is
-    // kept so that no exported body can unwind into the host
-    let _ = std::panic::catch_unwind(|| {
-        // SAFETY: `groom` came from pelage_groom_new and is freed once, as
-        // the header requires.
-        drop(unsafe { Box::from_raw(groom.cast::<Groom>()) });
-    });
+    free(groom);
 }
 
 /// Writes the number of strands in `groom` to `*strand_count`.
@@ -107,7 +96,7 @@ pub extern "C" fn pelage_groom_strand_count(
     strand_count: *mut usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let groom = groom_ref(groom)?;
+        let groom = object(groom)?;
         *req_mut(strand_count, "strand_count")? = groom.roots.len();
         Ok(())
     }
@@ -197,8 +186,8 @@ fn expand_range(
     params: *const PelageExpandParams,
     curves: *const PelageCurves,
 ) -> Result<(), Failure> {
-    let groom = groom_ref(groom)?;
-    let frame = frame_ref(frame)?;
+    let groom = object(groom)?;
+    let frame = object(frame)?;
     let total = groom.roots.len();
     let range = first
         ..first

@@ -2,7 +2,7 @@
 //! shutter samples, read by a renderer straight into a frame.
 
 use crate::buffers::{bytes, bytes_mut, handles, req, req_mut, slice};
-use crate::frame::{frame_mut, frame_ref};
+use crate::handles::{object, object_mut};
 use crate::status::Failure;
 use crate::{PelageFrame, PelageRoot, PelageStatus};
 use pelage_core::cache::groom_file::Groom;
@@ -112,7 +112,7 @@ pub extern "C" fn pelage_guide_cache_write(
         let handles = handles(samples, sample_count as usize, "samples")?;
         let frames = handles
             .iter()
-            .map(|&h| frame_ref(h).map(|f| f.posed()))
+            .map(|&h| object(h).map(|f| f.posed()))
             .collect::<Result<Vec<&PosedFrame>, Failure>>()?;
         let mode = if exact != 0 { Mode::Exact } else { Mode::Quantized };
         *written = guide_cache::encode(&groom, set.groom_id, &frames, mode, bytes_mut(out, capacity, "out")?)?;
@@ -174,7 +174,7 @@ pub extern "C" fn pelage_guide_cache_read(
     ffi_boundary! {
         let set = req(guides, "guides")?;
         let groom = set.view()?;
-        let frame = frame_mut(frame)?;
+        let frame = object_mut(frame)?;
         let cache = GuideCache::parse(bytes(data, length, "data")?)?;
         frame.decode_guides(&cache, &groom, set.groom_id, sample as usize, thread_count)?;
         Ok(())

@@ -8,7 +8,9 @@
 #[macro_use]
 mod status;
 mod bind;
+mod body;
 mod buffers;
+mod colliders;
 mod expand;
 mod frame;
 mod groom;
@@ -16,6 +18,7 @@ mod groom_file;
 mod groom_handle;
 mod guide_cache;
 mod guides;
+mod handles;
 mod map;
 mod mesh;
 mod patch;
@@ -31,13 +34,14 @@ pub use bind::{
     pelage_bind, pelage_bind_params_defaults, pelage_bind_query, PelageBindInfo, PelageBindParams,
     PelageStrandBinding, PELAGE_MAX_NEIGHBOURS,
 };
+pub use colliders::{PelageCapsule, PelageColliders, PelageDistanceFn, PelagePlane, PelageSphere};
 pub use expand::{
     pelage_curves_segment_indices, pelage_expand, pelage_expand_params_defaults,
     pelage_expand_query, PelageCurves, PelageEndPoints, PelageExpandParams, PelageStrands,
 };
 pub use frame::{
     pelage_frame_free, pelage_frame_new, pelage_frame_set_colliders, pelage_frame_set_guides,
-    pelage_frame_set_sim_guides, PelageFrame, PelageFrameTy,
+    PelageFrame, PelageFrameTy,
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,
@@ -62,10 +66,9 @@ pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};
 pub use sim::{
-    pelage_sim_free, pelage_sim_new, pelage_sim_params_defaults, pelage_sim_query, pelage_sim_read,
-    pelage_sim_reset, pelage_sim_restore, pelage_sim_save, pelage_sim_state_size, pelage_sim_step,
-    PelageCapsule, PelageColliders, PelageDistanceFn, PelagePlane, PelageSim, PelageSimParams,
-    PelageSimTy, PelageSphere,
+    pelage_frame_set_sim_guides, pelage_sim_free, pelage_sim_new, pelage_sim_params_defaults,
+    pelage_sim_query, pelage_sim_read, pelage_sim_reset, pelage_sim_restore, pelage_sim_save,
+    pelage_sim_state_size, pelage_sim_step, PelageSim, PelageSimParams, PelageSimTy,
 };
 pub use stamp::{
     pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageProgressFn,

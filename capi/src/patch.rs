@@ -3,9 +3,8 @@
 
 use crate::buffers::{filled, req, req_mut, slice, slice_mut};
 use crate::expand::{core_params, PelageExpandParams, PelageStrands};
-use crate::frame::frame_ref;
 use crate::groom_file::PelagePatch;
-use crate::groom_handle::groom_ref;
+use crate::handles::object;
 use crate::status::Failure;
 use crate::threads::split_over_threads;
 use crate::{PelageGroom, PelageMeshDesc, PelageRoot, PelageStatus};
@@ -71,7 +70,7 @@ pub extern "C" fn pelage_patch_boxes(
     boxes: *mut f32,
 ) -> PelageStatus {
     ffi_boundary! {
-        let frame = frame_ref(frame)?.posed();
+        let frame = object(frame)?.posed();
         let strands = req(strands, "strands")?.view()?;
         let host = req(params, "params")?;
         let params = core_params(host)?;
@@ -116,7 +115,7 @@ pub extern "C" fn pelage_groom_lod_counts(
     counts: *mut u32,
 ) -> PelageStatus {
     ffi_boundary! {
-        let roots = groom_ref(groom)?.strands().roots;
+        let roots = object(groom)?.strands().roots;
         let patches: &[Patch] = bytemuck::cast_slice(slice(patches, patch_count, "patches")?);
         for (i, p) in patches.iter().enumerate() {
             if p.first as usize + p.count as usize > roots.len() {

@@ -1,24 +1,24 @@
 //! The simulation handle: guide dynamics across frames (paper 3).
 
-use crate::buffers::{bytes, bytes_mut, grow, req, req_mut, slice, strided, Float3Out};
-use crate::frame::frame_ref;
+use crate::body::BodyMemory;
+use crate::buffers::{bytes, bytes_mut, grow, req, req_mut, strided, Float3Out};
+use crate::colliders::HostColliders;
+use crate::handles::{free, into_handle, object, object_mut, Handle};
 use crate::status::Failure;
 use crate::threads::{
-    beside, cut_into, run_parts, split_in_chunks, split_pairs_in_chunks, thread_total,
+    beside, split_in_chunks, split_over_threads, split_pairs_in_chunks, thread_total,
 };
-use crate::{PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus};
+use crate::{
+    PelageColliders, PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus,
+};
 use pelage_core::arena::ArenaLayout;
-use pelage_core::collide::{
-    Capsule, Colliders, Plane, SignedDistance, Sphere, COLLISION_CELLS_PER_TRIANGLE,
-};
+use pelage_core::collide::COLLISION_CELLS_PER_TRIANGLE;
 use pelage_core::dynamics::ik::IkParams;
 use pelage_core::dynamics::links::LinkParams;
-use pelage_core::dynamics::sim::{Sim, SimParams, Step, KEPT_FLOATS};
+use pelage_core::dynamics::sim::{PosedFaults, Sim, SimParams, Step, KEPT_FLOATS};
 use pelage_core::interp::posed::PosedFrame;
-use pelage_core::surface::body::{Body, BodyParts, BodyPlan, Rim};
-use pelage_core::{Arena, Mesh, Strided};
+use pelage_core::{Arena, Strided};
 use std::ffi::c_void;
-use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The opaque object a `PelageSim` points to.
@@ -137,6 +137,11 @@ fn core_params<'a>(p: &'a PelageSimParams, vertex_count: usize) -> Result<SimPar
     Ok(params)
 }
 
+impl Handle for PelageSimTy {
+    type Object = SimBox;
+    const NAME: &'static str = "sim";
+}
+
 /// What a [`PelageSim`] points to.
 pub(crate) struct SimBox {
     /// Lives in the host's memory, which outlives the handle (the header's
@@ -149,16 +154,6 @@ pub(crate) struct SimBox {
     kept: Vec<f32>,
     /// That step's guide curves before the push-out.
     shaped: Vec<f32>,
-}
-
-fn sim_mut<'a>(sim: PelageSim) -> Result<&'a mut SimBox, Failure> {
-    req_mut(sim.cast::<SimBox>(), "sim")
-}
-
-/// The simulation behind a handle, shared: for the calls that only read
-/// it, which may run at once.
-pub(crate) fn sim_ref<'a>(sim: PelageSim) -> Result<&'a SimBox, Failure> {
-    req(sim.cast::<SimBox>().cast_const(), "sim")
 }
 
 /// Memory bytes pelage_sim_new needs for `guide_count` guides on
@@ -220,7 +215,7 @@ pub extern "C" fn pelage_sim_new(
         // the rest mesh is read only while the simulation is made: the
         // guides' rest shapes and roots are copied into its memory
         let sim = Sim::new(mesh, &guides, &p, &mut Arena::new(memory))?;
-        *out = Box::into_raw(Box::new(SimBox { sim, body: BodyMemory::default(), kept: Vec::new(), shaped: Vec::new() })).cast::<PelageSimTy>();
+        *out = into_handle(Box::new(SimBox { sim, body: BodyMemory::default(), kept: Vec::new(), shaped: Vec::new() }));
         Ok(())
     }
 }
@@ -231,390 +226,7 @@ pub extern "C" fn pelage_sim_new(
 /// Thread safety: no other call may use `sim` during or after this one.
 #[no_mangle]
 pub extern "C" fn pelage_sim_free(sim: PelageSim) {
-    if sim.is_null() {
-        return;
-    }
-    // dropping plain data cannot panic; the boundary is kept so that no
-    // exported body can unwind into the host
-    let _ = std::panic::catch_unwind(|| {
-        // SAFETY: `sim` came from pelage_sim_new and is freed once, as the
-        // header requires.
-        drop(unsafe { Box::from_raw(sim.cast::<SimBox>()) });
-    });
-}
-
-/// A solid sphere collider.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PelageSphere {
-    /// Centre.
-    pub centre: [f32; 3],
-    /// Radius (>= 0).
-    pub radius: f32,
-}
-
-/// A solid capsule collider: the points within `radius` of the segment a-b.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PelageCapsule {
-    /// One end of the axis.
-    pub a: [f32; 3],
-    /// The other end.
-    pub b: [f32; 3],
-    /// Radius (>= 0).
-    pub radius: f32,
-}
-
-/// A solid half-space collider: the points p with dot(normal, p) < offset
-/// (normal not zero, used as given).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PelagePlane {
-    /// Outward normal.
-    pub normal: [f32; 3],
-    /// dot(normal, p) on the surface.
-    pub offset: f32,
-}
-
-same_layout!(PelageSphere, Sphere, centre, radius);
-same_layout!(PelageCapsule, Capsule, a, b, radius);
-same_layout!(PelagePlane, Plane, normal, offset);
-
-/// A host's signed distance field (negative inside): writes the distance
-/// of each of `count` points (x, y, z floats, packed) to `distances`.
-/// Called from the threads of the call that uses it (`pelage_sim_step`,
-/// `pelage_trim_find`, `pelage_trim_shortest_hairs`, and every thread that
-/// expands with a push mask on a frame holding it), possibly at once: it
-/// must be safe to call concurrently.
-pub type PelageDistanceFn = Option<
-    unsafe extern "C" fn(
-        user_data: *mut c_void,
-        points: *const f32,
-        count: usize,
-        distances: *mut f32,
-    ),
->;
-
-/// What guides (a step, trimming) or pushed render strands collide with;
-/// every array may be NULL with a count of 0.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct PelageColliders {
-    /// Spheres.
-    pub spheres: *const PelageSphere,
-    /// Number of spheres.
-    pub sphere_count: usize,
-    /// Capsules.
-    pub capsules: *const PelageCapsule,
-    /// Number of capsules.
-    pub capsule_count: usize,
-    /// Half-spaces.
-    pub planes: *const PelagePlane,
-    /// Number of half-spaces.
-    pub plane_count: usize,
-    /// Nonzero: collide with the body itself, the frame's (deformed) mesh
-    /// as a solid: inside where its generalized winding number is above 0.5
-    /// (open meshes and intersecting shells work; its grid is built each
-    /// step).
-    pub body: u32,
-    /// A signed distance field, or NULL.
-    pub distance: PelageDistanceFn,
-    /// Passed unchanged to `distance`.
-    pub distance_user_data: *mut c_void,
-}
-
-/// A host's colliders, checked for NULL arrays (the shapes' values are
-/// checked by `Colliders::check`).
-pub(crate) struct HostColliders<'a> {
-    pub(crate) spheres: &'a [Sphere],
-    pub(crate) capsules: &'a [Capsule],
-    pub(crate) planes: &'a [Plane],
-    pub(crate) field: Option<HostField>,
-    /// The body collides.
-    pub(crate) body: bool,
-}
-
-impl<'a> HostColliders<'a> {
-    /// The colliders `colliders` points to; none for NULL.
-    pub(crate) fn read(colliders: *const PelageColliders) -> Result<Self, Failure> {
-        let host = match colliders.is_null() {
-            true => None,
-            false => Some(req(colliders, "colliders")?),
-        };
-        Ok(HostColliders {
-            spheres: bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| {
-                slice(c.spheres, c.sphere_count, "colliders.spheres")
-            })?),
-            capsules: bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| {
-                slice(c.capsules, c.capsule_count, "colliders.capsules")
-            })?),
-            planes: bytemuck::cast_slice(host.map_or(Ok(&[][..]), |c| {
-                slice(c.planes, c.plane_count, "colliders.planes")
-            })?),
-            field: host.and_then(|c| {
-                c.distance.map(|callback| HostField {
-                    callback,
-                    user_data: c.distance_user_data,
-                })
-            }),
-            body: host.is_some_and(|c| c.body != 0),
-        })
-    }
-
-    /// The core's colliders, with `body` (built when `self.body` is set).
-    pub(crate) fn colliders<'r>(&'r self, body: Option<&'r Body<'r>>) -> Colliders<'r> {
-        Colliders {
-            spheres: self.spheres,
-            capsules: self.capsules,
-            planes: self.planes,
-            body,
-            field: self.field.as_ref().map(|f| f as &dyn SignedDistance),
-        }
-    }
-}
-
-/// The memory of a body built every call, kept from call to call: its
-/// rim, its grid and the grid's triangle references.
-#[derive(Default)]
-pub(crate) struct BodyMemory {
-    rim: Vec<u8>,
-    grid: Vec<u8>,
-    refs: Vec<u8>,
-}
-
-impl BodyMemory {
-    /// The solid of `mesh` in this memory (grown as needed), its grid of
-    /// `density` cells per triangle built over `thread_count` threads.
-    pub(crate) fn body<'a>(
-        &'a mut self,
-        mesh: &Mesh,
-        density: f32,
-        thread_count: u32,
-    ) -> Result<Body<'a>, Failure> {
-        let (parts, refs) = self.parts(mesh, density)?;
-        body_grid(parts, thread_count, |bytes| refs.take(bytes))
-    }
-
-    /// [`body`](Self::body)'s stages that run on one thread, and the
-    /// memory the rest takes for the references.
-    fn parts<'a>(
-        &'a mut self,
-        mesh: &Mesh,
-        density: f32,
-    ) -> Result<(BodyParts<'a>, RefsMemory<'a>), Failure> {
-        let grid = &mut self.grid;
-        let parts = body_parts(mesh, &mut self.rim, density, |bytes| {
-            grow(grid, bytes, 0, "the body")?;
-            Ok(grid)
-        })?;
-        Ok((parts, RefsMemory(&mut self.refs)))
-    }
-}
-
-/// The memory of a body's triangle references, to be sized once counted.
-struct RefsMemory<'a>(&'a mut Vec<u8>);
-
-impl<'a> RefsMemory<'a> {
-    /// `bytes` of it (grown as needed).
-    fn take(self, bytes: usize) -> Result<&'a mut [u8], Failure> {
-        grow(self.0, bytes, 0, "the body's triangle references")?;
-        Ok(self.0.as_mut_slice())
-    }
-}
-
-/// The solid of `mesh`, its rim found in `rim_arena` (grown as needed; the
-/// rim an earlier call left there is taken again while it still fits), its
-/// grid of `density` cells per triangle in the memory `memory` gives for
-/// the bytes it needs, and its triangle references, once counted, in the
-/// memory `refs_memory` gives; built by layers over `thread_count` threads
-/// (the same bits on any count).
-pub(crate) fn body_in<'a>(
-    mesh: &Mesh,
-    rim_arena: &mut Vec<u8>,
-    density: f32,
-    thread_count: u32,
-    memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
-    refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
-) -> Result<Body<'a>, Failure> {
-    body_grid(
-        body_parts(mesh, rim_arena, density, memory)?,
-        thread_count,
-        refs_memory,
-    )
-}
-
-/// The stages of [`body_in`] that run on one thread: the rim, the grid's
-/// placement, the triangles copied.
-fn body_parts<'a>(
-    mesh: &Mesh,
-    rim_arena: &mut Vec<u8>,
-    density: f32,
-    memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
-) -> Result<BodyParts<'a>, Failure> {
-    grow(
-        rim_arena,
-        Rim::required_bytes(mesh),
-        0,
-        "the mesh's boundary loops",
-    )?;
-    let rim = Rim::refresh(mesh, &mut Arena::new(rim_arena))?;
-    let plan = BodyPlan::with_density(mesh, &rim, density)?;
-    Ok(Body::parts(
-        &plan,
-        mesh,
-        &rim,
-        &mut Arena::new(memory(plan.bytes())?),
-    )?)
-}
-
-/// The stages of [`body_in`] split by layers over `thread_count` threads:
-/// the grid's triangles counted, listed, the cells classified.
-fn body_grid<'a>(
-    parts: BodyParts<'a>,
-    thread_count: u32,
-    refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
-) -> Result<Body<'a>, Failure> {
-    counted(parts, thread_total(thread_count), true, refs_memory)?.body()
-}
-
-/// A body grid with its triangles counted by layers, and the memory of its
-/// references taken: what is left of it is split alike.
-struct Counted<'a> {
-    parts: BodyParts<'a>,
-    /// The layers of each part of the split.
-    ranges: Vec<Range<usize>>,
-    /// Each part's cells.
-    cells: Vec<usize>,
-    /// Each part's references.
-    totals: Vec<u64>,
-    /// Stages run.
-    listed: bool,
-    classified: bool,
-}
-
-/// Counts the triangles of `parts`' grid in layers split for `threads`
-/// threads, on as many threads or (`parallel` false) one after the other on
-/// this one, and takes the references' memory from `refs_memory`.
-fn counted<'a>(
-    mut parts: BodyParts<'a>,
-    threads: usize,
-    parallel: bool,
-    refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
-) -> Result<Counted<'a>, Failure> {
-    let (layers, per) = (parts.layers(), parts.layer_cells());
-    let threads = threads.clamp(1, layers.max(1));
-    let ranges: Vec<Range<usize>> = (0..threads)
-        .map(|t| t * layers / threads..(t + 1) * layers / threads)
-        .collect();
-    let cells: Vec<usize> = ranges.iter().map(|l| l.len() * per).collect();
-    let (grid, start, _, _) = parts.split();
-    let work: Vec<_> = ranges
-        .iter()
-        .cloned()
-        .zip(cut_into(start, &cells))
-        .collect();
-    let count = |(l, part): (Range<usize>, &mut [u32])| grid.count(l, part);
-    let totals = run_parts_if(parallel, work, count)?;
-    let total = totals.iter().sum();
-    let refs = refs_memory(BodyParts::refs_bytes(total)?)?;
-    parts.set_total(total, &mut Arena::new(refs))?;
-    Ok(Counted {
-        parts,
-        ranges,
-        cells,
-        totals,
-        listed: false,
-        classified: false,
-    })
-}
-
-/// [`run_parts`] when `parallel`, else each part in turn on this thread.
-fn run_parts_if<P: Send, R: Send>(
-    parallel: bool,
-    parts: Vec<P>,
-    work: impl Fn(P) -> R + Sync,
-) -> Result<Vec<R>, Failure> {
-    match parallel {
-        true => run_parts(parts, work),
-        false => Ok(parts.into_iter().map(work).collect()),
-    }
-}
-
-/// A part of [`Counted::list`]'s work: its layers, its references' first
-/// index, its cells' starts and its references.
-type Listing<'p> = (Range<usize>, u32, &'p mut [u32], &'p mut [u32]);
-
-impl<'a> Counted<'a> {
-    /// Lists the grid's triangles, the parts of the split on as many
-    /// threads or (`parallel` false) one after the other on this one.
-    fn list(&mut self, parallel: bool) -> Result<(), Failure> {
-        let (ranges, cells) = (&self.ranges, &self.cells);
-        let (grid, start, refs, _) = self.parts.split();
-        // each below the total, which set_total found below 2^32
-        let bases = self.totals.iter().scan(0u32, |sum, &t| {
-            let base = *sum;
-            *sum += t as u32;
-            Some(base)
-        });
-        let lists: Vec<usize> = self.totals.iter().map(|&t| t as usize).collect();
-        let work: Vec<Listing> = ranges
-            .iter()
-            .cloned()
-            .zip(bases)
-            .zip(cut_into(start, cells))
-            .zip(cut_into(refs, &lists))
-            .map(|(((layers, base), start), refs)| (layers, base, start, refs))
-            .collect();
-        let fill = |(layers, base, start, refs): Listing| grid.fill(layers, base, start, refs);
-        run_parts_if(parallel, work, fill)?;
-        self.listed = true;
-        Ok(())
-    }
-
-    /// Classifies the grid's cells (once [`list`](Self::list)ed), as
-    /// [`list`](Self::list) splits its work.
-    fn classify(&mut self, parallel: bool) -> Result<(), Failure> {
-        debug_assert!(self.listed, "cells classified before their lists");
-        let (ranges, cells) = (&self.ranges, &self.cells);
-        let (grid, start, _, class) = self.parts.split();
-        let start = &*start;
-        let work: Vec<_> = ranges.iter().cloned().zip(cut_into(class, cells)).collect();
-        let sweep = |(l, class): (Range<usize>, &mut [u8])| grid.classify(l, start, class);
-        run_parts_if(parallel, work, sweep)?;
-        self.classified = true;
-        Ok(())
-    }
-
-    /// The body, its stages not run yet run on the split's threads.
-    fn body(mut self) -> Result<Body<'a>, Failure> {
-        if !self.listed {
-            self.list(true)?;
-        }
-        if !self.classified {
-            self.classify(true)?;
-        }
-        Ok(self.parts.finish())
-    }
-}
-
-/// The host's distance callback as a core field.
-#[derive(Clone, Copy)]
-pub(crate) struct HostField {
-    callback: unsafe extern "C" fn(*mut c_void, *const f32, usize, *mut f32),
-    user_data: *mut c_void,
-}
-
-// SAFETY: the header requires the callback to be safe to call from any
-// thread at once with its user data; pelage only passes the pointer on.
-unsafe impl Sync for HostField {}
-
-impl SignedDistance for HostField {
-    fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
-        let n = points.len().min(out.len());
-        // SAFETY: the host's callback, with `n` packed points and room for
-        // `n` distances, as its contract says.
-        unsafe { (self.callback)(self.user_data, points.as_ptr().cast(), n, out.as_mut_ptr()) };
-    }
+    free(sim);
 }
 
 /// Advances the simulation by `dt` seconds (1e-5 <= dt <= 1; it may change
@@ -661,8 +273,8 @@ pub extern "C" fn pelage_sim_step(
     thread_count: u32,
 ) -> PelageStatus {
     ffi_boundary! {
-        let sim = sim_mut(sim)?;
-        let frame = frame_ref(frame)?;
+        let sim = object_mut(sim)?;
+        let frame = object(frame)?;
         let host = HostColliders::read(colliders)?;
         let external = match external_points.is_null() {
             true => None,
@@ -688,12 +300,9 @@ pub extern "C" fn pelage_sim_step(
         let colliders = host.colliders(body);
         let Step { context, blocks, snapshot } = sim.sim.begin(frame.posed(), &colliders, external, dt)?;
         let (n, per) = (snapshot.len(), context.block_floats());
-        split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.advance(range.start, part))?;
-        for _ in 0..context.link_iterations() {
-            context.snapshot(blocks, snapshot);
-            let snapshot = &*snapshot;
-            split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.relax(range.start, part, snapshot))?;
-        }
+        context.bend(blocks, snapshot, |blocks, phase| {
+            split_in_chunks(n, thread_count, blocks, per, |range, part| phase(range.start, part))
+        })?;
         split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.finish(range.start, part))?;
         Ok(())
     }
@@ -743,33 +352,20 @@ fn step_beside_body(
     let guide_threads = threads as u32 - 1;
     let bending = AtomicBool::new(true);
     let built = beside(
-        || -> Result<Built, Failure> {
-            let (parts, refs) = memory.parts(frame.mesh(), COLLISION_CELLS_PER_TRIANGLE)?;
-            // the later stages too while the guides still bend, else
-            // over every thread once they are bent (the same bits)
-            if !bending.load(Ordering::Relaxed) {
-                return Ok(Built::Placed(parts, refs));
-            }
-            let mut counted = counted(parts, threads, false, |bytes| refs.take(bytes))?;
-            if bending.load(Ordering::Relaxed) {
-                counted.list(false)?;
-                if bending.load(Ordering::Relaxed) {
-                    counted.classify(false)?;
-                }
-            }
-            Ok(Built::Counted(counted))
+        || {
+            memory.beside(
+                frame.mesh(),
+                COLLISION_CELLS_PER_TRIANGLE,
+                threads,
+                &bending,
+            )
         },
         || -> Result<(), Failure> {
-            split_in_chunks(n, guide_threads, blocks, per, |range, part| {
-                context.advance(range.start, part)
-            })?;
-            for _ in 0..context.link_iterations() {
-                context.snapshot(blocks, snapshot);
-                let snapshot = &*snapshot;
+            context.bend(blocks, snapshot, |blocks, phase| {
                 split_in_chunks(n, guide_threads, blocks, per, |range, part| {
-                    context.relax(range.start, part, snapshot)
-                })?;
-            }
+                    phase(range.start, part)
+                })
+            })?;
             let shaped = split_pairs_in_chunks(
                 n,
                 guide_threads,
@@ -785,10 +381,7 @@ fn step_beside_body(
     )
     .and_then(|(built, bent)| {
         bent?;
-        match built? {
-            Built::Placed(parts, refs) => body_grid(parts, thread_count, |bytes| refs.take(bytes)),
-            Built::Counted(counted) => counted.body(),
-        }
+        built?.body(thread_count)
     });
     let body = match built {
         Ok(body) => body,
@@ -809,13 +402,49 @@ fn step_beside_body(
     })
 }
 
-/// How far a step's body thread built the body while the guides bent: the
-/// stages it did not run then run on every thread.
-enum Built<'a> {
-    /// The grid placed and its triangles copied.
-    Placed(BodyParts<'a>, RefsMemory<'a>),
-    /// Its triangles counted too, and maybe listed and classified.
-    Counted(Counted<'a>),
+// a frame's guides from the simulation: here, above both objects
+/// Poses `frame`'s guides with `sim`'s posed guides of the last step,
+/// without copying them out: the bits and the statuses of pelage_sim_read
+/// then pelage_frame_set_guides (with the simulation's roots), in less
+/// time. The frame must be of the simulation's mesh (its counts) with the
+/// simulation's points_per_guide points per strand, made for as many
+/// guides as the simulation has; `sim` must have stepped since it was
+/// created, reset or restored (after a PANIC from pelage_sim_step, reset
+/// or restore it first: a half-made step is not refused here). Split over
+/// `thread_count` threads (0: all cores); the bits do not depend on it. The
+/// guides are checked as they are written: when one is refused, the frame
+/// has no guides (expansions from it are refused) until guides are set
+/// again; when the frame or the simulation is refused (the counts, no
+/// step yet), the frame keeps the guides it had.
+///
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
+/// another point or guide count, no step yet; a simulated guide with a
+/// point beyond 1e9 or of zero length, on a collapsed root triangle, as
+/// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
+/// step), PANIC (also when a worker thread cannot start: the frame then
+/// has no guides until guides are set again).
+///
+/// Thread safety: no other call may use `frame` during this one; `sim` may
+/// be read by other calls meanwhile (not stepped, reset or restored).
+#[no_mangle]
+pub extern "C" fn pelage_frame_set_sim_guides(
+    frame: PelageFrame,
+    sim: PelageSim,
+    thread_count: u32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let frame = object_mut(frame)?;
+        let sim = &object(sim)?.sim;
+        let posing = sim.posing(frame.posed_mut())?;
+        let filler = posing.filler;
+        let per = filler.floats_per_guide();
+        let faults = split_over_threads(sim.len(), thread_count, &mut *posing.data, per, |range, part| {
+            filler.fill(range.start, part);
+            sim.posed_faults(range)
+        })?;
+        posing.finish_checked(faults.into_iter().fold(PosedFaults::default(), PosedFaults::then))?;
+        Ok(())
+    }
 }
 
 /// Writes the posed guides of the last step (world space; all zero before
@@ -839,7 +468,7 @@ pub extern "C" fn pelage_sim_read(
     point_capacity: usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let sim = &sim_ref(sim)?.sim;
+        let sim = &object(sim)?.sim;
         let (n, m) = (sim.len(), sim.points());
         let needed = n * m;
         if point_capacity < needed {
@@ -869,7 +498,7 @@ pub extern "C" fn pelage_sim_read(
 #[no_mangle]
 pub extern "C" fn pelage_sim_reset(sim: PelageSim) -> PelageStatus {
     ffi_boundary! {
-        sim_mut(sim)?.sim.reset();
+        object_mut(sim)?.sim.reset();
         Ok(())
     }
 }
@@ -882,7 +511,7 @@ pub extern "C" fn pelage_sim_reset(sim: PelageSim) -> PelageStatus {
 #[no_mangle]
 pub extern "C" fn pelage_sim_state_size(sim: PelageSim, state_bytes: *mut usize) -> PelageStatus {
     ffi_boundary! {
-        let size = sim_ref(sim)?.sim.state_bytes();
+        let size = object(sim)?.sim.state_bytes();
         *req_mut(state_bytes, "state_bytes")? = size;
         Ok(())
     }
@@ -905,7 +534,7 @@ pub extern "C" fn pelage_sim_save(
     written: *mut usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let sim = &sim_ref(sim)?.sim;
+        let sim = &object(sim)?.sim;
         let written = req_mut(written, "written")?;
         let needed = sim.state_bytes();
         if capacity < needed {
@@ -935,7 +564,7 @@ pub extern "C" fn pelage_sim_restore(
     state_bytes: usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let sim = sim_mut(sim)?;
+        let sim = object_mut(sim)?;
         let state = bytes(state, state_bytes, "state")?;
         sim.sim.restore(state)?;
         Ok(())

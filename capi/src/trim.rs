@@ -1,11 +1,11 @@
 //! Trimming in C (paper 3.3): a frame's trim records, the shot pass over a
 //! groom's strands, and the two small files.
 
+use crate::body::BodyMemory;
 use crate::buffers::{bytes, bytes_mut, collected, filled, grow, req, req_mut, slice, slice_mut};
+use crate::colliders::HostColliders;
 use crate::expand::{core_params, PelageExpandParams};
-use crate::frame::frame_ref;
-use crate::groom_handle::groom_ref;
-use crate::sim::{BodyMemory, HostColliders};
+use crate::handles::object;
 use crate::status::Failure;
 use crate::threads::split_over_threads;
 use crate::{PelageColliders, PelageFrame, PelageGroom, PelageMeshDesc, PelageStatus};
@@ -121,7 +121,7 @@ pub extern "C" fn pelage_trim_find(
 ) -> PelageStatus {
     ffi_boundary! {
         let count = req_mut(record_count, "record_count")?;
-        let frame = frame_ref(frame)?.posed();
+        let frame = object(frame)?.posed();
         if !frame.is_posed() {
             return Err(Failure::new(PelageStatus::InvalidArgument, "the frame has no guides (pelage_frame_set_guides)"));
         }
@@ -175,7 +175,7 @@ pub extern "C" fn pelage_trim_shortest(
     length_count: usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let groom = groom_ref(groom)?;
+        let groom = object(groom)?;
         let records: &[TrimRecord] = bytemuck::cast_slice(slice(records, record_count, "records")?);
         let strands = groom.strands();
         if length_count != strands.len() {
@@ -226,8 +226,8 @@ pub extern "C" fn pelage_trim_shortest_hairs(
     length_count: usize,
 ) -> PelageStatus {
     ffi_boundary! {
-        let groom = groom_ref(groom)?;
-        let frame = frame_ref(frame)?.posed();
+        let groom = object(groom)?;
+        let frame = object(frame)?.posed();
         let p = req(params, "params")?;
         let core = core_params(p)?;
         let strands = groom.strands();

@@ -588,11 +588,10 @@ impl<'a> Sim<'a> {
             blocks,
             snapshot,
         } = self.begin(frame, colliders, None, dt)?;
-        ctx.advance(0, blocks);
-        for _ in 0..ctx.link_iterations() {
-            ctx.snapshot(blocks, snapshot);
-            ctx.relax(0, blocks, snapshot);
-        }
+        ctx.bend(blocks, snapshot, |blocks, phase| {
+            phase(0, blocks);
+            Ok::<(), Error>(())
+        })?;
         ctx.finish(0, blocks);
         Ok(())
     }
@@ -951,6 +950,28 @@ impl StepContext<'_> {
             b[STARTED] = 1.0;
             put(b, TARGET, tip + y * spring.amplitude);
         }
+    }
+
+    /// Phases 1 and 2 in their order, the one place it is written: the
+    /// advance, then each link relaxation against a snapshot of every
+    /// target. `each` runs one phase over every guide's block in `blocks`,
+    /// split as the caller likes (one thread or many; the bits are the
+    /// same): the phase takes the first guide of a range and its blocks.
+    /// Phase 3 follows: [`finish`](Self::finish), or [`shape`](Self::shape)
+    /// then [`collide`](Self::collide).
+    pub fn bend<E>(
+        &self,
+        blocks: &mut [f32],
+        snapshot: &mut [[f32; 3]],
+        mut each: impl FnMut(&mut [f32], &(dyn Fn(usize, &mut [f32]) + Sync)) -> Result<(), E>,
+    ) -> Result<(), E> {
+        each(blocks, &|first, part| self.advance(first, part))?;
+        for _ in 0..self.link_iterations() {
+            self.snapshot(blocks, snapshot);
+            let snapshot = &*snapshot;
+            each(blocks, &|first, part| self.relax(first, part, snapshot))?;
+        }
+        Ok(())
     }
 
     /// Copies every guide's target from `blocks` (all of them) to `snapshot`.
