@@ -1204,17 +1204,15 @@ enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct
 // be read by other calls meanwhile (not stepped, reset or restored).
 enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, uint32_t thread_count);
 
-// Writes the posed guides of the last step (world space; all zero before
-// the first step and after pelage_sim_reset; after pelage_sim_restore,
-// which restores the motion but not the posed points, each guide's
-// points at its root until the next step): `points_per_guide` float3 per
-// guide, guide after guide,
-// `point_stride` bytes apart (>= 12, a multiple of 4), capacity
-// `point_capacity` points. Hand them to pelage_frame_set_guides (with the
-// simulated guides' roots) to expand render hairs from them.
+// Writes the posed guides of the last step (world space), or of the step
+// a restored state was saved after: `points_per_guide` float3 per guide,
+// guide after guide, `point_stride` bytes apart (>= 12, a multiple of 4),
+// capacity `point_capacity` points. Hand them to pelage_frame_set_guides
+// (with the simulated guides' roots) to expand render hairs from them.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (stride),
-// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (stride; no posed guides:
+// no step since pelage_sim_new or pelage_sim_reset, or a state restored
+// that was saved before any step), CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 //
 // Thread safety: concurrent reads of one sim are safe; not during a step.
 enum PelageStatus pelage_sim_read(PelageSim sim, void *points, size_t point_stride, size_t point_capacity);
@@ -1234,10 +1232,12 @@ enum PelageStatus pelage_sim_reset(PelageSim sim);
 // Thread safety: concurrent with reads of `sim`; not during a step.
 enum PelageStatus pelage_sim_state_size(PelageSim sim, size_t *state_bytes);
 
-// Saves the state carried between steps (little-endian: magic "PLGS",
-// version, counts, the state, a CRC-32) to `out` (capacity `capacity`
-// bytes), so that a farm task can restore it and go on with the same bits
-// as an uninterrupted run. `*written` gets the size.
+// Saves the simulation's state (docs/FORMAT.md: the file framing, magic
+// "PLGSTATE", every guide's state and posed points, a fingerprint of the
+// parameters and rest guides, a CRC-32) to `out` (capacity `capacity`
+// bytes), so that a farm task can restore it, read the saved step's
+// guides and go on with the same bits as an uninterrupted run.
+// `*written` gets the size.
 //
 // Returns OK, NULL_PARAMETER, CAPACITY_EXCEEDED (the needed size is in
 // `*written`), PANIC.
@@ -1245,14 +1245,16 @@ enum PelageStatus pelage_sim_state_size(PelageSim sim, size_t *state_bytes);
 // Thread safety: concurrent with reads of `sim`; not during a step.
 enum PelageStatus pelage_sim_save(PelageSim sim, void *out, size_t capacity, size_t *written);
 
-// Restores a state pelage_sim_save wrote, for a simulation made with the
-// same guides and parameters. Everything is checked first (length, magic,
-// version, counts, checksum, finite values); on failure nothing changes.
+// Restores a state pelage_sim_save wrote, for a simulation made from the
+// same rest mesh's guides, maps and parameters (the state's fingerprint
+// of them must match). Everything is checked first (framing, checksum,
+// counts, fingerprint, values); on failure nothing changes. Afterwards
+// pelage_sim_read gives the posed guides of the step saved.
 //
-// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values,
-// a reserved header word not zero), VERSION_MISMATCH (magic or format
-// version), INVALID_ARGUMENT (another
-// guide set), PANIC.
+// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values),
+// VERSION_MISMATCH (magic or format version; 0.11's states are version
+// 1), INVALID_ARGUMENT (another guide count, other rest guides, roots,
+// maps or parameters), PANIC.
 //
 // Thread safety: no other call may use `sim` during this one.
 enum PelageStatus pelage_sim_restore(PelageSim sim, const void *state, size_t state_bytes);

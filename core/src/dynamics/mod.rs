@@ -13,6 +13,9 @@
 
 pub mod ik;
 pub mod links;
+pub mod params;
 pub mod sim;
 pub mod spline;
 pub mod spring;
+pub mod state;
+pub mod step;
