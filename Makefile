@@ -64,6 +64,7 @@ deps-demo deps-farm deps-test: deps-%:
 deps: deps-test
 
 rust-lint:
+	python3 tests/import_circles.py core/src capi/src
 	cargo fmt --all -- --check
 	cargo clippy --locked --workspace --all-targets --release -- -D warnings
 	cargo check --locked -p pelage-core --target $(EMBEDDED_TARGET)

@@ -86,3 +86,17 @@ impl SimParams<'_> {
 /// Shortest step: below it the neutral tip's speed (distance over dt)
 /// leaves the float range for ordinary motion.
 pub const MIN_DT: f32 = 1e-5;
+
+/// One guide's constants: its parameters sampled from the maps at its
+/// root, and its length.
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub(crate) struct GuideConstants {
+    pub(crate) spring_frequency: f32,
+    pub(crate) spring_amplitude: f32,
+    pub(crate) spring_decay: f32,
+    /// Sum of the segment lengths.
+    pub(crate) reach: f32,
+    /// Share of the host's curves in the posed guide.
+    pub(crate) external: f32,
+}

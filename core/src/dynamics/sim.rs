@@ -14,8 +14,11 @@
 //! ([`Sim::save`], [`Sim::restore`]).
 
 use super::links::Links;
+use super::params::GuideConstants;
 use super::spring::TipSpring;
-use super::state::{posed, state, Fingerprint};
+use super::state::{
+    posed, read_state, state, state_file_bytes, write_state, Fingerprint, StateHeader,
+};
 use crate::arena::{Arena, ArenaLayout};
 use crate::collide::Colliders;
 use crate::guides::Guides;
@@ -29,19 +32,6 @@ use glam::Vec3;
 pub use super::params::{SimParams, MAX_JOINTS, MIN_DT};
 pub use super::state::{GuideState, KEPT_FLOATS, STATE_VERSION};
 pub use super::step::{Step, StepContext};
-
-/// One guide's constants.
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub(super) struct GuideConstants {
-    pub(super) spring_frequency: f32,
-    pub(super) spring_amplitude: f32,
-    pub(super) spring_decay: f32,
-    /// Sum of the segment lengths.
-    pub(super) reach: f32,
-    /// Share of the host's curves in the posed guide.
-    pub(super) external: f32,
-}
 
 /// Simulated guides.
 pub struct Sim<'a> {
@@ -486,6 +476,48 @@ impl<'a> Sim<'a> {
             Ok::<(), Error>(())
         })?;
         ctx.finish(0, blocks);
+        Ok(())
+    }
+}
+
+impl Sim<'_> {
+    /// The header of this simulation's state file.
+    fn state_header(&self) -> StateHeader {
+        StateHeader {
+            counts: [self.len(), self.params.joints, self.params.points].map(|c| c as u64),
+            fingerprint: self.fingerprint,
+            stepped: self.stepped,
+        }
+    }
+
+    /// Bytes [`Sim::save`] writes.
+    pub fn state_bytes(&self) -> usize {
+        state_file_bytes(self.blocks)
+    }
+
+    /// Writes the simulation's state to `out` (at least
+    /// [`Sim::state_bytes`]) in pelage's file framing (docs/FORMAT.md):
+    /// the counts, the fingerprint of the parameters and rest guides that
+    /// [`Sim::restore`] checks, whether a step has run, and every guide's
+    /// block. Returns the bytes written.
+    pub fn save(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let needed = self.state_bytes();
+        if out.len() < needed {
+            return Err(Error::OutputTooSmall {
+                needed,
+                available: out.len(),
+            });
+        }
+        Ok(write_state(out, self.state_header(), self.blocks))
+    }
+
+    /// Restores a state [`Sim::save`] wrote for a simulation made from the
+    /// same rest guides, roots, maps and parameters (its fingerprint).
+    /// Checks everything first (framing, checksum, counts, fingerprint,
+    /// values) and changes nothing on error. Once restored, the posed
+    /// guides are those of the step saved, if any.
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        self.stepped = read_state(bytes, self.state_header(), self.blocks)?;
         Ok(())
     }
 }

@@ -2,11 +2,10 @@
 //!
 //! Each guide owns one block of floats: its [`GuideState`] record, then
 //! its posed points in its root frame. A step's phases write the blocks
-//! of the guides they are given; [`Sim::save`] writes every block, so a
+//! of the guides they are given; the state file holds every block, so a
 //! restored simulation reads the posed guides of the step it was saved
 //! after and goes on with the same bits as an uninterrupted run.
 
-use super::sim::Sim;
 use crate::cache::container::{self, Reader};
 use crate::surface::frame::Frame;
 use crate::Error;
@@ -104,95 +103,88 @@ impl Fingerprint {
     }
 }
 
-impl Sim<'_> {
-    /// Bytes [`Sim::save`] writes.
-    pub fn state_bytes(&self) -> usize {
-        container::header_bytes(FIELDS) + self.blocks.len() * 4
-    }
+/// What a state file holds besides its blocks.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) struct StateHeader {
+    /// Guides, joints per guide, points per posed guide.
+    pub(super) counts: [u64; 3],
+    /// Of the simulation's inputs ([`Fingerprint`]).
+    pub(super) fingerprint: u64,
+    /// A step had run: the blocks hold posed guides.
+    pub(super) stepped: bool,
+}
 
-    /// Writes the simulation's state to `out` (at least
-    /// [`Sim::state_bytes`]) in pelage's file framing (docs/FORMAT.md):
-    /// the counts, the fingerprint of the parameters and rest guides that
-    /// [`Sim::restore`] checks, whether a step has run, and every guide's
-    /// block. Returns the bytes written.
-    pub fn save(&self, out: &mut [u8]) -> Result<usize, Error> {
-        let needed = self.state_bytes();
-        if out.len() < needed {
-            return Err(Error::OutputTooSmall {
-                needed,
-                available: out.len(),
-            });
-        }
-        let fields = [
-            self.len() as u64,
-            self.params.joints as u64,
-            self.params.points as u64,
-            self.fingerprint,
-            self.stepped as u64,
-        ];
-        Ok(container::write(
-            &mut out[..needed],
-            MAGIC,
-            STATE_VERSION,
-            &fields,
-            |w| w.words(self.blocks),
-        ))
-    }
+/// Bytes a state file of `blocks` takes.
+pub(super) fn state_file_bytes(blocks: &[f32]) -> usize {
+    container::header_bytes(FIELDS) + blocks.len() * 4
+}
 
-    /// Restores a state [`Sim::save`] wrote for a simulation made from the
-    /// same rest guides, roots, maps and parameters (its fingerprint).
-    /// Checks everything first (framing, checksum, counts, fingerprint,
-    /// values) and changes nothing on error. Once restored, the posed
-    /// guides are those of the step saved, if any.
-    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
-        let file = container::read(bytes, MAGIC, STATE_VERSION, FIELDS)?;
-        let [guides, joints, points, fingerprint, stepped, ..] = file.fields;
-        if (guides, joints, points)
-            != (
-                self.len() as u64,
-                self.params.joints as u64,
-                self.params.points as u64,
-            )
-        {
-            return Err(Error::InvalidArgument(
-                "the state is of another guide set (guide, joint or point count)",
-            ));
-        }
-        if fingerprint != self.fingerprint {
-            return Err(Error::InvalidArgument(
-                "the state was saved by a simulation of other rest guides, roots, maps or parameters",
-            ));
-        }
-        if stepped > 1 {
-            return Err(Error::Corrupt {
-                what: "state's stepped field is neither 0 nor 1",
-            });
-        }
-        if file.payload.len() != self.blocks.len() * 4 {
-            return Err(Error::Corrupt {
-                what: "state payload does not match its counts",
-            });
-        }
-        let per = self.blocks.len() / self.len();
-        let mut r = Reader::new(file.payload);
-        let mut sound = true;
-        for k in 0..self.blocks.len() {
-            let x = f32::from_bits(r.u32()?);
-            sound &= if k % per == STARTED_FLOAT {
-                x == 0.0 || x == 1.0
-            } else {
-                x.abs() <= MAX_STATE
-            };
-        }
-        if !sound {
-            return Err(Error::Corrupt {
-                what: "state holds a value out of its range",
-            });
-        }
-        Reader::new(file.payload).words(self.blocks)?;
-        self.stepped = stepped == 1;
-        Ok(())
+/// Writes a state file of `header` and `blocks` to `out`, which holds at
+/// least [`state_file_bytes`]; returns the bytes written.
+pub(super) fn write_state(out: &mut [u8], header: StateHeader, blocks: &[f32]) -> usize {
+    let [guides, joints, points] = header.counts;
+    let fields = [
+        guides,
+        joints,
+        points,
+        header.fingerprint,
+        header.stepped as u64,
+    ];
+    let needed = state_file_bytes(blocks);
+    container::write(&mut out[..needed], MAGIC, STATE_VERSION, &fields, |w| {
+        w.words(blocks)
+    })
+}
+
+/// Reads a state file into `blocks` (guide after guide, `blocks.len()` /
+/// guides floats each) when its framing, counts, fingerprint and values
+/// are those `expected` has and sound, returning whether a step had run;
+/// on error `blocks` is unchanged.
+pub(super) fn read_state(
+    bytes: &[u8],
+    expected: StateHeader,
+    blocks: &mut [f32],
+) -> Result<bool, Error> {
+    let file = container::read(bytes, MAGIC, STATE_VERSION, FIELDS)?;
+    let [guides, joints, points, fingerprint, stepped, ..] = file.fields;
+    if [guides, joints, points] != expected.counts {
+        return Err(Error::InvalidArgument(
+            "the state is of another guide set (guide, joint or point count)",
+        ));
     }
+    if fingerprint != expected.fingerprint {
+        return Err(Error::InvalidArgument(
+            "the state was saved by a simulation of other rest guides, roots, maps or parameters",
+        ));
+    }
+    if stepped > 1 {
+        return Err(Error::Corrupt {
+            what: "state's stepped field is neither 0 nor 1",
+        });
+    }
+    if file.payload.len() != blocks.len() * 4 {
+        return Err(Error::Corrupt {
+            what: "state payload does not match its counts",
+        });
+    }
+    let per = blocks.len() / guides.max(1) as usize;
+    let mut r = Reader::new(file.payload);
+    let mut sound = true;
+    for k in 0..blocks.len() {
+        let x = f32::from_bits(r.u32()?);
+        sound &= if k % per == STARTED_FLOAT {
+            x == 0.0 || x == 1.0
+        } else {
+            x.abs() <= MAX_STATE
+        };
+    }
+    if !sound {
+        return Err(Error::Corrupt {
+            what: "state holds a value out of its range",
+        });
+    }
+    Reader::new(file.payload).words(blocks)?;
+    Ok(stepped == 1)
 }
 
 /// Where [`GuideState::started`] sits in a block.

@@ -7,8 +7,7 @@
 
 use super::ik;
 use super::links::Links;
-use super::params::{SimParams, MAX_JOINTS};
-use super::sim::GuideConstants;
+use super::params::{GuideConstants, SimParams, MAX_JOINTS};
 use super::spline;
 use super::spring::TipSpring;
 use super::state::{state, state_mut, GuideState, KEPT_FLOATS};
