@@ -1327,6 +1327,12 @@ enum PelageStatus pelage_trim_find(PelageFrame frame, const struct PelageMeshDes
 // every length PELAGE_TRIM_WHOLE; frames may come in any order. On
 // failure `lengths` is unchanged.
 //
+// `guide_count` (from `pelage_trim_records_info` when the records come
+// from a file) must be at least the guides the groom's strands use, and
+// at most 2^32 - 1; the records are checked against it. Memory and work
+// follow the records and the guides the groom uses, never `guide_count`
+// itself: records of guides no strand uses are checked and left out.
+//
 // Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
 // groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
 // length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
@@ -1371,8 +1377,9 @@ enum PelageStatus pelage_trim_records_size(size_t record_count, size_t *bytes);
 // (`capacity` bytes; `pelage_trim_records_size`); the bytes written go to
 // `*written`. On failure `out` is untouched.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts), OUT_OF_RANGE,
-// NON_FINITE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (`guide_count` 0 or above
+// 2^32 - 1, `points_per_guide` outside 2..64), OUT_OF_RANGE, NON_FINITE,
+// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_trim_records_write(const struct PelageTrimRecord *records, size_t record_count, size_t guide_count, uint32_t points_per_guide, void *out, size_t capacity, size_t *written);

@@ -157,6 +157,12 @@ pub extern "C" fn pelage_trim_find(
 /// every length PELAGE_TRIM_WHOLE; frames may come in any order. On
 /// failure `lengths` is unchanged.
 ///
+/// `guide_count` (from `pelage_trim_records_info` when the records come
+/// from a file) must be at least the guides the groom's strands use, and
+/// at most 2^32 - 1; the records are checked against it. Memory and work
+/// follow the records and the guides the groom uses, never `guide_count`
+/// itself: records of guides no strand uses are checked and left out.
+///
 /// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
 /// groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
 /// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
@@ -181,14 +187,17 @@ pub extern "C" fn pelage_trim_shortest(
         if length_count != strands.len() {
             return Err(Failure::new(PelageStatus::InvalidArgument, format!("length_count {length_count} differs from the groom's {} strands", strands.len())));
         }
-        // guides are named by u32 (u32::MAX for none): no frame has more
-        if guide_count >= u32::MAX as usize {
+        // guides are named by u32 below u32::MAX (which names none)
+        if guide_count > u32::MAX as usize {
             return Err(Failure::new(PelageStatus::InvalidArgument, format!("guide_count {guide_count} is above 2^32 - 1")));
         }
-        groom.bounds.fits(usize::MAX, guide_count)?;
+        groom.bounds.fits(usize::MAX, guide_count).map_err(|e| {
+            Failure::new(PelageStatus::OutOfRange, format!("guide_count {guide_count} (the records' frame) is below the guides the groom's strands use: {e}"))
+        })?;
         let lengths = slice_mut(lengths, length_count, "lengths")?;
-        let mut per_guide = filled(guide_count, 0.0f32, "the guide lengths")?;
-        guide_lengths(records, points_per_guide as usize, &mut per_guide)?;
+        // a count read from a file sizes nothing: the groom's guides do
+        let mut per_guide = filled(groom.bounds.guides(), 0.0f32, "the guide lengths")?;
+        guide_lengths(records, guide_count, points_per_guide as usize, &mut per_guide)?;
         shortest(&strands, &per_guide, lengths);
         Ok(())
     }
@@ -270,8 +279,9 @@ pub extern "C" fn pelage_trim_records_size(record_count: usize, bytes: *mut usiz
 /// (`capacity` bytes; `pelage_trim_records_size`); the bytes written go to
 /// `*written`. On failure `out` is untouched.
 ///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts), OUT_OF_RANGE,
-/// NON_FINITE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (`guide_count` 0 or above
+/// 2^32 - 1, `points_per_guide` outside 2..64), OUT_OF_RANGE, NON_FINITE,
+/// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]

@@ -1,9 +1,9 @@
 //! Trimming's two files (paper 3.3; `docs/FORMAT.md`).
 //!
 //! - A frame's **trim records**: where its posed guides first meet the
-//!   cloth or a collider ([`TrimRecord`]). Header fields: guide count,
-//!   points per guide, record count. Payload: the records, 12 bytes each
-//!   (guide, cv as u32, length as f32).
+//!   cloth or a collider ([`TrimRecord`]). Header fields: guide count
+//!   (1..=[`MAX_GUIDES`]), points per guide, record count. Payload: the
+//!   records, 12 bytes each (guide, cv as u32, length as f32).
 //! - A shot's **trim lengths**: the shot pass's shortest length per render
 //!   strand, what expansion reads. Header field: strand count. Payload: one
 //!   u16 per strand (2 bytes per hair; [`WHOLE`](crate::trim::WHOLE) is
@@ -23,6 +23,9 @@ pub const VERSION: u32 = 1;
 const RECORD_FIELDS: usize = 3;
 const LENGTH_FIELDS: usize = 1;
 const RECORD_BYTES: usize = 12;
+/// Most guides of a records file's frame: guides are named by u32, and
+/// u32::MAX names none.
+pub const MAX_GUIDES: u64 = u32::MAX as u64;
 
 /// What a records file holds besides its records.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -52,7 +55,7 @@ pub fn encode_records(
     out: &mut [u8],
 ) -> Result<usize, Error> {
     check_shape(info.guides as u64, info.points as u64).map_err(|_| {
-        Error::InvalidArgument("trim records: guides must be >= 1 and points in 2..=64")
+        Error::InvalidArgument("trim records: guides must be in 1..=2^32 - 1 and points in 2..=64")
     })?;
     for (i, r) in records.iter().enumerate() {
         r.check(i, info.guides, info.points)?;
@@ -77,7 +80,7 @@ pub fn encode_records(
 }
 
 fn check_shape(guides: u64, points: u64) -> Result<(), Error> {
-    if guides == 0 || !(2..=MAX_STRAND_POINTS as u64).contains(&points) {
+    if !(1..=MAX_GUIDES).contains(&guides) || !(2..=MAX_STRAND_POINTS as u64).contains(&points) {
         return Err(Error::Corrupt {
             what: "guide or point count",
         });
@@ -257,6 +260,42 @@ mod tests {
             ..recs[1]
         }];
         assert!(encode_records(&bad, INFO, &mut file).is_err());
+    }
+
+    #[test]
+    fn a_frame_has_at_most_two_to_the_32_minus_one_guides() {
+        let recs = records();
+        let mut file = vec![0u8; records_bytes(recs.len()).unwrap()];
+        let most = RecordsInfo {
+            guides: u32::MAX as usize,
+            ..INFO
+        };
+        encode_records(&recs, most, &mut file).unwrap();
+        assert_eq!(records_info(&file).unwrap().guides, u32::MAX as usize);
+        let past = RecordsInfo {
+            guides: u32::MAX as usize + 1,
+            ..INFO
+        };
+        assert!(matches!(
+            encode_records(&recs, past, &mut file),
+            Err(Error::InvalidArgument(_))
+        ));
+        let mut header = vec![0u8; records_bytes(0).unwrap()];
+        for (guides, fine) in [
+            (0, false),
+            (1, true),
+            (MAX_GUIDES, true),
+            (MAX_GUIDES + 1, false),
+        ] {
+            container::write(
+                &mut header,
+                &RECORDS_MAGIC,
+                VERSION,
+                &[guides, 8, 0],
+                |_| {},
+            );
+            assert_eq!(records_info(&header).is_ok(), fine, "{guides}");
+        }
     }
 
     #[test]

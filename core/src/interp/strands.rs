@@ -114,6 +114,12 @@ impl StrandBounds {
         }
     }
 
+    /// The fewest guides a frame needs for these strands: the largest
+    /// guide index a binding uses (clump included) + 1, 0 when none.
+    pub fn guides(&self) -> usize {
+        self.guides.0
+    }
+
     /// Checks that the strands fit a mesh of `faces` triangles and a frame
     /// of `guides` guides.
     pub fn fits(&self, faces: usize, guides: usize) -> Result<(), Error> {

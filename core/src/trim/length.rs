@@ -30,23 +30,34 @@ use crate::Error;
 use core::ops::Range;
 use glam::Vec3;
 
-/// Fills `lengths` (one per guide of a frame of `points` points per guide)
-/// with each guide's meet parameter under `records`, infinity where a guide
-/// has none (a hair longer than its guide is cut by a guide meeting at its
-/// tip, never by one meeting nothing). The records are checked first; on error `lengths` is unchanged.
-/// A guide with two records takes the shorter.
+/// Fills `lengths` (one per guide of the first `lengths.len()` guides of a
+/// frame of `guides` guides of `points` points) with each guide's meet
+/// parameter under `records`, infinity where a guide has none (a hair
+/// longer than its guide is cut by a guide meeting at its tip, never by one
+/// meeting nothing). The records are checked against the whole frame
+/// first; on error `lengths` is unchanged. A guide with two records takes
+/// the shorter; a record of a guide past `lengths` is left out, so a
+/// caller whose strands use only the first guides sizes `lengths` by them,
+/// never by a count that comes from a file.
 pub fn guide_lengths(
     records: &[TrimRecord],
+    guides: usize,
     points: usize,
     lengths: &mut [f32],
 ) -> Result<(), Error> {
+    if lengths.len() > guides {
+        return Err(Error::InvalidArgument(
+            "more guide lengths than the frame has guides",
+        ));
+    }
     for (i, r) in records.iter().enumerate() {
-        r.check(i, lengths.len(), points)?;
+        r.check(i, guides, points)?;
     }
     lengths.fill(f32::INFINITY);
     for r in records {
-        let l = &mut lengths[r.guide as usize];
-        *l = l.min(r.length);
+        if let Some(l) = lengths.get_mut(r.guide as usize) {
+            *l = l.min(r.length);
+        }
     }
     Ok(())
 }
@@ -258,8 +269,13 @@ mod tests {
     fn records_are_checked_and_the_shorter_kept() {
         let mut lengths = [0.0f32; 3];
         let r = |guide, cv, length| TrimRecord { guide, cv, length };
-        guide_lengths(&[r(1, 2, 0.4), r(1, 3, 0.3)], 8, &mut lengths).unwrap();
+        guide_lengths(&[r(1, 2, 0.4), r(1, 3, 0.3)], 3, 8, &mut lengths).unwrap();
         assert_eq!(lengths, [f32::INFINITY, 0.3, f32::INFINITY]);
+        // a record past the guides asked for counts only in the check
+        let mut first = [0.0f32; 2];
+        guide_lengths(&[r(1, 2, 0.4), r(4, 3, 0.3)], 5, 8, &mut first).unwrap();
+        assert_eq!(first, [f32::INFINITY, 0.4]);
+        assert!(guide_lengths(&[], 1, 8, &mut first).is_err());
         for bad in [
             r(3, 1, 0.5),
             r(0, 0, 0.5),
@@ -268,7 +284,7 @@ mod tests {
             r(0, 1, 1.5),
         ] {
             let mut untouched = [7.0f32; 3];
-            assert!(guide_lengths(&[bad], 8, &mut untouched).is_err());
+            assert!(guide_lengths(&[bad], 3, 8, &mut untouched).is_err());
             assert_eq!(untouched, [7.0; 3]);
         }
     }

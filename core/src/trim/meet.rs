@@ -231,7 +231,7 @@ mod tests {
             grooms: &grooms,
         };
         let mut per_guide = vec![0.0f32; g];
-        guide_lengths(&records, POINTS, &mut per_guide).unwrap();
+        guide_lengths(&records, g, POINTS, &mut per_guide).unwrap();
         let mut lengths = vec![WHOLE; hairs.len()];
         shortest(&strands, &per_guide, &mut lengths);
         let params = ExpandParams {
