@@ -1036,7 +1036,11 @@ enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const str
 // frame's guides and the strand records without expanding; merge the boxes
 // of a frame's shutter samples for motion blur. The boxes also hold the
 // Catmull-Rom curves through the points (which reach up to 1.25 times
-// farther from the root). `params` are the expansion's.
+// farther from the root). `params` are the expansion's. Every float
+// written is finite: an empty patch (count 0) gets the empty box, low
+// corner FLT_MAX and high corner -FLT_MAX on every axis (low above high,
+// so it holds no point, and merging boxes by min and max leaves any box
+// as it is).
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides,
 // or of another point count), NON_FINITE, OUT_OF_RANGE (a strand's face

@@ -10,7 +10,7 @@
 
 use pelage::*;
 use pelage_tests::creature::{creature, CreatureMesh};
-use pelage_tests::measure::{groom_handle, groomed, Groomed};
+use pelage_tests::measure::{frame, groom_handle, groomed, mesh_desc, strands_desc, Groomed};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::ffi::CStr;
 use std::ptr::null;
@@ -221,4 +221,43 @@ fn the_shot_pass_sizes_its_memory_by_the_groom_not_by_a_file() {
         &[],
     );
     assert!(lengths[0] < PELAGE_TRIM_WHOLE);
+}
+
+#[test]
+fn an_empty_patch_gets_a_finite_empty_box() {
+    let (m, g) = fixture();
+    let params = pelage_expand_params_defaults();
+    let frame = frame(&mesh_desc(&m), &g.guides(), params.points_per_strand, 1).unwrap();
+    let strands = strands_desc(&g.strands, &g.bindings, &g.grooms);
+    let n = g.strands.len() as u32;
+    let patches = [
+        PelagePatch { first: 0, count: 0 },
+        PelagePatch { first: 0, count: n },
+        PelagePatch { first: n, count: 0 },
+    ];
+    let mut boxes = [0.0f32; 18];
+    expect(
+        pelage_patch_boxes(
+            frame.0,
+            &strands,
+            &params,
+            patches.as_ptr(),
+            patches.len(),
+            boxes.as_mut_ptr(),
+        ),
+        PelageStatus::Ok,
+        &[],
+    );
+    assert!(boxes.iter().all(|v| v.is_finite()), "{boxes:?}");
+    let empty = [
+        f32::MAX,
+        f32::MAX,
+        f32::MAX,
+        -f32::MAX,
+        -f32::MAX,
+        -f32::MAX,
+    ];
+    assert_eq!(boxes[..6], empty);
+    assert_eq!(boxes[12..], empty);
+    assert!((0..3).all(|a| boxes[6 + a] < boxes[9 + a]));
 }

@@ -51,10 +51,14 @@ pub struct PatchBox {
 }
 
 impl PatchBox {
-    /// The empty box (the identity of [`PatchBox::merge`]).
+    /// The empty box (the identity of [`PatchBox::merge`]): low corner
+    /// `f32::MAX`, high corner `-f32::MAX`, so it holds no point. Finite,
+    /// so a host that checks its boxes for NaN and infinity (as Embree's
+    /// users must) never meets one, and merging still leaves any box as
+    /// it is.
     pub const EMPTY: PatchBox = PatchBox {
-        lo: Vec3::splat(f32::INFINITY),
-        hi: Vec3::splat(f32::NEG_INFINITY),
+        lo: Vec3::splat(f32::MAX),
+        hi: Vec3::splat(-f32::MAX),
     };
 
     /// The box holding both (shutter samples, patches).
@@ -195,7 +199,7 @@ pub fn lod_count(roots: &[Root], patch: Patch, cutoff: u32) -> u32 {
 /// The box of strands `first .. first + count` of `strands` (checked by
 /// [`check`]) on `frame`, with `reach` from [`guide_reach`] on the same
 /// frame: every point [`expand`](crate::interp::expand) writes for them,
-/// radius included, lies inside.
+/// radius included, lies inside. [`PatchBox::EMPTY`] for no strand.
 pub fn patch_box(
     frame: &PosedFrame,
     reach: &[f32],
@@ -298,6 +302,39 @@ mod tests {
             .map(|p| spread(&order[p.first as usize..(p.first + p.count) as usize]));
         let mean = runs.sum::<f32>() / patches.len() as f32;
         assert!(mean < 0.75 * spread(&order), "{mean} vs {}", spread(&order));
+    }
+
+    #[test]
+    fn an_empty_patch_has_the_finite_empty_box() {
+        let scene = Scene::new(100);
+        let strands = Strands {
+            roots: &scene.roots,
+            bindings: &scene.bindings,
+            grooms: &scene.grooms,
+        };
+        let params = ExpandParams {
+            points_per_strand: POINTS,
+            end_points: EndPoints::Pinned,
+            orphan_length: 0.2,
+            width_scale: 1.0,
+        };
+        scene.with_frame(&scene.rest, &scene.guide_world, |frame| {
+            let mut reach = vec![0.0; frame.guide_count()];
+            guide_reach(frame, &mut reach);
+            let empty = Patch { first: 3, count: 0 };
+            let b = patch_box(frame, &reach, &strands, &params, empty);
+            assert_eq!(b, PatchBox::EMPTY);
+            assert!(b.lo.is_finite() && b.hi.is_finite());
+            assert!(b.lo.cmpgt(b.hi).all() && !b.contains(Vec3::ZERO));
+            let one = patch_box(
+                frame,
+                &reach,
+                &strands,
+                &params,
+                Patch { first: 3, count: 1 },
+            );
+            assert_eq!(one.merge(b), one);
+        });
     }
 
     #[test]
