@@ -229,6 +229,40 @@ impl<'c, 'r> Near<'c, 'r> {
         self.in_shape(p) || !self.field_clear(&[p])
     }
 
+    /// Asks the host's field (if any) once whether every point after the
+    /// root of the guide `local` (root frame `frame`, at most
+    /// [`MAX_POINTS`] points) is outside when turned by each of `trials`
+    /// (at most [`MAX_TRIALS`]); `known[i]` gets the answer for `trials[i]`,
+    /// `None` without a field. The points are those a trial of
+    /// [`push_out`] makes, bit for bit.
+    fn field_trials(
+        &self,
+        frame: &Frame,
+        local: &[Vec3],
+        trials: &[Vec2],
+        known: &mut [Option<bool>],
+    ) {
+        let Some(field) = self.all.field else {
+            return;
+        };
+        let n = local.len().min(MAX_POINTS);
+        let trials = &trials[..trials.len().min(MAX_TRIALS)];
+        let per = n.saturating_sub(1);
+        let mut xyz = [[0.0f32; 3]; MAX_TRIALS * MAX_POINTS];
+        for (t, w) in trials.iter().enumerate() {
+            let turn = Turn::new((*w).into());
+            for j in 1..n {
+                xyz[t * per + j - 1] = frame.to_world(turned(turn, local[j])).to_array();
+            }
+        }
+        let total = trials.len() * per;
+        let mut d = [0.0f32; MAX_TRIALS * MAX_POINTS];
+        field.distances(&xyz[..total], &mut d[..total]);
+        for (t, k) in known.iter_mut().enumerate().take(trials.len()) {
+            *k = Some(d[t * per..(t + 1) * per].iter().all(|&x| x >= 0.0));
+        }
+    }
+
     /// True when the host's field (if any) puts every point of `points`
     /// (at most [`MAX_POINTS`]) outside.
     fn field_clear(&self, points: &[Vec3]) -> bool {
@@ -263,10 +297,12 @@ impl<'c, 'r> Near<'c, 'r> {
         out
     }
 
-    /// True when no point of `points` is inside a shape; `hint` as
-    /// [`none_inside`] takes it.
-    fn clear(&self, points: &[Vec3], hint: &mut usize) -> bool {
-        none_inside(points.len(), hint, |j| self.in_shape(points[j])) && self.field_clear(points)
+    /// True when no point of `points` is inside a collider; `hint` as
+    /// [`none_inside`] takes it. `field`, when known, is the host field's
+    /// answer for these points ([`field_verdicts`]).
+    fn clear(&self, points: &[Vec3], hint: &mut usize, field: Option<bool>) -> bool {
+        none_inside(points.len(), hint, |j| self.in_shape(points[j]))
+            && field.unwrap_or_else(|| self.field_clear(points))
     }
 }
 
@@ -295,6 +331,60 @@ pub const MAX_POINTS: usize = 64;
 /// enough (as settle does).
 const AXES: u32 = 8;
 
+/// Most rotations one call of a host field answers for.
+const MAX_TRIALS: usize = LIFT_STEPS as usize;
+
+/// Most guides whose points one call of a host field answers for before
+/// their push-outs ([`field_verdicts`]): a host pays its per-call cost
+/// (a Python callback takes its interpreter's lock) once per batch, and a
+/// batch of guides of 16 points asks for some 500 distances.
+pub const FIELD_BATCH: usize = 32;
+
+/// Asks the host field of `colliders` once, for up to [`FIELD_BATCH`]
+/// guides, what [`push_out`] would first ask it for each: whether every
+/// point after the root is outside. `guide(i)` gives guide `i`'s root frame
+/// and root-frame points, or `None` to leave it out (a guide not finite,
+/// whose points no host should see); `verdicts[i]` gets its answer, `None`
+/// where left out or without a field. [`push_out_known`] takes it, with
+/// the bits [`push_out`] gives.
+pub fn field_verdicts<'g>(
+    colliders: &Colliders,
+    guide: impl Fn(usize) -> Option<(Frame, &'g [Vec3])>,
+    verdicts: &mut [Option<bool>],
+) {
+    verdicts.fill(None);
+    let Some(field) = colliders.field else {
+        return;
+    };
+    let guides = verdicts.len().min(FIELD_BATCH);
+    let mut xyz = [[0.0f32; 3]; FIELD_BATCH * MAX_POINTS];
+    let mut spans = [(0, 0); FIELD_BATCH];
+    let mut total = 0;
+    for (i, span) in spans.iter_mut().enumerate().take(guides) {
+        let Some((frame, local)) = guide(i) else {
+            continue;
+        };
+        let n = local.len().min(MAX_POINTS);
+        let start = total;
+        for l in local.iter().take(n).skip(1) {
+            xyz[total] = frame.to_world(*l).to_array();
+            total += 1;
+        }
+        *span = (start, total);
+        verdicts[i] = Some(true);
+    }
+    if total == 0 {
+        return;
+    }
+    let mut d = [0.0f32; FIELD_BATCH * MAX_POINTS];
+    field.distances(&xyz[..total], &mut d[..total]);
+    for (v, span) in verdicts.iter_mut().zip(&spans).take(guides) {
+        if let Some(v) = v {
+            *v = d[span.0..span.1].iter().all(|&x| x >= 0.0);
+        }
+    }
+}
+
 /// Pushes a posed guide out of the colliders. `local` holds its points in
 /// its root frame `frame` (`local[0]` the root), and `reach` bounds its
 /// length. Unchanged when every point after the root is outside; else
@@ -302,6 +392,19 @@ const AXES: u32 = 8;
 /// angle, or about another axis of the tangent plane, or (when nothing
 /// frees it) fully toward the normal.
 pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach: f32) -> PushOut {
+    push_out_known(colliders, frame, local, reach, None)
+}
+
+/// [`push_out`] told `field`, the host field's answer for the guide as it
+/// is ([`field_verdicts`]), when known: the same bits, the field asked
+/// only for the rotations tried.
+pub fn push_out_known(
+    colliders: &Colliders,
+    frame: &Frame,
+    local: &mut [Vec3],
+    reach: f32,
+    field: Option<bool>,
+) -> PushOut {
     let n = local.len().min(MAX_POINTS);
     if n < 2 {
         return PushOut::Clear;
@@ -315,12 +418,13 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
         *w = frame.to_world(*l);
     }
     let mut hint = 0;
-    if near.clear(&world[1..n], &mut hint) {
+    if near.clear(&world[1..n], &mut hint, field) {
         return PushOut::Clear;
     }
     // a trial turns the point found inside last (the hint) first: most
     // leave it inside, and it answers alone (as `clear` answers then)
-    let mut clear = |w: Vec2| {
+    // `known`: the host field's answer for the rotation, when asked before
+    let mut clear = |w: Vec2, known: Option<bool>| {
         let turn = Turn::new(w.into());
         let at = |j: usize| frame.to_world(turned(turn, local[j]));
         let first = hint.min(n - 2);
@@ -334,18 +438,31 @@ pub fn push_out(colliders: &Colliders, frame: &Frame, local: &mut [Vec3], reach:
         let points = &world[1..n];
         none_inside(points.len(), &mut hint, |j| {
             j != first && near.in_shape(points[j])
-        }) && near.field_clear(points)
+        }) && known.unwrap_or_else(|| near.field_clear(points))
     };
+    // the field is asked once for every lift toward the normal, and once
+    // per angle for the axes tried after them
     let (toward, to_normal) = toward_normal(local[n - 1]);
-    let lifted = first_clear(to_normal, 1, |a| clear(toward * a)).map(|a| toward * a);
+    let lifts: [Vec2; LIFT_STEPS as usize] =
+        core::array::from_fn(|k| toward * ((k + 1) as f32 * LIFT_STEP).min(to_normal));
+    let mut known = [None; LIFT_STEPS as usize];
+    near.field_trials(frame, &local[..n], &lifts, &mut known);
+    let lifted = first_clear(to_normal, 1, |a| {
+        let w = toward * a;
+        let asked = lifts.iter().position(|&l| l == w).and_then(|i| known[i]);
+        clear(w, asked)
+    })
+    .map(|a| toward * a);
     let chosen = lifted.or_else(|| {
         (1..=LIFT_STEPS).find_map(|k| {
-            (0..AXES).find_map(|m| {
+            let axes: [Vec2; AXES as usize] = core::array::from_fn(|m| {
                 let (s, c) = libm::sincosf(m as f32 * core::f32::consts::TAU / AXES as f32);
                 let axis = Vec2::new(toward.x * c - toward.y * s, toward.x * s + toward.y * c);
-                let w = axis * (k as f32 * LIFT_STEP).min(FRAC_PI_2);
-                clear(w).then_some(w)
-            })
+                axis * (k as f32 * LIFT_STEP).min(FRAC_PI_2)
+            });
+            let mut known = [None; AXES as usize];
+            near.field_trials(frame, &local[..n], &axes, &mut known);
+            (0..AXES as usize).find_map(|m| clear(axes[m], known[m]).then_some(axes[m]))
         })
     });
     let turn = Turn::new(chosen.unwrap_or(toward * to_normal).into());
@@ -532,5 +649,82 @@ mod tests {
                 .collect();
             prop_assert!(keeps_what_the_distance_keeps(&capsules, shift(Vec3::ZERO), reach));
         }
+    }
+
+    /// A ball field that counts its calls and the points asked.
+    struct CountedBall {
+        calls: core::sync::atomic::AtomicUsize,
+        points: core::sync::atomic::AtomicUsize,
+    }
+
+    impl SignedDistance for CountedBall {
+        fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
+            use core::sync::atomic::Ordering::Relaxed;
+            self.calls.fetch_add(1, Relaxed);
+            self.points.fetch_add(points.len(), Relaxed);
+            for (p, d) in points.iter().zip(out) {
+                *d = Vec3::from(*p).distance(Vec3::new(0.0, 0.0, 1.0)) - 0.35;
+            }
+        }
+    }
+
+    #[test]
+    fn a_batch_of_field_verdicts_gives_each_push_out_its_bits() {
+        use core::sync::atomic::Ordering::Relaxed;
+        let ball = CountedBall {
+            calls: 0.into(),
+            points: 0.into(),
+        };
+        let colliders = Colliders {
+            field: Some(&ball),
+            ..Colliders::default()
+        };
+        // guides standing on a plane under the ball, leaning different
+        // ways: some clear, some through it, one left out (not finite)
+        let guide = |i: usize| -> (Frame, [Vec3; 16]) {
+            let x = -0.6 + 0.04 * i as f32;
+            let frame = Frame {
+                origin: Vec3::new(x, 0.1 * (i % 3) as f32, 0.0),
+                t: Vec3::X,
+                b: Vec3::Y,
+                n: Vec3::Z,
+            };
+            let lean = Vec3::new(0.3 * ((i % 5) as f32 - 2.0), 0.1, 1.0).normalize();
+            let mut local = [Vec3::ZERO; 16];
+            for (k, l) in local.iter_mut().enumerate() {
+                *l = lean * (0.1 * k as f32);
+            }
+            if i == 7 {
+                local[3].x = f32::NAN;
+            }
+            (frame, local)
+        };
+        let guides: Vec<(Frame, [Vec3; 16])> = (0..FIELD_BATCH).map(guide).collect();
+        let mut verdicts = [None; FIELD_BATCH];
+        field_verdicts(
+            &colliders,
+            |i| {
+                let (frame, local) = &guides[i];
+                local
+                    .iter()
+                    .all(|p| p.is_finite())
+                    .then_some((*frame, &local[..]))
+            },
+            &mut verdicts,
+        );
+        assert_eq!(ball.calls.load(Relaxed), 1, "one call for the batch");
+        assert_eq!(ball.points.load(Relaxed), (FIELD_BATCH - 1) * 15);
+        assert_eq!(verdicts[7], None);
+        let (mut freed, mut clear) = (0, 0);
+        for (i, (frame, local)) in guides.iter().enumerate().filter(|&(i, _)| i != 7) {
+            let (mut asked, mut told) = (*local, *local);
+            let a = push_out(&colliders, frame, &mut asked, 1.5);
+            let b = push_out_known(&colliders, frame, &mut told, 1.5, verdicts[i]);
+            assert_eq!(a, b, "guide {i}");
+            assert!(asked == told, "guide {i}: other points");
+            freed += (a == PushOut::Freed) as usize;
+            clear += (a == PushOut::Clear) as usize;
+        }
+        assert!(freed >= 3 && clear >= 3, "{freed} freed, {clear} clear");
     }
 }

@@ -11,7 +11,7 @@ use super::params::{GuideConstants, SimParams, MAX_JOINTS};
 use super::spline;
 use super::spring::TipSpring;
 use super::state::{state, state_mut, GuideState, KEPT_FLOATS};
-use crate::collide::{push_out, Colliders, PushOut};
+use crate::collide::{field_verdicts, push_out, push_out_known, Colliders, PushOut, FIELD_BATCH};
 use crate::interp::posed::PosedFrame;
 use crate::surface::body::Body;
 use crate::surface::frame::Frame;
@@ -184,11 +184,25 @@ impl StepContext<'_> {
     /// [`collide`](Self::collide), without keeping the curves in between.
     pub fn finish(&self, first: usize, blocks: &mut [f32]) {
         let m = self.params.points;
-        self.solve(first, blocks, |g, b, joints| {
-            let mut posed = [Vec3::ZERO; MAX_JOINTS];
-            self.curve(g, b, joints, &mut posed[..m]);
-            self.push(g, b, &mut posed[..m], self.colliders);
-        });
+        if self.colliders.field.is_none() {
+            self.solve(first, blocks, |g, b, joints| {
+                let mut posed = [Vec3::ZERO; MAX_JOINTS];
+                self.curve(g, b, joints, &mut posed[..m]);
+                self.push(g, b, &mut posed[..m], self.colliders, None);
+            });
+            return;
+        }
+        // with a host field, the guides' curves are made a batch at a time
+        // and the field asked once for the batch (each guide's curve is its
+        // own whatever it is solved with: the same bits)
+        for (k, part) in blocks.chunks_mut(FIELD_BATCH * self.block).enumerate() {
+            let first = first + k * FIELD_BATCH;
+            let mut curves = [[Vec3::ZERO; MAX_JOINTS]; FIELD_BATCH];
+            self.solve(first, part, |g, b, joints| {
+                self.curve(g, b, joints, &mut curves[g - first][..m]);
+            });
+            self.push_batch(first, part, &mut curves, self.colliders);
+        }
     }
 
     /// Phase 3 without its push-out, for a host that builds a collider
@@ -223,15 +237,48 @@ impl StepContext<'_> {
         };
         let colliders = &colliders;
         let m = self.params.points;
-        for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
-            let mut posed = [Vec3::ZERO; MAX_JOINTS];
-            for (p, s) in posed[..m]
-                .iter_mut()
-                .zip(shaped[i * 3 * m..].chunks_exact(3))
-            {
-                *p = Vec3::new(s[0], s[1], s[2]);
+        for (k, part) in blocks.chunks_mut(FIELD_BATCH * self.block).enumerate() {
+            let first = first + k * FIELD_BATCH;
+            let shaped = &shaped[k * FIELD_BATCH * 3 * m..];
+            let mut curves = [[Vec3::ZERO; MAX_JOINTS]; FIELD_BATCH];
+            for (curve, s) in curves.iter_mut().zip(shaped.chunks(3 * m)) {
+                for (p, s) in curve[..m].iter_mut().zip(s.chunks_exact(3)) {
+                    *p = Vec3::new(s[0], s[1], s[2]);
+                }
             }
-            self.push(first + i, b, &mut posed[..m], colliders);
+            self.push_batch(first, part, &mut curves, colliders);
+        }
+    }
+
+    /// The push-outs of the guides `first ..` whose blocks `blocks` holds
+    /// (at most [`FIELD_BATCH`]) and whose curves `curves` holds, the host
+    /// field (if any) asked once for all of them first.
+    fn push_batch(
+        &self,
+        first: usize,
+        blocks: &mut [f32],
+        curves: &mut [[Vec3; MAX_JOINTS]; FIELD_BATCH],
+        colliders: &Colliders,
+    ) {
+        let m = self.params.points;
+        let mut verdicts = [None; FIELD_BATCH];
+        let guides = blocks.len() / self.block;
+        let blocks_read = &*blocks;
+        let curves_read = &*curves;
+        field_verdicts(
+            colliders,
+            |i| {
+                let curve = &curves_read[i][..m];
+                let frame = state(&blocks_read[i * self.block..]).root_frame();
+                curve
+                    .iter()
+                    .all(|p| p.is_finite())
+                    .then_some((frame, curve))
+            },
+            &mut verdicts[..guides],
+        );
+        for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
+            self.push(first + i, b, &mut curves[i][..m], colliders, verdicts[i]);
         }
     }
 
@@ -325,7 +372,14 @@ impl StepContext<'_> {
 
     /// Guide `g`'s `posed` curve pushed out of `colliders` and written to
     /// its block `b` as its posed points.
-    fn push(&self, g: usize, b: &mut [f32], posed: &mut [Vec3], colliders: &Colliders) {
+    fn push(
+        &self,
+        g: usize,
+        b: &mut [f32],
+        posed: &mut [Vec3],
+        colliders: &Colliders,
+        field: Option<bool>,
+    ) {
         let j = self.params.joints;
         let frame = state(b).root_frame();
         let reach = self.constants[g].reach;
@@ -333,7 +387,7 @@ impl StepContext<'_> {
         // coordinate limit (lengths past ~1e9 each way): such a guide takes
         // its groomed shape rather than a non-finite point
         let lost = !posed.iter().all(|p| p.is_finite());
-        if lost || push_out(colliders, &frame, posed, reach) == PushOut::Stuck {
+        if lost || push_out_known(colliders, &frame, posed, reach, field) == PushOut::Stuck {
             // bent into a place no rotation leaves (a crease, a landing), or
             // lost: the groomed shape, pushed out in turn
             let mut rest = [Vec3::ZERO; MAX_JOINTS];

@@ -1,6 +1,6 @@
 use super::*;
 use crate::cache::container::header_bytes;
-use crate::collide::{Capsule, Plane, SignedDistance, Sphere};
+use crate::collide::{Capsule, Plane, SignedDistance, Sphere, FIELD_BATCH};
 use crate::dynamics::links::LinkParams;
 use crate::guides::CvLayout;
 use crate::surface::body::Body;
@@ -955,4 +955,63 @@ fn a_restored_simulation_reads_the_posed_guides_of_the_step_saved() {
     // a state saved before any step has no posed guides to read
     other.restore(&fresh).unwrap();
     assert!(!other.has_stepped());
+}
+
+/// A ball field that counts its calls and the points asked.
+struct CountedField {
+    centre: Vec3,
+    calls: core::sync::atomic::AtomicUsize,
+    points: core::sync::atomic::AtomicUsize,
+}
+
+impl SignedDistance for CountedField {
+    fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
+        use core::sync::atomic::Ordering::Relaxed;
+        self.calls.fetch_add(1, Relaxed);
+        self.points.fetch_add(points.len(), Relaxed);
+        for (p, d) in points.iter().zip(out) {
+            *d = Vec3::from(*p).distance(self.centre) - 0.3;
+        }
+    }
+}
+
+#[test]
+fn a_host_field_is_asked_for_a_batch_of_guides_at_a_time() {
+    use core::sync::atomic::Ordering::Relaxed;
+    let s = Scene::new(400);
+    let field_at = |centre: Vec3| CountedField {
+        centre,
+        calls: 0.into(),
+        points: 0.into(),
+    };
+    // far from every guide: one call per batch, every point asked once
+    let far = field_at(Vec3::new(0.0, 50.0, 0.0));
+    let mut buf = vec![];
+    let mut sim = s.sim(&params(), &mut buf);
+    let colliders = Colliders {
+        field: Some(&far),
+        ..Colliders::default()
+    };
+    step(&mut sim, &s.rest, &colliders, 1.0 / 24.0);
+    let n = sim.len();
+    assert_eq!(far.calls.load(Relaxed), n.div_ceil(FIELD_BATCH));
+    assert_eq!(far.points.load(Relaxed), n * (JOINTS - 1));
+    // in the guides' way: the batches, then the rotations tried for the
+    // few guides it holds; none ends inside
+    let ball = field_at(Vec3::new(0.0, 1.38, 0.0));
+    let mut buf2 = vec![];
+    let mut sim = s.sim(&params(), &mut buf2);
+    let colliders = Colliders {
+        field: Some(&ball),
+        ..Colliders::default()
+    };
+    step(&mut sim, &s.rest, &colliders, 1.0 / 24.0);
+    let calls = ball.calls.load(Relaxed);
+    let points = ball.points.load(Relaxed);
+    assert!(calls < n / 4, "{calls} calls for {n} guides");
+    assert!(points >= 256 * n.div_ceil(FIELD_BATCH) - 256, "{points}");
+    let inside = (0..n)
+        .filter(|&g| (1..JOINTS).any(|k| ball.centre.distance(sim.posed(g, k)) < 0.3))
+        .count();
+    assert_eq!(inside, 0);
 }
