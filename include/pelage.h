@@ -379,7 +379,12 @@ typedef struct PelagePlane {
 // Called from the threads of the call that uses it (`pelage_sim_step`,
 // `pelage_trim_find`, `pelage_trim_shortest_hairs`, and every thread that
 // expands with a push mask on a frame holding it), possibly at once: it
-// must be safe to call concurrently.
+// must be safe to call concurrently. pelage asks for many points a call
+// where it can: a step asks once for the guides of a batch of 32 (some
+// 500 points for guides of 16) before their push-outs, and once for all
+// the rotations of a guide it tries toward its normal. A NaN distance
+// fails the call with NON_FINITE: a step is taken back whole, trimming
+// writes nothing, an expansion's curves are unspecified.
 typedef void (*PelageDistanceFn)(void *user_data, const float *points, size_t count, float *distances);
 
 // What guides (a step, trimming) or pushed render strands collide with;
@@ -946,7 +951,8 @@ enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size
 //
 // Returns the statuses of `pelage_groom_expand`; MISALIGNED also for
 // `edits.lengths` (2-byte aligned), INVALID_ARGUMENT for a push mask on a
-// frame without colliders.
+// frame without colliders, NON_FINITE when the frame's distance callback
+// gave a NaN (the curves are then unspecified).
 //
 // Thread safety: as `pelage_groom_expand`.
 enum PelageStatus pelage_groom_expand_edited(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageStrandEdits *edits, const struct PelageExpandParams *params, const struct PelageCurves *curves);
@@ -1173,7 +1179,8 @@ void pelage_sim_free(PelageSim sim);
 // worker thread that could not start, or a panic) can leave the step half
 // made: reset or restore the simulation before stepping again.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
+// Returns OK, NULL_PARAMETER, NON_FINITE (the distance callback gave a
+// NaN: the step is taken back), INVALID_ARGUMENT (dt, a collider, a frame of
 // another mesh, the body grid too large, a body of a frame without a
 // triangle of area, the external curves' count or
 // stride, an external point not finite or beyond 1e9 where

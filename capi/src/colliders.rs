@@ -3,9 +3,11 @@
 
 use crate::buffers::{req, slice};
 use crate::status::Failure;
+use crate::PelageStatus;
 use pelage_core::collide::{Capsule, Colliders, Plane, SignedDistance, Sphere};
 use pelage_core::surface::body::Body;
 use std::ffi::c_void;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A solid sphere collider.
 #[repr(C)]
@@ -49,7 +51,12 @@ same_layout!(PelagePlane, Plane, normal, offset);
 /// Called from the threads of the call that uses it (`pelage_sim_step`,
 /// `pelage_trim_find`, `pelage_trim_shortest_hairs`, and every thread that
 /// expands with a push mask on a frame holding it), possibly at once: it
-/// must be safe to call concurrently.
+/// must be safe to call concurrently. pelage asks for many points a call
+/// where it can: a step asks once for the guides of a batch of 32 (some
+/// 500 points for guides of 16) before their push-outs, and once for all
+/// the rotations of a guide it tries toward its normal. A NaN distance
+/// fails the call with NON_FINITE: a step is taken back whole, trimming
+/// writes nothing, an expansion's curves are unspecified.
 pub type PelageDistanceFn = Option<
     unsafe extern "C" fn(
         user_data: *mut c_void,
@@ -119,10 +126,16 @@ impl<'a> HostColliders<'a> {
                 c.distance.map(|callback| HostField {
                     callback,
                     user_data: c.distance_user_data,
+                    nan: AtomicBool::new(false),
                 })
             }),
             body: host.is_some_and(|c| c.body != 0),
         })
+    }
+
+    /// NON_FINITE when the distance callback gave a NaN during this call.
+    pub(crate) fn check_field(&self) -> Result<(), Failure> {
+        self.field.as_ref().map_or(Ok(()), HostField::check)
     }
 
     /// The core's colliders, with `body` (built when `self.body` is set).
@@ -137,16 +150,43 @@ impl<'a> HostColliders<'a> {
     }
 }
 
-/// The host's distance callback as a core field.
-#[derive(Clone, Copy)]
+/// The host's distance callback as a core field, for one call: a NaN
+/// distance counts as inside (never trusted as clear) and is remembered,
+/// so that the call fails with NON_FINITE rather than return what it made
+/// of it ([`HostField::check`]).
 pub(crate) struct HostField {
     callback: unsafe extern "C" fn(*mut c_void, *const f32, usize, *mut f32),
     user_data: *mut c_void,
+    nan: AtomicBool,
 }
 
 // SAFETY: the header requires the callback to be safe to call from any
 // thread at once with its user data; pelage only passes the pointer on.
 unsafe impl Sync for HostField {}
+// SAFETY: as above: the pointer is only passed back to the host.
+unsafe impl Send for HostField {}
+
+impl HostField {
+    /// The same callback for another call, nothing remembered.
+    pub(crate) fn fresh(&self) -> HostField {
+        HostField {
+            callback: self.callback,
+            user_data: self.user_data,
+            nan: AtomicBool::new(false),
+        }
+    }
+
+    /// NON_FINITE when the callback gave a NaN distance during the call.
+    pub(crate) fn check(&self) -> Result<(), Failure> {
+        match self.nan.load(Ordering::Relaxed) {
+            false => Ok(()),
+            true => Err(Failure::new(
+                PelageStatus::NonFinite,
+                "the distance callback returned NaN for a point",
+            )),
+        }
+    }
+}
 
 impl SignedDistance for HostField {
     fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
@@ -154,5 +194,8 @@ impl SignedDistance for HostField {
         // SAFETY: the host's callback, with `n` packed points and room for
         // `n` distances, as its contract says.
         unsafe { (self.callback)(self.user_data, points.as_ptr().cast(), n, out.as_mut_ptr()) };
+        if out[..n].iter().any(|d| d.is_nan()) {
+            self.nan.store(true, Ordering::Relaxed);
+        }
     }
 }

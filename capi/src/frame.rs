@@ -98,14 +98,24 @@ struct FrameColliders {
 }
 
 impl Frame {
-    /// The colliders set by `pelage_frame_set_colliders`, if any.
-    pub(crate) fn push_colliders(&self) -> Option<Colliders<'_>> {
+    /// The distance callback set by `pelage_frame_set_colliders`, if any,
+    /// for one call ([`HostField::check`] it afterwards).
+    pub(crate) fn push_field(&self) -> Option<HostField> {
+        self.push.as_ref()?.field.as_ref().map(HostField::fresh)
+    }
+
+    /// The colliders set by `pelage_frame_set_colliders`, if any, with
+    /// `field`, this call's of [`push_field`](Self::push_field).
+    pub(crate) fn push_colliders<'r>(
+        &'r self,
+        field: Option<&'r HostField>,
+    ) -> Option<Colliders<'r>> {
         self.push.as_ref().map(|c| Colliders {
             spheres: &c.spheres,
             capsules: &c.capsules,
             planes: &c.planes,
             body: c.body.as_ref(),
-            field: c.field.as_ref().map(|f| f as &dyn SignedDistance),
+            field: field.map(|f| f as &dyn SignedDistance),
         })
     }
 

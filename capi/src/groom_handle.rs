@@ -2,6 +2,7 @@
 //! expanding every frame.
 
 use crate::buffers::{collected, req, req_mut, slice};
+use crate::colliders::HostField;
 use crate::expand::{run, Edits};
 use crate::handles::{free, into_handle, object, Handle};
 use crate::status::Failure;
@@ -157,7 +158,8 @@ pub struct PelageStrandEdits {
 ///
 /// Returns the statuses of `pelage_groom_expand`; MISALIGNED also for
 /// `edits.lengths` (2-byte aligned), INVALID_ARGUMENT for a push mask on a
-/// frame without colliders.
+/// frame without colliders, NON_FINITE when the frame's distance callback
+/// gave a NaN (the curves are then unspecified).
 ///
 /// Thread safety: as `pelage_groom_expand`.
 #[no_mangle]
@@ -199,7 +201,8 @@ fn expand_range(
                     format!("strands {first} + {count} exceed the groom's {total}"),
                 )
             })?;
-    let colliders = frame.push_colliders();
+    let field = frame.push_field();
+    let colliders = frame.push_colliders(field.as_ref());
     let mut edits_of = Edits::default();
     if !edits.is_null() {
         let e = req(edits, "edits")?;
@@ -227,5 +230,6 @@ fn expand_range(
         edits_of,
         p,
         req(curves, "curves")?,
-    )
+    )?;
+    field.as_ref().map_or(Ok(()), HostField::check)
 }

@@ -3,6 +3,7 @@
 use crate::body::BodyMemory;
 use crate::buffers::{bytes, bytes_mut, grow, req, req_mut, strided, Float3Out};
 use crate::colliders::HostColliders;
+use crate::frame::Frame;
 use crate::handles::{free, into_handle, object, object_mut, Handle};
 use crate::status::Failure;
 use crate::threads::{
@@ -154,6 +155,9 @@ pub(crate) struct SimBox {
     kept: Vec<f32>,
     /// That step's guide curves before the push-out.
     shaped: Vec<f32>,
+    /// Every block before a step with a host field (to take it back whole
+    /// when the field gives a NaN).
+    whole: Vec<f32>,
 }
 
 /// Memory bytes pelage_sim_new needs for `guide_count` guides on
@@ -215,7 +219,7 @@ pub extern "C" fn pelage_sim_new(
         // the rest mesh is read only while the simulation is made: the
         // guides' rest shapes and roots are copied into its memory
         let sim = Sim::new(mesh, &guides, &p, &mut Arena::new(memory))?;
-        *out = into_handle(Box::new(SimBox { sim, body: BodyMemory::default(), kept: Vec::new(), shaped: Vec::new() }));
+        *out = into_handle(Box::new(SimBox { sim, body: BodyMemory::default(), kept: Vec::new(), shaped: Vec::new(), whole: Vec::new() }));
         Ok(())
     }
 }
@@ -254,7 +258,8 @@ pub extern "C" fn pelage_sim_free(sim: PelageSim) {
 /// worker thread that could not start, or a panic) can leave the step half
 /// made: reset or restore the simulation before stepping again.
 ///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (dt, a collider, a frame of
+/// Returns OK, NULL_PARAMETER, NON_FINITE (the distance callback gave a
+/// NaN: the step is taken back), INVALID_ARGUMENT (dt, a collider, a frame of
 /// another mesh, the body grid too large, a body of a frame without a
 /// triangle of area, the external curves' count or
 /// stride, an external point not finite or beyond 1e9 where
@@ -280,32 +285,72 @@ pub extern "C" fn pelage_sim_step(
             true => None,
             false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),
         };
-        if host.body && frame.body().is_none() && thread_total(thread_count) > 1 {
-            return step_beside_body(sim, frame.posed(), &host, external, dt, thread_count);
+        // a NaN from the host's field fails the step: the state before it
+        // is kept to put back
+        if host.field.is_some() {
+            let blocks = sim.sim.blocks();
+            grow(&mut sim.whole, blocks.len(), 0.0, "the state kept through a step")?;
+            sim.whole[..blocks.len()].copy_from_slice(blocks);
         }
-        // the frame's own body, when its colliders have one, is this mesh's:
-        // built once per frame, shared with the render strands' push-out
-        let built;
-        let body = match (host.body, frame.body()) {
-            (false, _) => None,
-            (true, Some(body)) => Some(body),
-            (true, None) => {
-                // a bad input is reported before a body that cannot be
-                // built, as on several threads
-                sim.sim.check_step(frame.posed(), &host.colliders(None), external, dt)?;
-                built = sim.body.body(frame.posed().mesh(), COLLISION_CELLS_PER_TRIANGLE, thread_count)?;
-                Some(&built)
+        let stepped = sim.sim.has_stepped();
+        let done = step(sim, frame, &host, external, dt, thread_count);
+        if done.is_ok() {
+            if let Err(failure) = host.check_field() {
+                let n = sim.sim.blocks().len();
+                sim.sim.put_back(&sim.whole[..n], stepped);
+                return Err(failure);
             }
-        };
-        let colliders = host.colliders(body);
-        let Step { context, blocks, snapshot } = sim.sim.begin(frame.posed(), &colliders, external, dt)?;
-        let (n, per) = (snapshot.len(), context.block_floats());
-        context.bend(blocks, snapshot, |blocks, phase| {
-            split_in_chunks(n, thread_count, blocks, per, |range, part| phase(range.start, part))
-        })?;
-        split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| context.finish(range.start, part))?;
-        Ok(())
+        }
+        done
     }
+}
+
+/// [`pelage_sim_step`] with its inputs read.
+fn step(
+    sim: &mut SimBox,
+    frame: &Frame,
+    host: &HostColliders,
+    external: Option<Strided<[f32; 3]>>,
+    dt: f32,
+    thread_count: u32,
+) -> Result<(), Failure> {
+    if host.body && frame.body().is_none() && thread_total(thread_count) > 1 {
+        return step_beside_body(sim, frame.posed(), host, external, dt, thread_count);
+    }
+    // the frame's own body, when its colliders have one, is this mesh's:
+    // built once per frame, shared with the render strands' push-out
+    let built;
+    let body = match (host.body, frame.body()) {
+        (false, _) => None,
+        (true, Some(body)) => Some(body),
+        (true, None) => {
+            // a bad input is reported before a body that cannot be
+            // built, as on several threads
+            sim.sim
+                .check_step(frame.posed(), &host.colliders(None), external, dt)?;
+            built = sim.body.body(
+                frame.posed().mesh(),
+                COLLISION_CELLS_PER_TRIANGLE,
+                thread_count,
+            )?;
+            Some(&built)
+        }
+    };
+    let colliders = host.colliders(body);
+    let Step {
+        context,
+        blocks,
+        snapshot,
+    } = sim.sim.begin(frame.posed(), &colliders, external, dt)?;
+    let (n, per) = (snapshot.len(), context.block_floats());
+    context.bend(blocks, snapshot, |blocks, phase| {
+        split_in_chunks(n, thread_count, blocks, per, |range, part| {
+            phase(range.start, part)
+        })
+    })?;
+    split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| {
+        context.finish(range.start, part)
+    })
 }
 
 /// A step on several threads that builds its own body collider: the
@@ -330,6 +375,7 @@ fn step_beside_body(
         body: memory,
         kept,
         shaped,
+        ..
     } = sim;
     let (n, m) = (sim.len(), sim.points());
     grow(kept, n * KEPT_FLOATS, 0.0, "the state kept through a step")?;

@@ -133,6 +133,7 @@ pub extern "C" fn pelage_trim_find(
         let found = split_over_threads(guides, thread_count, &mut [0u8; 0], 0, |range, _| {
             range.filter_map(|g| meet(frame, g, cloth_body.as_ref(), &colliders)).collect::<Vec<_>>()
         })?;
+        host.check_field()?;
         let total: usize = found.iter().map(Vec::len).sum();
         let out: &mut [TrimRecord] = bytemuck::cast_slice_mut(slice_mut(records, capacity, "records")?);
         if total > out.len() {
@@ -255,6 +256,7 @@ pub extern "C" fn pelage_trim_shortest_hairs(
         split_over_threads(n, p.thread_count, &mut own, 1, |range, part| {
             shortest_own(&job, range, cloth_body.as_ref(), &colliders, part)
         })?;
+        host.check_field()?;
         lengths.copy_from_slice(&own);
         Ok(())
     }

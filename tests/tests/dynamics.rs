@@ -509,3 +509,67 @@ fn handle_of(shot: &Shot, f: u32) -> Frame {
     let guides = guides_desc(&shot.roots, &shot.points);
     frame(&mesh_desc(&pose(&shot.rest, f)), &guides, JOINTS as u32, 1).unwrap()
 }
+
+/// A host field whose every distance is NaN (a level set read out of its
+/// bounds, say).
+unsafe extern "C" fn nan_field(
+    _user_data: *mut std::ffi::c_void,
+    _points: *const f32,
+    count: usize,
+    distances: *mut f32,
+) {
+    // SAFETY: pelage passes room for `count` distances.
+    let out = unsafe { std::slice::from_raw_parts_mut(distances, count) };
+    out.fill(f32::NAN);
+}
+
+#[test]
+fn a_nan_from_the_distance_callback_fails_the_call_and_changes_nothing() {
+    let shot = Shot::new();
+    let n = shot.roots.len();
+    let params = shot.params();
+    let nan = PelageColliders {
+        distance: Some(nan_field),
+        ..colliders(&[], false)
+    };
+    let message = || {
+        // SAFETY: pelage_last_error returns a valid NUL-terminated string
+        // that lives until the next failing call on this thread.
+        unsafe { std::ffi::CStr::from_ptr(pelage_last_error()) }
+            .to_string_lossy()
+            .into_owned()
+    };
+    for threads in [1, 3] {
+        let sim = SimHandle::new(&shot, &params);
+        run(&shot, &sim, 0..3, threads, false, |_, _, _, _| {});
+        let (state, posed) = (save(&sim), sim.read(n));
+        let next = handle_of(&shot, 3);
+        assert_eq!(step(&sim, next.0, &nan, threads), PelageStatus::NonFinite);
+        assert!(message().contains("NaN"), "{}", message());
+        assert!(save(&sim) == state, "the state changed ({threads} threads)");
+        assert!(sim.read(n) == posed, "the posed guides changed");
+    }
+    // trimming against it: refused, nothing written
+    let posed = handle_of(&shot, 3);
+    let mut records = vec![
+        PelageTrimRecord {
+            guide: 7,
+            cv: 7,
+            length: 7.0
+        };
+        n
+    ];
+    let mut count = 99;
+    let s = pelage_trim_find(
+        posed.0,
+        std::ptr::null(),
+        &nan,
+        2,
+        records.as_mut_ptr(),
+        records.len(),
+        &mut count,
+    );
+    assert_eq!(s, PelageStatus::NonFinite);
+    assert_eq!(count, 99);
+    assert!(records.iter().all(|r| r.guide == 7 && r.length == 7.0));
+}

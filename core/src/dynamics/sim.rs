@@ -259,6 +259,20 @@ impl<'a> Sim<'a> {
         self.stepped = stepped;
     }
 
+    /// Every guide's block, its state then its posed points: what
+    /// [`put_back`](Self::put_back) takes to undo a whole step.
+    pub fn blocks(&self) -> &[f32] {
+        self.blocks
+    }
+
+    /// Takes back a whole step, push-out included: every block as
+    /// [`blocks`](Self::blocks) gave them before it (all of them), and
+    /// `stepped`, what [`has_stepped`](Self::has_stepped) said then.
+    pub fn put_back(&mut self, blocks: &[f32], stepped: bool) {
+        self.blocks.copy_from_slice(blocks);
+        self.stepped = stepped;
+    }
+
     /// Forgets the motion: the next step starts from the neutral pose.
     pub fn reset(&mut self) {
         self.blocks.fill(0.0);
