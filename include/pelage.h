@@ -29,6 +29,10 @@
 // Most guides a strand can use.
 #define PELAGE_MAX_NEIGHBOURS 8
 
+// How far a bound strand's weights may sum from 1 (pelage_bind's sum to
+// within a few 1e-7).
+#define PELAGE_WEIGHT_SUM_TOLERANCE 1e-4
+
 // The stored length of an untrimmed strand (lengths are fractions of a
 // strand's length in 1/65535).
 #define PELAGE_TRIM_WHOLE 65535
@@ -239,7 +243,9 @@ typedef struct PelageGuidesDesc {
 typedef struct PelageStrandBinding {
   // Guide indices; the first `count` are used.
   uint32_t guides[8];
-  // Normalized weights.
+  // Weights of the first `count` guides, each in 0..1, summing to 1
+  // within PELAGE_WEIGHT_SUM_TOLERANCE (an orphan, count 0, has none);
+  // calls that take bindings refuse others with INVALID_ARGUMENT.
   float weights[8];
   // Guides used; 0 for an orphan (no eligible guide).
   uint32_t count;
@@ -784,7 +790,8 @@ enum PelageStatus pelage_expand_query(const struct PelageExpandParams *params, s
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
 // without guides or posed for another point count, stride, a groom value
-// beyond 1e6 or a weight outside 0..1), NON_FINITE, OUT_OF_RANGE (a face or
+// beyond 1e6, a weight outside 0..1 or a strand's weights that do not sum
+// to 1 within PELAGE_WEIGHT_SUM_TOLERANCE), NON_FINITE, OUT_OF_RANGE (a face or
 // guide index), CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED,
 // CANCELLED (the curves already written are unspecified), PANIC.
 //
@@ -871,11 +878,11 @@ enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const
 // `*written`. With `out` NULL and `capacity` 0, only the length needed is
 // written (CAPACITY_EXCEEDED, as for a buffer too small). Every record is
 // checked first (finite, in range, guide indices below the guide count,
-// patches contiguous and covering the strands); on failure `out` is
-// untouched.
+// weights summing to 1 within PELAGE_WEIGHT_SUM_TOLERANCE, patches
+// contiguous and covering the strands); on failure `out` is untouched.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts, a frame with no
-// guides, patches that leave strands out), NON_FINITE, OUT_OF_RANGE,
+// guides, patches that leave strands out, weights), NON_FINITE, OUT_OF_RANGE,
 // CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread; the frame may be read by
@@ -892,7 +899,8 @@ enum PelageStatus pelage_groom_file_write(const struct PelageGroomFileDesc *desc
 enum PelageStatus pelage_groom_file_info(const void *data, size_t length, struct PelageGroomFileInfo *info);
 
 // Reads a groom file into `buffers`. The whole file is checked first
-// (framing, counts, every record); on failure nothing is written.
+// (framing, counts, every record as `pelage_groom_file_write` checks it:
+// a record that fails is CORRUPT_DATA); on failure nothing is written.
 //
 // Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 // CAPACITY_EXCEEDED (an array shorter than the file's counts),
@@ -903,10 +911,10 @@ enum PelageStatus pelage_groom_file_read(const void *data, size_t length, const 
 
 // Creates a groom from render strands (roots, bindings from `pelage_bind`,
 // groom values from `pelage_groom_evaluate` or the host). The records are
-// checked (faces, barycentrics, guide indices, weights in 0..1, finite
-// groom values within 1e6) and copied: the host may free or change its
-// arrays afterwards. On success `*out_groom` is the new groom; on failure
-// it is left untouched.
+// checked (faces, barycentrics, guide indices, weights in 0..1 summing to
+// 1 within PELAGE_WEIGHT_SUM_TOLERANCE, finite groom values within 1e6)
+// and copied: the host may free or change its arrays afterwards. On
+// success `*out_groom` is the new groom; on failure it is left untouched.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
 // MISALIGNED (a record pointer), OUT_OF_MEMORY, PANIC.
@@ -1049,7 +1057,8 @@ enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const str
 // as it is).
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides,
-// or of another point count), NON_FINITE, OUT_OF_RANGE (a strand's face
+// or of another point count, strand records as `pelage_expand` refuses
+// them), NON_FINITE, OUT_OF_RANGE (a strand's face
 // or guide, a patch past the strands), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread; the frame may be read by
@@ -1107,8 +1116,9 @@ enum PelageStatus pelage_settle_query(const struct PelageMeshDesc *rest_mesh, si
 // depend on it. `params->progress`, when set, hears the share of strands
 // done on the calling thread and may cancel.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9 or
-// groom values beyond 1e6), NON_FINITE, OUT_OF_RANGE, CAPACITY_EXCEEDED
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9,
+// groom values beyond 1e6, or a strand's weights that do not sum to 1
+// within PELAGE_WEIGHT_SUM_TOLERANCE), NON_FINITE, OUT_OF_RANGE, CAPACITY_EXCEEDED
 // (the arena), MISALIGNED, CANCELLED (the grooms of the strands not yet
 // reached are unchanged, the others settled: which ones is unspecified;
 // `info` is not written), PANIC.

@@ -7,12 +7,18 @@ use crate::{
     PelageGuidesDesc, PelageMeshDesc, PelageProgressFn, PelageRegionMap, PelageRoot, PelageStatus,
 };
 use bytemuck::{Pod, Zeroable};
-use pelage_core::interp::bind::{self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS};
+use pelage_core::interp::bind::{
+    self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS, WEIGHT_SUM_TOLERANCE,
+};
 use pelage_core::root::check_roots;
 use pelage_core::{Arena, Root};
 
 /// Most guides a strand can use.
 pub const PELAGE_MAX_NEIGHBOURS: u32 = 8;
+
+/// How far a bound strand's weights may sum from 1 (pelage_bind's sum to
+/// within a few 1e-7).
+pub const PELAGE_WEIGHT_SUM_TOLERANCE: f32 = 1e-4;
 
 /// Binding parameters; start from pelage_bind_params_defaults().
 #[repr(C)]
@@ -57,7 +63,9 @@ pub struct PelageBindParams {
 pub struct PelageStrandBinding {
     /// Guide indices; the first `count` are used.
     pub guides: [u32; 8],
-    /// Normalized weights.
+    /// Weights of the first `count` guides, each in 0..1, summing to 1
+    /// within PELAGE_WEIGHT_SUM_TOLERANCE (an orphan, count 0, has none);
+    /// calls that take bindings refuse others with INVALID_ARGUMENT.
     pub weights: [f32; 8],
     /// Guides used; 0 for an orphan (no eligible guide).
     pub count: u32,
@@ -74,6 +82,7 @@ same_layout!(
     clump
 );
 const _: () = assert!(MAX_NEIGHBOURS == PELAGE_MAX_NEIGHBOURS as usize);
+const _: () = assert!(WEIGHT_SUM_TOLERANCE == PELAGE_WEIGHT_SUM_TOLERANCE);
 
 /// What binding found.
 #[repr(C)]

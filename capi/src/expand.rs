@@ -173,7 +173,8 @@ pub extern "C" fn pelage_expand_query(
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
 /// without guides or posed for another point count, stride, a groom value
-/// beyond 1e6 or a weight outside 0..1), NON_FINITE, OUT_OF_RANGE (a face or
+/// beyond 1e6, a weight outside 0..1 or a strand's weights that do not sum
+/// to 1 within PELAGE_WEIGHT_SUM_TOLERANCE), NON_FINITE, OUT_OF_RANGE (a face or
 /// guide index), CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED,
 /// CANCELLED (the curves already written are unspecified), PANIC.
 ///

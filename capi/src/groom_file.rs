@@ -86,11 +86,11 @@ pub struct PelageGroomFileBuffers {
 /// `*written`. With `out` NULL and `capacity` 0, only the length needed is
 /// written (CAPACITY_EXCEEDED, as for a buffer too small). Every record is
 /// checked first (finite, in range, guide indices below the guide count,
-/// patches contiguous and covering the strands); on failure `out` is
-/// untouched.
+/// weights summing to 1 within PELAGE_WEIGHT_SUM_TOLERANCE, patches
+/// contiguous and covering the strands); on failure `out` is untouched.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts, a frame with no
-/// guides, patches that leave strands out), NON_FINITE, OUT_OF_RANGE,
+/// guides, patches that leave strands out, weights), NON_FINITE, OUT_OF_RANGE,
 /// CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread; the frame may be read by
@@ -159,7 +159,8 @@ pub extern "C" fn pelage_groom_file_info(
 }
 
 /// Reads a groom file into `buffers`. The whole file is checked first
-/// (framing, counts, every record); on failure nothing is written.
+/// (framing, counts, every record as `pelage_groom_file_write` checks it:
+/// a record that fails is CORRUPT_DATA); on failure nothing is written.
 ///
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 /// CAPACITY_EXCEEDED (an array shorter than the file's counts),

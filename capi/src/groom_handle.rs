@@ -49,10 +49,10 @@ impl Groom {
 
 /// Creates a groom from render strands (roots, bindings from `pelage_bind`,
 /// groom values from `pelage_groom_evaluate` or the host). The records are
-/// checked (faces, barycentrics, guide indices, weights in 0..1, finite
-/// groom values within 1e6) and copied: the host may free or change its
-/// arrays afterwards. On success `*out_groom` is the new groom; on failure
-/// it is left untouched.
+/// checked (faces, barycentrics, guide indices, weights in 0..1 summing to
+/// 1 within PELAGE_WEIGHT_SUM_TOLERANCE, finite groom values within 1e6)
+/// and copied: the host may free or change its arrays afterwards. On
+/// success `*out_groom` is the new groom; on failure it is left untouched.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
 /// MISALIGNED (a record pointer), OUT_OF_MEMORY, PANIC.

@@ -32,7 +32,7 @@ mod trim;
 
 pub use bind::{
     pelage_bind, pelage_bind_params_defaults, pelage_bind_query, PelageBindInfo, PelageBindParams,
-    PelageStrandBinding, PELAGE_MAX_NEIGHBOURS,
+    PelageStrandBinding, PELAGE_MAX_NEIGHBOURS, PELAGE_WEIGHT_SUM_TOLERANCE,
 };
 pub use colliders::{PelageCapsule, PelageColliders, PelageDistanceFn, PelagePlane, PelageSphere};
 pub use expand::{

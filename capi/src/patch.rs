@@ -59,7 +59,8 @@ pub extern "C" fn pelage_patch_plan(
 /// as it is).
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides,
-/// or of another point count), NON_FINITE, OUT_OF_RANGE (a strand's face
+/// or of another point count, strand records as `pelage_expand` refuses
+/// them), NON_FINITE, OUT_OF_RANGE (a strand's face
 /// or guide, a patch past the strands), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread; the frame may be read by

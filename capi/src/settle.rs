@@ -70,8 +70,9 @@ pub extern "C" fn pelage_settle_query(
 /// depend on it. `params->progress`, when set, hears the share of strands
 /// done on the calling thread and may cancel.
 ///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9 or
-/// groom values beyond 1e6), NON_FINITE, OUT_OF_RANGE, CAPACITY_EXCEEDED
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9,
+/// groom values beyond 1e6, or a strand's weights that do not sum to 1
+/// within PELAGE_WEIGHT_SUM_TOLERANCE), NON_FINITE, OUT_OF_RANGE, CAPACITY_EXCEEDED
 /// (the arena), MISALIGNED, CANCELLED (the grooms of the strands not yet
 /// reached are unchanged, the others settled: which ones is unspecified;
 /// `info` is not written), PANIC.

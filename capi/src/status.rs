@@ -118,9 +118,10 @@ impl From<Error> for Failure {
             Error::CapacityExceeded { .. } | Error::OutputTooSmall { .. } => {
                 PelageStatus::CapacityExceeded
             }
-            Error::InvalidArgument(_) | Error::BadStride { .. } | Error::OutOfDomain { .. } => {
-                PelageStatus::InvalidArgument
-            }
+            Error::InvalidArgument(_)
+            | Error::BadStride { .. }
+            | Error::OutOfDomain { .. }
+            | Error::WeightSum { .. } => PelageStatus::InvalidArgument,
             Error::NonFinite { .. } => PelageStatus::NonFinite,
             Error::OutOfRange { .. } => PelageStatus::OutOfRange,
             Error::Corrupt { .. } => PelageStatus::CorruptData,

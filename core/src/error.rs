@@ -6,7 +6,7 @@ use core::fmt;
 /// context for a host to print a useful message without a debugger, and has
 /// one meaning. New variants may come in a minor version (the enum is
 /// non-exhaustive): match with a fallback arm.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum Error {
     /// The caller's arena is too small (in bytes).
@@ -58,6 +58,17 @@ pub enum Error {
         /// Element index within that input.
         index: usize,
     },
+    /// A bound strand's weights (the first `count` of its binding) do not
+    /// sum to 1 within
+    /// [`WEIGHT_SUM_TOLERANCE`](crate::interp::bind::WEIGHT_SUM_TOLERANCE):
+    /// the strand would be longer or shorter than its guides.
+    WeightSum {
+        /// The strand.
+        index: usize,
+        /// What its weights sum to (finite: each weight is checked to lie
+        /// in 0..=1 first).
+        sum: f32,
+    },
     /// Serialized bytes are truncated, inconsistent or fail their checksum.
     Corrupt {
         /// What is wrong with them.
@@ -75,6 +86,10 @@ pub enum Error {
     Cancelled,
 }
 
+// every float an error carries is finite (see `WeightSum`), so equality
+// is reflexive
+impl Eq for Error {}
+
 impl Error {
     /// The same error with its element index moved by `by`: a check run on
     /// the range starting at `by` reports indices into the whole input.
@@ -87,6 +102,10 @@ impl Error {
             Error::OutOfDomain { what, index } => Error::OutOfDomain {
                 what,
                 index: index + by,
+            },
+            Error::WeightSum { index, sum } => Error::WeightSum {
+                index: index + by,
+                sum,
             },
             Error::OutOfRange {
                 what,
@@ -144,6 +163,11 @@ impl fmt::Display for Error {
                     "value outside the accepted range in {what} at element {index}"
                 )
             }
+            Error::WeightSum { index, sum } => write!(
+                f,
+                "bindings[{index}].weights sum to {sum} (must be 1 within {:e})",
+                crate::interp::bind::WEIGHT_SUM_TOLERANCE
+            ),
             Error::Corrupt { what } => write!(f, "corrupt data: {what}"),
             Error::VersionMismatch { found, supported } => write!(
                 f,

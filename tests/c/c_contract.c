@@ -2045,9 +2045,24 @@ static void test_hostile(void) {
       FAILS(want[i], pelage_groom_new(&r, &out));
       CHECK(out == canary);
     }
-    /* the bounds themselves are fine: weights 0 and 1 */
+    /* weights in 0..1 that sum to more than 1 (within 1e-4 is fine): refused, naming the strand and the field */
     memcpy(b, g_in.bindings, n * sizeof *b);
-    b[bound].weights[0] = 1.0f, b[last].weights[1] = 0.0f;
+    for (uint32_t k = 0; k < b[last].count; ++k) b[last].weights[k] = 1.0f;
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(g_in.frame, g_in.strands, b, g_in.grooms, n, &threads,
+                                                 g_in.points_out, 16, POINTS_CAPACITY));
+    {
+      char field[64];
+      snprintf(field, sizeof field, "bindings[%zu].weights sum to", last);
+      CHECK(strstr(pelage_last_error(), field) != NULL);
+      const PelageStrands r = records(g_in.strands, b, g_in.grooms, n);
+      PelageGroom out = canary;
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_groom_new(&r, &out));
+      CHECK(out == canary);
+    }
+    /* the bounds themselves are fine: weights 1 and 0 (the strand's others 0, so its weights still sum to 1) */
+    memcpy(b, g_in.bindings, n * sizeof *b);
+    for (uint32_t k = 0; k < b[bound].count; ++k) b[bound].weights[k] = k == 0 ? 1.0f : 0.0f;
+    for (uint32_t k = 0; k < b[last].count; ++k) b[last].weights[k] = k == 0 ? 1.0f : 0.0f;
     fill_outputs();
     EXPECT(PELAGE_STATUS_OK, EXPAND(g_in.frame, g_in.strands, b, g_in.grooms, n, &g_in.expand_params,
                                     g_in.points_out, 16, POINTS_CAPACITY));

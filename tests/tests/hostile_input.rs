@@ -10,10 +10,12 @@
 
 use pelage::*;
 use pelage_tests::creature::{creature, CreatureMesh};
-use pelage_tests::measure::{frame, groom_handle, groomed, mesh_desc, strands_desc, Groomed};
+use pelage_tests::measure::{
+    curves_desc, frame, groom_handle, groomed, mesh_desc, strands_desc, Groomed,
+};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::ffi::CStr;
-use std::ptr::null;
+use std::ptr::{null, null_mut};
 
 /// The system's allocator, refusing any one allocation above 1 GiB.
 struct Capped;
@@ -260,4 +262,203 @@ fn an_empty_patch_gets_a_finite_empty_box() {
     assert_eq!(boxes[..6], empty);
     assert_eq!(boxes[12..], empty);
     assert!((0..3).all(|a| boxes[6 + a] < boxes[9 + a]));
+}
+
+/// Writes `g`'s strands with `bindings` as a groom file (rest frame of
+/// `m`), or the failing status.
+fn groom_file(
+    m: &CreatureMesh,
+    g: &Groomed,
+    bindings: &[PelageStrandBinding],
+) -> Result<Vec<u8>, PelageStatus> {
+    let rest = frame(&mesh_desc(m), &g.guides(), CVS as u32, 1).unwrap();
+    let desc = PelageGroomFileDesc {
+        rest_frame: rest.0,
+        guide_roots: bytemuck::cast_slice::<_, PelageRoot>(&g.guide_roots).as_ptr(),
+        strands: strands_desc(&g.strands, bindings, &g.grooms),
+        patches: null(),
+        patch_count: 0,
+    };
+    let mut size = 0usize;
+    let s = pelage_groom_file_write(&desc, null_mut(), 0, &mut size);
+    if s != PelageStatus::CapacityExceeded {
+        return Err(s);
+    }
+    let mut bytes = vec![0u8; size];
+    match pelage_groom_file_write(&desc, bytes.as_mut_ptr().cast(), size, &mut size) {
+        PelageStatus::Ok => Ok(bytes),
+        s => Err(s),
+    }
+}
+
+/// Reads a groom file of `g`'s counts.
+fn read_groom_file(g: &Groomed, bytes: &[u8]) -> PelageStatus {
+    let (guides, n) = (g.guide_roots.len(), g.strands.len());
+    let mut guide_roots = vec![PelageRoot::default(); guides];
+    let mut guide_points = vec![0.0f32; guides * CVS * 3];
+    let mut roots = vec![PelageRoot::default(); n];
+    let mut bindings = vec![PelageStrandBinding::default(); n];
+    let mut grooms = vec![PelageStrandGroom::default(); n];
+    let buffers = PelageGroomFileBuffers {
+        guide_roots: guide_roots.as_mut_ptr(),
+        guide_points: guide_points.as_mut_ptr(),
+        guide_capacity: guides,
+        roots: roots.as_mut_ptr(),
+        bindings: bindings.as_mut_ptr(),
+        grooms: grooms.as_mut_ptr(),
+        strand_capacity: n,
+        patches: null_mut(),
+        patch_capacity: 0,
+    };
+    pelage_groom_file_read(bytes.as_ptr().cast(), bytes.len(), &buffers)
+}
+
+#[test]
+fn bound_weights_must_sum_to_one() {
+    let (m, g) = fixture();
+    let params = pelage_expand_params_defaults();
+    let posed = frame(&mesh_desc(&m), &g.guides(), params.points_per_strand, 1).unwrap();
+    let rest = frame(&mesh_desc(&m), &g.guides(), CVS as u32, 1).unwrap();
+    let n = g.strands.len();
+    let per = {
+        let mut per = 0usize;
+        expect(
+            pelage_expand_query(&params, &mut per),
+            PelageStatus::Ok,
+            &[],
+        );
+        per
+    };
+    let mut out = vec![[0.0f32; 4]; n * per];
+    let mut arena_bytes = 0usize;
+    let d = mesh_desc(&m);
+    expect(
+        pelage_settle_query(&d, g.guide_roots.len(), &params, &mut arena_bytes),
+        PelageStatus::Ok,
+        &[],
+    );
+    let mut arena = vec![0u8; arena_bytes];
+    // every call that takes bindings from the host, with `bindings`
+    let mut calls = |bindings: &[PelageStrandBinding], out: &mut [[f32; 4]]| {
+        let strands = strands_desc(&g.strands, bindings, &g.grooms);
+        let mut groom = null_mut();
+        let new = pelage_groom_new(&strands, &mut groom);
+        pelage_groom_free(groom);
+        let expand = pelage_expand(posed.0, &strands, &params, &curves_desc(out, None));
+        let mut boxes = [0.0f32; 6];
+        let patch = PelagePatch {
+            first: 0,
+            count: n as u32,
+        };
+        let boxes = pelage_patch_boxes(posed.0, &strands, &params, &patch, 1, boxes.as_mut_ptr());
+        let mut grooms = g.grooms.clone();
+        let settle = pelage_settle(
+            &d,
+            &g.guides(),
+            bytemuck::cast_slice::<_, PelageRoot>(&g.strands).as_ptr(),
+            bindings.as_ptr(),
+            grooms.as_mut_ptr(),
+            n,
+            &params,
+            arena.as_mut_ptr().cast(),
+            arena_bytes,
+            null_mut(),
+        );
+        let file = groom_file(&m, &g, bindings)
+            .err()
+            .unwrap_or(PelageStatus::Ok);
+        [new, expand, boxes, settle, file]
+    };
+    let all_ok = [PelageStatus::Ok; 5];
+    assert_eq!(calls(&g.bindings, &mut out), all_ok, "{}", last_error());
+    // eight weights of 1: a strand 8 times as long as its guides
+    let mut bad = g.bindings.clone();
+    bad[7] = PelageStrandBinding {
+        guides: [0, 1, 2, 3, 4, 5, 6, 7],
+        weights: [1.0; 8],
+        count: 8,
+        clump: 0,
+    };
+    for status in calls(&bad, &mut out) {
+        expect(
+            status,
+            PelageStatus::InvalidArgument,
+            &["bindings[7].weights sum to 8 (must be 1 within 1e-4)"],
+        );
+    }
+    // within the tolerance, and just past it
+    let pair = |a: f32, b: f32| PelageStrandBinding {
+        guides: [0, 1, 0, 0, 0, 0, 0, 0],
+        weights: [a, b, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        count: 2,
+        clump: 0,
+    };
+    bad[7] = pair(0.5, 0.50005);
+    assert_eq!(calls(&bad, &mut out), all_ok, "{}", last_error());
+    bad[7] = pair(0.5, 0.4998);
+    for status in calls(&bad, &mut out) {
+        expect(
+            status,
+            PelageStatus::InvalidArgument,
+            &[
+                "bindings[7].weights sum to 0.999",
+                "(must be 1 within 1e-4)",
+            ],
+        );
+    }
+    // an orphan has no weight: its sum is 0, and it is fine
+    bad[7] = PelageStrandBinding {
+        clump: u32::MAX,
+        ..PelageStrandBinding::default()
+    };
+    assert_eq!(calls(&bad, &mut out), all_ok, "{}", last_error());
+    drop(rest);
+}
+
+#[test]
+fn the_library_s_own_bindings_pass_and_its_groom_files_read() {
+    // pelage_bind at every neighbour count, and the groom file it goes into
+    let (m, mut g) = fixture();
+    let d = mesh_desc(&m);
+    let mut bytes = 0usize;
+    expect(
+        pelage_bind_query(&d, g.guide_roots.len(), &mut bytes),
+        PelageStatus::Ok,
+        &[],
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut worst = 0.0f64;
+    for (min, max) in [(1, 1), (1, 8), (8, 8), (3, 6)] {
+        let params = PelageBindParams {
+            min_neighbours: min,
+            max_neighbours: max,
+            seed: u64::from(min * 10 + max),
+            ..pelage_bind_params_defaults()
+        };
+        let n = g.strands.len();
+        expect(
+            pelage_bind(
+                &d,
+                &g.guides(),
+                bytemuck::cast_slice::<_, PelageRoot>(&g.strands).as_ptr(),
+                n,
+                &params,
+                arena.as_mut_ptr().cast(),
+                bytes,
+                g.bindings.as_mut_ptr(),
+                n,
+                null_mut(),
+            ),
+            PelageStatus::Ok,
+            &[],
+        );
+        for b in g.bindings.iter().filter(|b| b.count > 0) {
+            let sum: f32 = b.weights[..b.count as usize].iter().sum();
+            worst = worst.max((f64::from(sum) - 1.0).abs());
+        }
+        let file = groom_file(&m, &g, &g.bindings).unwrap();
+        expect(read_groom_file(&g, &file), PelageStatus::Ok, &[]);
+    }
+    // far inside the tolerance
+    assert!(worst < 1e-6, "{worst}");
 }

@@ -480,6 +480,12 @@ mod tests {
         nan[weight..weight + 4].copy_from_slice(&f32::NAN.to_le_bytes());
         reseal(&mut nan);
         assert!(matches!(out.decode(&nan), Err(Error::Corrupt { .. })));
+        // weights in 0..1 that sum to 2 (the fixture's are 0.25 and 0.75)
+        let mut sum = bytes.clone();
+        sum[weight..weight + 4].copy_from_slice(&1.0f32.to_le_bytes());
+        sum[weight + 4..weight + 8].copy_from_slice(&1.0f32.to_le_bytes());
+        reseal(&mut sum);
+        assert!(matches!(out.decode(&sum), Err(Error::Corrupt { .. })));
         // a binding naming a guide past the count
         let mut index = bytes.clone();
         let guide = weight - 32;

@@ -28,6 +28,12 @@ use glam::Vec3;
 pub const MAX_NEIGHBOURS: usize = 8;
 /// Marks a strand without eligible guides in [`StrandBinding::clump`].
 pub const NO_GUIDE: u32 = u32::MAX;
+/// How far the weights of a bound strand may sum from 1. Binding divides
+/// each weight by their float32 sum, which leaves them within a few 1e-7
+/// of 1 (at most 8 roundings); 1e-4 also takes weights a host rounded to
+/// 5 decimals, and is small enough that no strand is measurably longer or
+/// shorter than its guides make it.
+pub const WEIGHT_SUM_TOLERANCE: f32 = 1e-4;
 /// The local guide spacing at a strand is its distance to this many-th
 /// nearest eligible guide.
 const SPACING_RANK: usize = 3;
@@ -98,7 +104,8 @@ impl Default for BindParams<'_> {
 pub struct StrandBinding {
     /// Guide indices; the first `count` are used.
     pub guides: [u32; MAX_NEIGHBOURS],
-    /// Normalized weights matching `guides`.
+    /// Weights matching `guides`, each in 0..=1; the first `count` sum to
+    /// 1 within [`WEIGHT_SUM_TOLERANCE`] (an orphan has none).
     pub weights: [f32; MAX_NEIGHBOURS],
     /// Number of guides used; 0 for an orphan (no eligible guide).
     pub count: u32,

@@ -214,8 +214,8 @@ pub fn patch_box(
         let (r, b, g) = (&strands.roots[i], &strands.bindings[i], &strands.grooms[i]);
         let o = mesh.point(r.face as usize, r.u, r.v);
         let count = b.count as usize;
-        // the weights need not sum to 1: the blend is within the weighted
-        // sum of the reaches
+        // the weights sum to 1 only within a tolerance: the blend is within
+        // the weighted sum of the reaches
         let far = if count == 0 {
             params.orphan_length.abs()
         } else {

@@ -2,7 +2,7 @@
 //! expansion, settling and the groom handle read per strand, checked once
 //! so that the kernel never meets a value it cannot turn into finite points.
 
-use crate::interp::bind::{StrandBinding, MAX_NEIGHBOURS, NO_GUIDE};
+use crate::interp::bind::{StrandBinding, MAX_NEIGHBOURS, NO_GUIDE, WEIGHT_SUM_TOLERANCE};
 use crate::interp::groom::StrandGroom;
 use crate::root::{check_root, BARYCENTRIC_SLACK};
 use crate::{Error, Root};
@@ -171,12 +171,16 @@ fn strand_is_valid(
     } else {
         b.clump as usize + 1
     };
+    // summed in slot order, as `weight_sum` does
+    let mut sum = 0.0f32;
     for k in 0..MAX_NEIGHBOURS {
         let guide = b.guides[k] as usize;
         let fine = (guide < guides) & (b.weights[k] >= 0.0) & (b.weights[k] <= 1.0);
         binding &= (k >= count) | fine;
         used = used.max(if k < count { guide + 1 } else { 0 });
+        sum += if k < count { b.weights[k] } else { 0.0 };
     }
+    binding &= (count == 0) | ((sum - 1.0).abs() <= WEIGHT_SUM_TOLERANCE);
     binding &= (b.clump == NO_GUIDE) | ((b.clump as usize) < guides);
     let values: &[f32] = bytemuck::cast_slice(core::slice::from_ref(g));
     let bounded = values
@@ -189,6 +193,11 @@ fn strand_is_valid(
         & (g.length >= 0.0)
         & (Vec2::from(g.lift).length_squared() <= pi2);
     (root & binding & groom, used)
+}
+
+/// The float32 sum of `weights` in order: the one both checks compare.
+fn weight_sum(weights: &[f32]) -> f32 {
+    weights.iter().fold(0.0, |s, w| s + w)
 }
 
 /// Checks one strand, naming the first fault (element index 0).
@@ -231,6 +240,11 @@ fn check_strand(
             index: 0,
         });
     }
+    // an orphan has no weight to sum; the weights are finite here
+    let sum = weight_sum(&b.weights[..count]);
+    if count > 0 && (sum - 1.0).abs() > WEIGHT_SUM_TOLERANCE {
+        return Err(Error::WeightSum { index: 0, sum });
+    }
     let values: &[f32] = bytemuck::cast_slice(core::slice::from_ref(g));
     if !values.iter().all(|v| v.is_finite()) {
         return Err(Error::NonFinite {
@@ -267,6 +281,9 @@ mod tests {
             0.0,
             0.3,
             0.9,
+            // with the base weights 0.3 and 0.5: a sum within 1e-4 of 1, and one past it
+            0.20005,
+            0.2002,
             -1e-3,
             -1e-5,
             1.0,
@@ -289,7 +306,7 @@ mod tests {
             let mesh = m.mesh();
             // a valid strand, then up to two fields changed
             let mut r = Root { face: 1, u: 0.2, v: 0.3, id: 0, rank: 0 };
-            let mut b = StrandBinding { guides: [0, 1, 2, 0, 0, 0, 0, 0], weights: [0.3; 8], count: 3, clump: 0 };
+            let mut b = StrandBinding { guides: [0, 1, 2, 0, 0, 0, 0, 0], weights: [0.2, 0.3, 0.5, 0.3, 0.3, 0.3, 0.3, 0.3], count: 3, clump: 0 };
             let mut g = StrandGroom { length: 1.0, root_radius: 0.01, tip_radius: 0.001, ..StrandGroom::default() };
             for &(field, x, i) in &changes {
                 match field {

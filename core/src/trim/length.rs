@@ -81,8 +81,8 @@ pub fn hair_length(binding: &StrandBinding, groom: &StrandGroom, guides: &[f32])
             weight += w;
         }
     }
-    // the weights' sum may differ from 1 (a host's bindings, rounding):
-    // the mean is over the weights as they are
+    // the weights sum to 1 only within WEIGHT_SUM_TOLERANCE: the mean is
+    // over the weights as they are
     if !trimmed {
         return WHOLE;
     }
