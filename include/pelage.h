@@ -966,10 +966,13 @@ enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size
 enum PelageStatus pelage_groom_expand_edited(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageStrandEdits *edits, const struct PelageExpandParams *params, const struct PelageCurves *curves);
 
 // The most bytes `pelage_guide_cache_write` writes for `sample_count`
-// shutter samples of `guide_count` guides of `points_per_guide` points
-// (a quantized frame typically takes a tenth of it).
+// shutter samples (1..255) of `guide_count` guides (at least 1) of
+// `points_per_guide` points (2..64), quantized (`exact` 0) or exact
+// (`exact` 1). A quantized frame typically takes a tenth of it.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a cache past 4 GB), PANIC.
+// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a count outside its
+// range, `exact` other than 0 or 1, or a cache past 4 GB, counts whose
+// product overflows included), PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_guide_cache_max_size(size_t guide_count, uint32_t points_per_guide, uint32_t sample_count, uint32_t exact, size_t *bytes);
@@ -983,7 +986,8 @@ enum PelageStatus pelage_guide_cache_max_size(size_t guide_count, uint32_t point
 // `*written`. On failure `out` is untouched.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts that differ from
-// the guide set's, a frame with no guides, sample count), NON_FINITE,
+// the guide set's, a frame with no guides, sample count, `exact` other
+// than 0 or 1), NON_FINITE,
 // OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread; the frames may be read by
@@ -1008,8 +1012,10 @@ enum PelageStatus pelage_guide_cache_info(const void *data, size_t length, struc
 // do not depend on it.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
-// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
-// VERSION_MISMATCH, MISALIGNED, OUT_OF_MEMORY, PANIC (also when a worker thread cannot
+// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA
+// (also a coding its version does not have: a version 1 label on a guide
+// coded from the one before it), VERSION_MISMATCH, MISALIGNED,
+// OUT_OF_MEMORY, PANIC (also when a worker thread cannot
 // start: the frame's guides are then unspecified until the next
 // successful call).
 //

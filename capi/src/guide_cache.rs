@@ -58,11 +58,27 @@ impl PelageGuideSet {
     }
 }
 
+/// The mode an `exact` flag names; only the documented values are taken,
+/// so a host's stray flag bits never pick a mode.
+fn mode(exact: u32) -> Result<Mode, Failure> {
+    match exact {
+        0 => Ok(Mode::Quantized),
+        1 => Ok(Mode::Exact),
+        other => Err(Failure::new(
+            PelageStatus::InvalidArgument,
+            format!("exact is {other}: it must be 0 (quantized) or 1 (exact float32)"),
+        )),
+    }
+}
+
 /// The most bytes `pelage_guide_cache_write` writes for `sample_count`
-/// shutter samples of `guide_count` guides of `points_per_guide` points
-/// (a quantized frame typically takes a tenth of it).
+/// shutter samples (1..255) of `guide_count` guides (at least 1) of
+/// `points_per_guide` points (2..64), quantized (`exact` 0) or exact
+/// (`exact` 1). A quantized frame typically takes a tenth of it.
 ///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a cache past 4 GB), PANIC.
+/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a count outside its
+/// range, `exact` other than 0 or 1, or a cache past 4 GB, counts whose
+/// product overflows included), PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -75,8 +91,7 @@ pub extern "C" fn pelage_guide_cache_max_size(
 ) -> PelageStatus {
     ffi_boundary! {
         let out = req_mut(bytes, "bytes")?;
-        let mode = if exact != 0 { Mode::Exact } else { Mode::Quantized };
-        *out = guide_cache::max_encoded_bytes(guide_count, points_per_guide as usize, sample_count as usize, mode)?;
+        *out = guide_cache::max_encoded_bytes(guide_count, points_per_guide as usize, sample_count as usize, mode(exact)?)?;
         Ok(())
     }
 }
@@ -90,7 +105,8 @@ pub extern "C" fn pelage_guide_cache_max_size(
 /// `*written`. On failure `out` is untouched.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts that differ from
-/// the guide set's, a frame with no guides, sample count), NON_FINITE,
+/// the guide set's, a frame with no guides, sample count, `exact` other
+/// than 0 or 1), NON_FINITE,
 /// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread; the frames may be read by
@@ -107,6 +123,7 @@ pub extern "C" fn pelage_guide_cache_write(
 ) -> PelageStatus {
     ffi_boundary! {
         let written = req_mut(written, "written")?;
+        let mode = mode(exact)?;
         let set = req(guides, "guides")?;
         let groom = set.view()?;
         let handles = handles(samples, sample_count as usize, "samples")?;
@@ -114,7 +131,6 @@ pub extern "C" fn pelage_guide_cache_write(
             .iter()
             .map(|&h| object(h).map(|f| f.posed()))
             .collect::<Result<Vec<&PosedFrame>, Failure>>()?;
-        let mode = if exact != 0 { Mode::Exact } else { Mode::Quantized };
         *written = guide_cache::encode(&groom, set.groom_id, &frames, mode, bytes_mut(out, capacity, "out")?)?;
         Ok(())
     }
@@ -156,8 +172,10 @@ pub extern "C" fn pelage_guide_cache_info(
 /// do not depend on it.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
-/// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA,
-/// VERSION_MISMATCH, MISALIGNED, OUT_OF_MEMORY, PANIC (also when a worker thread cannot
+/// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA
+/// (also a coding its version does not have: a version 1 label on a guide
+/// coded from the one before it), VERSION_MISMATCH, MISALIGNED,
+/// OUT_OF_MEMORY, PANIC (also when a worker thread cannot
 /// start: the frame's guides are then unspecified until the next
 /// successful call).
 ///

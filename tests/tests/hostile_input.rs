@@ -11,7 +11,7 @@
 use pelage::*;
 use pelage_tests::creature::{creature, CreatureMesh};
 use pelage_tests::measure::{
-    curves_desc, frame, groom_handle, groomed, mesh_desc, strands_desc, Groomed,
+    curves_desc, frame, groom_handle, groomed, guides_desc, mesh_desc, strands_desc, Frame, Groomed,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::ffi::CStr;
@@ -291,8 +291,9 @@ fn groom_file(
     }
 }
 
-/// Reads a groom file of `g`'s counts.
-fn read_groom_file(g: &Groomed, bytes: &[u8]) -> PelageStatus {
+/// The guides of a groom file of `g`'s counts (roots, rest points in
+/// their root frames), or the failing status.
+fn read_groom_file(g: &Groomed, bytes: &[u8]) -> Result<(Vec<PelageRoot>, Vec<f32>), PelageStatus> {
     let (guides, n) = (g.guide_roots.len(), g.strands.len());
     let mut guide_roots = vec![PelageRoot::default(); guides];
     let mut guide_points = vec![0.0f32; guides * CVS * 3];
@@ -310,7 +311,10 @@ fn read_groom_file(g: &Groomed, bytes: &[u8]) -> PelageStatus {
         patches: null_mut(),
         patch_capacity: 0,
     };
-    pelage_groom_file_read(bytes.as_ptr().cast(), bytes.len(), &buffers)
+    match pelage_groom_file_read(bytes.as_ptr().cast(), bytes.len(), &buffers) {
+        PelageStatus::Ok => Ok((guide_roots, guide_points)),
+        s => Err(s),
+    }
 }
 
 #[test]
@@ -457,8 +461,146 @@ fn the_library_s_own_bindings_pass_and_its_groom_files_read() {
             worst = worst.max((f64::from(sum) - 1.0).abs());
         }
         let file = groom_file(&m, &g, &g.bindings).unwrap();
-        expect(read_groom_file(&g, &file), PelageStatus::Ok, &[]);
+        if let Err(s) = read_groom_file(&g, &file) {
+            expect(s, PelageStatus::Ok, &[]);
+        }
     }
     // far inside the tolerance
     assert!(worst < 1e-6, "{worst}");
+}
+
+/// CRC-32 (IEEE) of `bytes`, as the files' framing takes it.
+fn crc32(bytes: impl Iterator<Item = u8>) -> u32 {
+    !bytes.fold(!0u32, |crc, b| {
+        (0..8).fold(crc ^ u32::from(b), |c, _| {
+            (c >> 1) ^ (0xEDB8_8320 & (c & 1).wrapping_neg())
+        })
+    })
+}
+
+/// A guide cache relabelled as format `version`, its CRC made valid again.
+fn relabelled(cache: &[u8], version: u32) -> Vec<u8> {
+    // the CRC sits 8 bytes before the payload of the cache's 6 header fields
+    let crc_at = 32 + 8 * 6 - 8;
+    let mut bytes = cache.to_vec();
+    bytes[8..12].copy_from_slice(&version.to_le_bytes());
+    let crc = crc32(bytes[..crc_at].iter().chain(&bytes[crc_at + 8..]).copied());
+    bytes[crc_at..crc_at + 4].copy_from_slice(&crc.to_le_bytes());
+    bytes
+}
+
+/// `p` moved as a smooth, non-rigid pose moves it.
+fn warp(p: [f32; 3]) -> [f32; 3] {
+    [
+        p[0] + 0.05 * (2.0 * p[1]).sin(),
+        p[1] * 1.02,
+        p[2] + 0.03 * (3.0 * p[0]).cos(),
+    ]
+}
+
+#[test]
+fn guide_cache_flags_and_versions_take_only_what_is_documented() {
+    let (m, g) = fixture();
+    let (guides, pts) = (g.guide_roots.len(), CVS as u32);
+    let mut size = 0usize;
+    // sizes: only counts a cache can hold, only the two modes
+    expect(
+        pelage_guide_cache_max_size(guides, pts, 1, 0, &mut size),
+        PelageStatus::Ok,
+        &[],
+    );
+    let bad = [
+        (guides, pts, 0, 0, "shutter samples"),
+        (guides, pts, 256, 0, "shutter samples"),
+        (guides, 0, 1, 0, "points"),
+        (guides, 65, 1, 0, "points"),
+        (0, pts, 1, 0, "guide"),
+        (guides, pts, 1, 7, "exact is 7"),
+        (guides, pts, 1, 2, "exact is 2"),
+        (1 << 28, pts, 2, 1, "4 GB"),
+        (usize::MAX, pts, 255, 0, "4 GB"),
+    ];
+    for (g, p, s, exact, what) in bad {
+        let mut out = 12345usize;
+        expect(
+            pelage_guide_cache_max_size(g, p, s, exact, &mut out),
+            PelageStatus::InvalidArgument,
+            &[what],
+        );
+        assert_eq!(out, 12345);
+    }
+    // the groom file's guides, a warped frame of them, and its cache
+    let file = groom_file(&m, &g, &g.bindings).unwrap();
+    let (guide_roots, guide_points) = read_groom_file(&g, &file).unwrap();
+    let mut info = PelageGroomFileInfo::default();
+    expect(
+        pelage_groom_file_info(file.as_ptr().cast(), file.len(), &mut info),
+        PelageStatus::Ok,
+        &[],
+    );
+    let set = PelageGuideSet {
+        guide_roots: guide_roots.as_ptr(),
+        guide_points: guide_points.as_ptr(),
+        guide_count: guides,
+        points_per_guide: pts,
+        groom_id: info.id,
+    };
+    let posed_mesh = CreatureMesh {
+        positions: m.positions.iter().map(|&p| warp(p)).collect(),
+        ..m.clone()
+    };
+    let posed_points: Vec<[f32; 3]> = g.guide_points.iter().map(|&p| warp(p)).collect();
+    let d = mesh_desc(&posed_mesh);
+    let posed = frame(&d, &guides_desc(&g.guide_roots, &posed_points), pts, 1).unwrap();
+    let rest = frame(&mesh_desc(&m), &g.guides(), pts, 1).unwrap();
+    let mut cache = vec![0u8; size];
+    let write = |sample: &Frame, exact: u32, cache: &mut [u8]| {
+        let mut written = 0usize;
+        let s = pelage_guide_cache_write(
+            &set,
+            &sample.0,
+            1,
+            exact,
+            cache.as_mut_ptr().cast(),
+            cache.len(),
+            &mut written,
+        );
+        (s, written)
+    };
+    for exact in [2, 3, 7] {
+        let (s, _) = write(&posed, exact, &mut cache);
+        expect(s, PelageStatus::InvalidArgument, &["exact"]);
+    }
+    // a quantized cache of the warped frame codes guides from their
+    // neighbours, which version 1 cannot: relabelled, it is corrupt
+    let (s, written) = write(&posed, 0, &mut cache);
+    expect(s, PelageStatus::Ok, &[]);
+    let decoded = frame(&d, &guides_desc(&g.guide_roots, &g.guide_points), pts, 1).unwrap();
+    let read = |bytes: &[u8]| {
+        pelage_guide_cache_read(bytes.as_ptr().cast(), bytes.len(), &set, 0, decoded.0, 1)
+    };
+    expect(read(&cache[..written]), PelageStatus::Ok, &[]);
+    let v1 = relabelled(&cache[..written], 1);
+    let mut cinfo = PelageGuideCacheInfo::default();
+    expect(
+        pelage_guide_cache_info(v1.as_ptr().cast(), v1.len(), &mut cinfo),
+        PelageStatus::Ok,
+        &[],
+    );
+    expect(
+        read(&v1),
+        PelageStatus::CorruptData,
+        &["version 1", "the one before it"],
+    );
+    // while a cache at the neutral pose has no such code: as version 1 it
+    // still reads (what version 1 files hold)
+    let (s, written) = write(&rest, 0, &mut cache);
+    expect(s, PelageStatus::Ok, &[]);
+    let rest_decoded = frame(&mesh_desc(&m), &g.guides(), pts, 1).unwrap();
+    let v1 = relabelled(&cache[..written], 1);
+    expect(
+        pelage_guide_cache_read(v1.as_ptr().cast(), v1.len(), &set, 0, rest_decoded.0, 1),
+        PelageStatus::Ok,
+        &[],
+    );
 }

@@ -22,9 +22,11 @@
 //! so ranges of blocks decode independently (on any threads, the same
 //! bits).
 
+use super::bits::{rice_bits, BitReader, BitWriter};
 use super::container::{self, product, Reader, Writer};
 use super::groom_file::{check_guides, Groom};
 use crate::interp::posed::PosedFrame;
+use crate::interp::strand::MAX_STRAND_POINTS;
 use crate::root::check_root;
 use crate::surface::frame::{self, Frame, FRAME_LANES};
 use crate::surface::mesh::MAX_COORDINATE;
@@ -40,6 +42,8 @@ pub const VERSION: u32 = 2;
 /// Guides per block of the offset table.
 pub const BLOCK: usize = 256;
 const FIELDS: usize = 6;
+/// Most shutter samples a cache holds.
+const MAX_SAMPLES: usize = 255;
 
 /// Quantization steps per guide length.
 const STEPS: f64 = 16384.0;
@@ -56,11 +60,6 @@ const NEIGHBOUR_ZERO: u8 = 0xfe;
 /// those of the guide before it in its block (neighbouring guides bend
 /// alike), then the Rice parameter in the low bits.
 const NEIGHBOUR: u8 = 0x80;
-/// A value whose quotient reaches this many ones is escaped: the ones,
-/// then the value in [`RAW_BITS`] bits.
-const ESCAPE: u64 = 24;
-/// Bits of an escaped value (zigzagged offsets stay below 2^33).
-const RAW_BITS: u32 = 40;
 
 const PACKED: u8 = 0;
 const RAW: u8 = 1;
@@ -93,6 +92,9 @@ pub struct CacheInfo {
 /// A guide cache's bytes, framing and counts checked.
 pub struct GuideCache<'a> {
     info: CacheInfo,
+    /// The format version of the bytes: 1 codes no guide from the one
+    /// before it.
+    version: u32,
     /// `samples * blocks + 1` offsets into `stream`.
     offsets: &'a [u8],
     stream: &'a [u8],
@@ -124,16 +126,6 @@ fn zigzag(v: i64) -> u64 {
 
 fn unzigzag(v: u64) -> i64 {
     (v >> 1) as i64 ^ -((v & 1) as i64)
-}
-
-/// Bits of `z` Rice-coded with parameter `k`.
-fn rice_bits(z: u64, k: u32) -> u64 {
-    let q = z >> k;
-    if q < ESCAPE {
-        q + 1 + u64::from(k)
-    } else {
-        ESCAPE + u64::from(RAW_BITS)
-    }
 }
 
 /// One guide, coded: a tag, then its Rice parameters and bits, or raw
@@ -248,31 +240,6 @@ fn code(frame: &PosedFrame, g: usize, rest: &[[f32; 3]], before: Option<&Coded>)
     c
 }
 
-/// Writes bits least significant first.
-struct BitWriter<'w, 'a> {
-    w: &'w mut Writer<'a>,
-    acc: u128,
-    bits: u32,
-}
-
-impl BitWriter<'_, '_> {
-    fn put(&mut self, value: u64, bits: u32) {
-        self.acc |= u128::from(value) << self.bits;
-        self.bits += bits;
-        while self.bits >= 8 {
-            self.w.u8(self.acc as u8);
-            self.acc >>= 8;
-            self.bits -= 8;
-        }
-    }
-
-    fn finish(self) {
-        if self.bits > 0 {
-            self.w.u8(self.acc as u8);
-        }
-    }
-}
-
 fn write_coded(w: &mut Writer, c: &Coded, n: usize) {
     w.u8(c.tag);
     if c.tag == RAW {
@@ -282,47 +249,53 @@ fn write_coded(w: &mut Writer, c: &Coded, n: usize) {
     for &k in &c.ks {
         w.u8(k);
     }
-    let mut bits = BitWriter { w, acc: 0, bits: 0 };
+    let mut bits = BitWriter::new(w);
     for axis in (0..3).filter(|&a| c.ks[a] != ZERO && c.ks[a] != NEIGHBOUR_ZERO) {
         let k = u32::from(c.ks[axis] & !NEIGHBOUR);
         for &z in &c.errors[axis][..n] {
-            let q = z >> k;
-            if q < ESCAPE {
-                // q ones, a zero, then the k low bits
-                bits.put((1 << q) - 1, q as u32 + 1);
-                bits.put(z & ((1 << k) - 1), k);
-            } else {
-                bits.put((1 << ESCAPE) - 1, ESCAPE as u32);
-                bits.put(z, RAW_BITS);
-            }
+            bits.rice(z, k);
         }
     }
     bits.finish();
 }
 
-/// The most bytes [`encode`] writes for `samples` shutter samples of
-/// `guides` guides of `points` points (every guide stored raw; a typical
-/// quantized frame takes a tenth of it).
+/// The most bytes [`encode`] writes for `samples` shutter samples (1..=255)
+/// of `guides` guides (at least 1) of `points` points (2..=64): every
+/// guide stored raw; a typical quantized frame takes a tenth of it.
+/// Counts outside those ranges, or a stream past 4 GB (the offsets are
+/// u32; counts whose product overflows included), are an
+/// [`Error::InvalidArgument`].
 pub fn max_encoded_bytes(
     guides: usize,
     points: usize,
     samples: usize,
     mode: Mode,
 ) -> Result<usize, Error> {
-    let per_guide = match mode {
-        Mode::Exact => 12 * points as u64,
-        Mode::Quantized => 1 + 12 * points as u64,
-    };
-    let stream = product(&[samples as u64, guides as u64, per_guide])?;
-    if stream > u32::MAX as usize {
-        return Err(Error::InvalidArgument("a frame's cache is limited to 4 GB"));
+    if guides == 0 || !(2..=MAX_STRAND_POINTS).contains(&points) {
+        return Err(Error::InvalidArgument(
+            "a cache holds at least 1 guide of 2..=64 points",
+        ));
     }
+    if !(1..=MAX_SAMPLES).contains(&samples) {
+        return Err(Error::InvalidArgument(
+            "a cache holds 1..=255 shutter samples",
+        ));
+    }
+    let per_guide = match mode {
+        Mode::Exact => 12 * points,
+        Mode::Quantized => 1 + 12 * points,
+    };
+    let stream = samples
+        .checked_mul(guides)
+        .and_then(|n| n.checked_mul(per_guide))
+        .filter(|&n| n <= u32::MAX as usize)
+        .ok_or(Error::InvalidArgument("a frame's cache is limited to 4 GB"))?;
     let offsets = 4 * (samples * guides.div_ceil(BLOCK) + 1);
     Ok(container::header_bytes(FIELDS) + offsets + stream)
 }
 
 fn check_samples(groom: &Groom, samples: &[&PosedFrame]) -> Result<(), Error> {
-    if samples.is_empty() || samples.len() > 255 {
+    if !(1..=MAX_SAMPLES).contains(&samples.len()) {
         return Err(Error::InvalidArgument(
             "a cache holds 1..=255 shutter samples",
         ));
@@ -411,18 +384,21 @@ impl<'a> GuideCache<'a> {
     /// Checks a cache's framing (magic, version, length, checksum), counts
     /// and offset table.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
-        let file = match container::read(bytes, &MAGIC, VERSION, FIELDS) {
+        let (file, version) = match container::read(bytes, &MAGIC, VERSION, FIELDS) {
             Err(Error::VersionMismatch { found: 1, .. }) => {
-                container::read(bytes, &MAGIC, 1, FIELDS)?
+                (container::read(bytes, &MAGIC, 1, FIELDS)?, 1)
             }
-            file => file?,
+            file => (file?, VERSION),
         };
         let [guides, points, samples, mode, groom, block, ..] = file.fields;
         let bad = |what| Err(Error::Corrupt { what });
-        if guides == 0 || guides >= u64::from(u32::MAX) || !(2..=64).contains(&points) {
+        if guides == 0
+            || guides >= u64::from(u32::MAX)
+            || !(2..=MAX_STRAND_POINTS as u64).contains(&points)
+        {
             return bad("guide or point count");
         }
-        if !(1..=255).contains(&samples) || mode > 1 || groom > u64::from(u32::MAX) {
+        if !(1..=MAX_SAMPLES as u64).contains(&samples) || mode > 1 || groom > u64::from(u32::MAX) {
             return bad("sample count, mode or groom id");
         }
         if block != BLOCK as u64 {
@@ -458,6 +434,7 @@ impl<'a> GuideCache<'a> {
                 },
                 groom: groom as u32,
             },
+            version,
             offsets,
             stream,
         })
@@ -642,8 +619,8 @@ impl<'a> GuideCache<'a> {
                     // the two slots take turns (no copy)
                     let [even, odd] = &mut offsets;
                     let (previous, q) = if i % 2 == 0 { (odd, even) } else { (even, odd) };
-                    before =
-                        unpack_guide(&mut r, rest, before.then_some(&*previous), q, tag, lanes)?;
+                    let before_q = before.then_some(&*previous);
+                    before = unpack_guide(&mut r, rest, self.version, before_q, q, tag, lanes)?;
                 }
             }
         }
@@ -678,12 +655,14 @@ fn read_point(r: &mut Reader) -> Result<Vec3, Error> {
     Ok(Vec3::from(p[0]))
 }
 
-/// Unpacks one guide's record into its `tag` and `lanes`; `before` holds
-/// the quantized offsets of the guide before in the block when that one
-/// is packed, and `q` takes this one's. Returns whether it is packed.
+/// Unpacks one guide's record (of a file of format `version`) into its
+/// `tag` and `lanes`; `before` holds the quantized offsets of the guide
+/// before in the block when that one is packed, and `q` takes this one's.
+/// Returns whether it is packed.
 fn unpack_guide(
     r: &mut Reader,
     rest: &[[f32; 3]],
+    version: u32,
     before: Option<&[[i64; 64]; 3]>,
     q: &mut [[i64; 64]; 3],
     tag: &mut [u32],
@@ -705,6 +684,13 @@ fn unpack_guide(
                 if *k & !NEIGHBOUR > MAX_K && *k != ZERO && *k != NEIGHBOUR_ZERO {
                     return Err(Error::Corrupt {
                         what: "a Rice parameter past 40",
+                    });
+                }
+                // version 1 has no such code: a file that claims it and
+                // holds one was not written by a version 1 encoder
+                if *k & NEIGHBOUR != 0 && *k != ZERO && version < 2 {
+                    return Err(Error::Corrupt {
+                        what: "a version 1 cache codes a guide from the one before it (version 2 does)",
                     });
                 }
                 if *k & NEIGHBOUR != 0 && *k != ZERO && before.is_none() {
@@ -886,439 +872,5 @@ impl CacheFiller<'_> {
     }
 }
 
-/// Reads bits least significant first from a slice, failing past its end.
-struct BitReader<'a> {
-    bytes: &'a [u8],
-    /// Bytes counted into `acc`.
-    next: usize,
-    /// The bits held, the first `have` counted; any above are the bytes
-    /// from `next` on, loaded early.
-    acc: u64,
-    have: u32,
-}
-
-impl<'a> BitReader<'a> {
-    fn new(bytes: &'a [u8]) -> Self {
-        BitReader {
-            bytes,
-            next: 0,
-            acc: 0,
-            have: 0,
-        }
-    }
-
-    /// Counts whole bytes in while they fit: at least 56 bits held unless
-    /// the slice ends.
-    #[inline(always)]
-    fn refill(&mut self) {
-        if let Some(w) = self.bytes.get(self.next..self.next + 8) {
-            let word = u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]);
-            self.acc |= word << self.have;
-            self.next += ((63 - self.have) >> 3) as usize;
-            self.have |= 56;
-        } else {
-            self.refill_tail();
-        }
-    }
-
-    #[cold]
-    fn refill_tail(&mut self) {
-        while self.have <= 56 {
-            let Some(&b) = self.bytes.get(self.next) else {
-                return;
-            };
-            self.acc |= u64::from(b) << self.have;
-            self.next += 1;
-            self.have += 8;
-        }
-    }
-
-    /// Bytes read so far, the last one perhaps in part (a guide's bits
-    /// end on a byte).
-    fn bytes_used(&self) -> usize {
-        self.next - (self.have / 8) as usize
-    }
-
-    /// The `bits` (<= 40) next bits.
-    #[inline]
-    fn take(&mut self, bits: u32) -> Result<u64, Error> {
-        if self.have < bits {
-            self.refill();
-            if self.have < bits {
-                return Err(truncated());
-            }
-        }
-        let v = self.acc & ((1u64 << bits) - 1);
-        self.acc >>= bits;
-        self.have -= bits;
-        Ok(v)
-    }
-
-    /// One Rice-coded value with parameter `k`: a run of ones (the
-    /// quotient), a zero, `k` low bits; a run of [`ESCAPE`] ones is
-    /// followed by the value in [`RAW_BITS`] bits.
-    #[inline(always)]
-    fn rice(&mut self, k: u32) -> Result<u64, Error> {
-        if self.have < 32 {
-            self.refill();
-        }
-        // bits past `have` may be zeros that end the run early: the fast
-        // path takes a code only when it lies within `have`
-        let run = (!self.acc).trailing_zeros();
-        let used = run + 1 + k;
-        if run < ESCAPE as u32 && used <= self.have {
-            let v = (u64::from(run) << k) | ((self.acc >> (run + 1)) & ((1u64 << k) - 1));
-            self.acc >>= used;
-            self.have -= used;
-            return Ok(v);
-        }
-        self.rice_slow(k)
-    }
-
-    /// [`BitReader::rice`] for a long or escaped code, or near the
-    /// slice's end.
-    #[cold]
-    #[inline(never)]
-    fn rice_slow(&mut self, k: u32) -> Result<u64, Error> {
-        self.refill();
-        let run = (!self.acc).trailing_zeros().min(self.have);
-        if run >= ESCAPE as u32 {
-            self.take(ESCAPE as u32)?;
-            return self.take(RAW_BITS);
-        }
-        if run == self.have {
-            return Err(truncated());
-        }
-        self.take(run + 1)?;
-        Ok((u64::from(run) << k) | self.take(k)?)
-    }
-}
-
-fn truncated() -> Error {
-    Error::Corrupt {
-        what: "truncated guide bits",
-    }
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::cache::fixture::{Scene, POINTS};
-
-    const GROOM_ID: u32 = 77;
-
-    fn scratch(cache: &GuideCache) -> Vec<u32> {
-        vec![0; cache.scratch_words()]
-    }
-
-    fn write(groom: &Groom, samples: &[&PosedFrame], mode: Mode) -> Vec<u8> {
-        let (g, n) = (groom.guide_roots.len(), groom.points);
-        let mut out = vec![0u8; max_encoded_bytes(g, n, samples.len(), mode).unwrap()];
-        let written = encode(groom, GROOM_ID, samples, mode, &mut out).unwrap();
-        out.truncate(written);
-        out
-    }
-
-    /// The scene posed at `t0` and `t1`: the cache of both samples, and a
-    /// check run on each source frame.
-    fn two_samples(
-        scene: &Scene,
-        (t0, t1): (f32, f32),
-        mode: Mode,
-        mut check: impl FnMut(&[u8], usize, &PosedFrame, &crate::testmesh::TestMesh),
-    ) {
-        let (m0, w0) = scene.posed(t0);
-        let (m1, w1) = scene.posed(t1);
-        scene.with_frame(&m0, &w0, |f0| {
-            scene.with_frame(&m1, &w1, |f1| {
-                let bytes = write(&scene.groom(), &[f0, f1], mode);
-                check(&bytes, 0, f0, &m0);
-                check(&bytes, 1, f1, &m1);
-            })
-        });
-    }
-
-    #[test]
-    fn quantized_samples_decode_within_the_bound() {
-        let scene = Scene::new(600);
-        let groom = scene.groom();
-        let mut worst = 0.0f32;
-        two_samples(
-            &scene,
-            (0.8, 1.0),
-            Mode::Quantized,
-            |bytes, s, source, mesh| {
-                let cache = GuideCache::parse(bytes).unwrap();
-                assert_eq!(cache.info().samples, 2);
-                // decoded into a frame of the sample's mesh, posed with other guides
-                let (_, other) = scene.posed(0.3);
-                scene.with_frame(mesh, &other, |f| {
-                    cache
-                        .decode(&groom, GROOM_ID, s, f, &mut scratch(&cache))
-                        .unwrap();
-                    for g in 0..f.guide_count() {
-                        let rest = &groom.guide_points[g * POINTS..(g + 1) * POINTS];
-                        let bound = rest_length(rest) / 32768.0;
-                        for j in 0..POINTS {
-                            let (a, b) = (f.local_point(g, j), source.local_point(g, j));
-                            let err = (a - b).abs().max_element();
-                            let ulp = b.abs().max_element() * f32::EPSILON;
-                            assert!(err <= bound + ulp, "guide {g} point {j}: {err} > {bound}");
-                            worst = worst.max(err / bound);
-                            assert!(f.world_point(g, j).is_finite());
-                        }
-                    }
-                });
-            },
-        );
-        // the bound is reached, not far above what rounding gives
-        assert!(worst > 0.9, "{worst}");
-    }
-
-    #[test]
-    fn exact_samples_decode_bit_for_bit() {
-        let scene = Scene::new(300);
-        let groom = scene.groom();
-        two_samples(&scene, (0.5, 1.0), Mode::Exact, |bytes, s, source, mesh| {
-            let cache = GuideCache::parse(bytes).unwrap();
-            let (_, other) = scene.posed(0.1);
-            scene.with_frame(mesh, &other, |f| {
-                cache
-                    .decode(&groom, GROOM_ID, s, f, &mut scratch(&cache))
-                    .unwrap();
-                for g in 0..f.guide_count() {
-                    for j in 0..POINTS {
-                        assert_eq!(f.world_point(g, j), source.world_point(g, j));
-                        assert_eq!(f.local_point(g, j), source.local_point(g, j));
-                    }
-                }
-            });
-        });
-    }
-
-    #[test]
-    fn any_split_into_runs_decodes_the_same_bits() {
-        let scene = Scene::new(700);
-        let groom = scene.groom();
-        two_samples(&scene, (0.4, 0.7), Mode::Quantized, |bytes, s, _, mesh| {
-            let cache = GuideCache::parse(bytes).unwrap();
-            let (_, other) = scene.posed(0.1);
-            let whole = scene.with_frame(mesh, &other, |f| {
-                cache
-                    .decode(&groom, GROOM_ID, s, f, &mut scratch(&cache))
-                    .unwrap();
-                (0..f.guide_count() * POINTS)
-                    .map(|k| {
-                        (
-                            f.local_point(k / POINTS, k % POINTS),
-                            f.world_point(k / POINTS, k % POINTS),
-                        )
-                    })
-                    .collect::<Vec<_>>()
-            });
-            scene.with_frame(mesh, &other, |f| {
-                cache.check(&groom, GROOM_ID, s, f).unwrap();
-                let mut words = scratch(&cache);
-                let per = cache.words_per_guide();
-                // block by block, then posed in runs of 7 guides
-                for b in 0..cache.blocks() {
-                    let end = ((b + 1) * BLOCK).min(cache.info().guides);
-                    let part = &mut words[b * BLOCK * per..end * per];
-                    cache.unpack(&groom, s, b..b + 1, part).unwrap();
-                }
-                let decoding = cache.decoding(&groom, f);
-                let floats = decoding.filler.floats_per_guide();
-                for (r, run) in decoding.data.chunks_mut(7 * floats).enumerate() {
-                    let guides = run.len() / floats;
-                    let mine = &words[7 * r * per..(7 * r + guides) * per];
-                    decoding.filler.fill(7 * r, mine, run).unwrap();
-                }
-                decoding.finish();
-                for (k, &(l, w)) in whole.iter().enumerate() {
-                    let (g, j) = (k / POINTS, k % POINTS);
-                    assert_eq!((f.local_point(g, j), f.world_point(g, j)), (l, w));
-                }
-            });
-        });
-    }
-
-    /// Writes a valid CRC into `bytes`.
-    fn seal(bytes: &mut [u8]) {
-        let crc_at = container::header_bytes(FIELDS) - 8;
-        let mut h = crc32fast::Hasher::new();
-        h.update(&bytes[..crc_at]);
-        h.update(&bytes[crc_at + 8..]);
-        let crc = h.finalize().to_le_bytes();
-        bytes[crc_at..crc_at + 4].copy_from_slice(&crc);
-    }
-
-    #[test]
-    fn a_guide_at_its_neutral_pose_costs_four_bytes() {
-        let scene = Scene::new(300);
-        let groom = scene.groom();
-        scene.with_frame(&scene.rest, &scene.guide_world, |f| {
-            let mut bytes = write(&groom, &[f], Mode::Quantized);
-            let g = f.guide_count();
-            let table = 4 * (g.div_ceil(BLOCK) + 1);
-            assert_eq!(bytes.len(), container::header_bytes(FIELDS) + table + 4 * g);
-            // it predicts from no neighbour, so as version 1 it reads the same
-            bytes[8..12].copy_from_slice(&1u32.to_le_bytes());
-            seal(&mut bytes);
-            let cache = GuideCache::parse(&bytes).unwrap();
-            let (_, other) = scene.posed(0.5);
-            scene.with_frame(&scene.rest, &other, |d| {
-                cache
-                    .decode(&groom, GROOM_ID, 0, d, &mut scratch(&cache))
-                    .unwrap();
-                assert_eq!(d.local_point(9, 4), f.local_point(9, 4));
-            });
-            bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
-            seal(&mut bytes);
-            assert!(matches!(
-                GuideCache::parse(&bytes),
-                Err(Error::VersionMismatch { found: 3, .. })
-            ));
-        });
-    }
-
-    #[test]
-    fn neighbouring_guides_code_from_each_other() {
-        let scene = Scene::new(300);
-        let groom = scene.groom();
-        let (mesh, world) = scene.posed(0.8);
-        scene.with_frame(&mesh, &world, |f| {
-            let n = groom.points;
-            let (mut alone, mut chained, mut from_neighbour) = (0, 0, 0);
-            let mut before: Option<Coded> = None;
-            for g in 0..f.guide_count().min(BLOCK) {
-                let rest = &groom.guide_points[g * n..(g + 1) * n];
-                let coded = code(f, g, rest, before.as_ref());
-                alone += code(f, g, rest, None).bytes;
-                chained += coded.bytes;
-                from_neighbour += coded
-                    .ks
-                    .iter()
-                    .filter(|&&k| k != ZERO && k & NEIGHBOUR != 0)
-                    .count();
-                before = Some(coded);
-            }
-            assert!(
-                from_neighbour > 0 && chained < alone,
-                "{chained} vs {alone}"
-            );
-        });
-    }
-
-    #[test]
-    fn wild_guides_fit_the_largest_size() {
-        // offsets zig-zagging by thousands of guide lengths cost more as
-        // Rice codes than as floats: such guides are stored raw
-        let scene = Scene::new(300);
-        let groom = scene.groom();
-        let mut world = scene.guide_world.clone();
-        for (k, p) in world.iter_mut().enumerate() {
-            p[0] += if k % 2 == 0 { 4000.0 } else { -4000.0 } * (k % POINTS) as f32;
-        }
-        scene.with_frame(&scene.rest, &world, |f| {
-            let bytes = write(&groom, &[f], Mode::Quantized);
-            let cache = GuideCache::parse(&bytes).unwrap();
-            let (_, other) = scene.posed(0.5);
-            scene.with_frame(&scene.rest, &other, |d| {
-                cache
-                    .decode(&groom, GROOM_ID, 0, d, &mut scratch(&cache))
-                    .unwrap();
-                assert_eq!(d.local_point(7, 5), f.local_point(7, 5));
-            });
-        });
-    }
-
-    #[test]
-    fn a_bad_guide_set_is_refused() {
-        let scene = Scene::new(300);
-        scene.with_frame(&scene.rest, &scene.guide_world, |f| {
-            let bytes = write(&scene.groom(), &[f], Mode::Quantized);
-            let cache = GuideCache::parse(&bytes).unwrap();
-            let mut points = scene.guide_local.clone();
-            points[40][2] = f32::NAN;
-            let mut groom = scene.groom();
-            groom.guide_points = &points;
-            assert!(cache
-                .decode(&groom, GROOM_ID, 0, f, &mut scratch(&cache))
-                .is_err());
-            groom.guide_points = &scene.guide_local[1..];
-            assert!(matches!(
-                cache.decode(&groom, GROOM_ID, 0, f, &mut scratch(&cache)),
-                Err(Error::InvalidArgument(_))
-            ));
-        });
-    }
-
-    #[test]
-    fn damaged_caches_are_refused_and_the_frame_kept() {
-        let scene = Scene::new(300);
-        let groom = scene.groom();
-        two_samples(
-            &scene,
-            (0.2, 0.9),
-            Mode::Quantized,
-            |bytes, s, source, mesh| {
-                if s == 1 {
-                    return;
-                }
-                let (_, other) = scene.posed(0.5);
-                scene.with_frame(mesh, &other, |f| {
-                    let before: Vec<_> = (0..f.guide_count() * POINTS)
-                        .map(|k| f.world_point(k / POINTS, k % POINTS))
-                        .collect();
-                    let kept = |f: &PosedFrame| {
-                        (0..f.guide_count() * POINTS)
-                            .all(|k| f.world_point(k / POINTS, k % POINTS) == before[k])
-                    };
-                    let mut decode = |b: &[u8]| {
-                        GuideCache::parse(b)
-                            .and_then(|c| c.decode(&groom, GROOM_ID, 0, f, &mut scratch(&c)))
-                    };
-                    for len in (0..bytes.len()).step_by(7) {
-                        assert!(decode(&bytes[..len]).is_err(), "truncated to {len}");
-                    }
-                    for at in (0..bytes.len()).step_by(13) {
-                        let mut bad = bytes.to_vec();
-                        bad[at] ^= 0x04;
-                        assert!(decode(&bad).is_err(), "bit flipped at {at}");
-                    }
-                    // a width past 40 bits, a bad tag, and a block's first
-                    // guide coded from a guide before it, sealed with a
-                    // valid CRC
-                    let stream = container::header_bytes(FIELDS) + 4 * (2 * 2 + 1);
-                    for (at, value) in [(stream + 1, 41u8), (stream, 9), (stream + 1, 0x85)] {
-                        let mut bad = bytes.to_vec();
-                        bad[at] = value;
-                        seal(&mut bad);
-                        assert!(matches!(decode(&bad), Err(Error::Corrupt { .. })));
-                    }
-                    let cache = GuideCache::parse(bytes).unwrap();
-                    assert!(matches!(
-                        cache.decode(&groom, GROOM_ID + 1, 0, f, &mut scratch(&cache)),
-                        Err(Error::InvalidArgument(_))
-                    ));
-                    assert!(matches!(
-                        cache.decode(&groom, GROOM_ID, 2, f, &mut scratch(&cache)),
-                        Err(Error::InvalidArgument(_))
-                    ));
-                    let short = &mut scratch(&cache)[1..];
-                    assert!(matches!(
-                        cache.decode(&groom, GROOM_ID, 0, f, short),
-                        Err(Error::InvalidArgument(_))
-                    ));
-                    assert!(kept(f));
-                    cache
-                        .decode(&groom, GROOM_ID, 0, f, &mut scratch(&cache))
-                        .unwrap();
-                    assert!(!kept(f));
-                    let err = (f.world_point(5, 3) - source.world_point(5, 3)).length();
-                    assert!(err < 1e-4, "{err}");
-                });
-            },
-        );
-    }
-}
+mod tests;

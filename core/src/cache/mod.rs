@@ -10,11 +10,14 @@
 //!   per strand (paper 3.3).
 //! - `container` (internal): the framing both share (magic, version, counts, a
 //!   CRC-32), and bounds-checked reading.
+//! - `bits` (internal): bits least significant first, and the Rice code the
+//!   guide cache writes in.
 //!
 //! All are little-endian and documented byte by byte in `docs/FORMAT.md`.
 //! Decoding never trusts the bytes: every count, index, width and float is
 //! checked before it is used, and a failed decode writes nothing.
 
+mod bits;
 pub(crate) mod container;
 pub mod groom_file;
 pub mod guide_cache;
