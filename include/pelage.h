@@ -43,9 +43,12 @@ typedef enum PelageStatus {
   PELAGE_STATUS_OK = 0,
   // A required pointer was NULL.
   PELAGE_STATUS_NULL_PARAMETER = 1,
-  // A parameter is outside its documented domain (including bad strides).
+  // A parameter is outside its documented domain (including bad strides);
+  // for a number, a finite value outside its range.
   PELAGE_STATUS_INVALID_ARGUMENT = 2,
-  // An input holds NaN or infinity.
+  // An input number (a value in a buffer, a parameter) is NaN or
+  // infinite: any non-finite input gets this status, whatever range the
+  // number has.
   PELAGE_STATUS_NON_FINITE = 3,
   // An index in the input is out of range.
   PELAGE_STATUS_OUT_OF_RANGE = 4,

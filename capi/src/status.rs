@@ -12,9 +12,12 @@ pub enum PelageStatus {
     Ok = 0,
     /// A required pointer was NULL.
     NullParameter = 1,
-    /// A parameter is outside its documented domain (including bad strides).
+    /// A parameter is outside its documented domain (including bad strides);
+    /// for a number, a finite value outside its range.
     InvalidArgument = 2,
-    /// An input holds NaN or infinity.
+    /// An input number (a value in a buffer, a parameter) is NaN or
+    /// infinite: any non-finite input gets this status, whatever range the
+    /// number has.
     NonFinite = 3,
     /// An index in the input is out of range.
     OutOfRange = 4,

@@ -604,3 +604,425 @@ fn guide_cache_flags_and_versions_take_only_what_is_documented() {
         &[],
     );
 }
+
+/// `status` is NON_FINITE, its message naming `what`.
+fn non_finite(status: PelageStatus, what: &str) {
+    expect(status, PelageStatus::NonFinite, &[what]);
+}
+
+#[test]
+fn any_non_finite_input_is_non_finite_in_every_object() {
+    let (m, g) = fixture();
+    let d = mesh_desc(&m);
+    let n = g.strands.len();
+    let c_strands = bytemuck::cast_slice::<_, PelageRoot>(&g.strands);
+    let bad_values = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY];
+
+    // stamp: parameters and maps
+    for x in bad_values {
+        let (mut arena, mut roots) = (0usize, 0usize);
+        let defaults = pelage_stamp_params_defaults();
+        for (what, params) in [
+            (
+                "radius",
+                PelageStampParams {
+                    radius: x,
+                    ..defaults
+                },
+            ),
+            (
+                "black_scale",
+                PelageStampParams {
+                    black_scale: x,
+                    ..defaults
+                },
+            ),
+            (
+                "bald_below",
+                PelageStampParams {
+                    bald_below: x,
+                    ..defaults
+                },
+            ),
+            (
+                "density",
+                PelageStampParams {
+                    density: PelageMap {
+                        constant: x,
+                        ..defaults.density
+                    },
+                    ..defaults
+                },
+            ),
+        ] {
+            non_finite(
+                pelage_stamp_query(&d, &params, &mut arena, &mut roots),
+                what,
+            );
+        }
+    }
+    let finite = PelageStampParams {
+        black_scale: 2.0,
+        ..pelage_stamp_params_defaults()
+    };
+    let (mut arena, mut roots) = (0usize, 0usize);
+    expect(
+        pelage_stamp_query(&d, &finite, &mut arena, &mut roots),
+        PelageStatus::InvalidArgument,
+        &["black_scale"],
+    );
+
+    // bind: every float parameter; a finite one out of range stays
+    // INVALID_ARGUMENT
+    let mut bytes = 0usize;
+    expect(
+        pelage_bind_query(&d, g.guide_roots.len(), &mut bytes),
+        PelageStatus::Ok,
+        &[],
+    );
+    let mut arena = vec![0u8; bytes];
+    let mut bindings = vec![PelageStrandBinding::default(); n];
+    let mut bind = |params: &PelageBindParams| {
+        pelage_bind(
+            &d,
+            &g.guides(),
+            c_strands.as_ptr(),
+            n,
+            params,
+            arena.as_mut_ptr().cast(),
+            bytes,
+            bindings.as_mut_ptr(),
+            n,
+            null_mut(),
+        )
+    };
+    let defaults = pelage_bind_params_defaults();
+    for x in bad_values {
+        for (what, params) in [
+            (
+                "min_normal_dot",
+                PelageBindParams {
+                    min_normal_dot: x,
+                    ..defaults
+                },
+            ),
+            (
+                "search_factor",
+                PelageBindParams {
+                    search_factor: x,
+                    ..defaults
+                },
+            ),
+            (
+                "max_wrap_slope",
+                PelageBindParams {
+                    max_wrap_slope: x,
+                    ..defaults
+                },
+            ),
+        ] {
+            non_finite(bind(&params), what);
+        }
+    }
+    expect(
+        bind(&PelageBindParams {
+            search_factor: -1.0,
+            ..defaults
+        }),
+        PelageStatus::InvalidArgument,
+        &["search_factor"],
+    );
+    let mut nan_points = g.guide_points.clone();
+    nan_points[17][2] = f32::NAN;
+    non_finite(
+        pelage_bind(
+            &d,
+            &guides_desc(&g.guide_roots, &nan_points),
+            c_strands.as_ptr(),
+            n,
+            &defaults,
+            arena.as_mut_ptr().cast(),
+            bytes,
+            bindings.as_mut_ptr(),
+            n,
+            null_mut(),
+        ),
+        "guide points",
+    );
+
+    // groom: maps and groom values
+    let mut grooms = vec![PelageStrandGroom::default(); n];
+    for x in bad_values {
+        let mut maps = pelage_groom_maps_defaults();
+        maps.length.constant = x;
+        non_finite(
+            pelage_groom_evaluate(&d, &maps, c_strands.as_ptr(), n, grooms.as_mut_ptr(), n),
+            "length map",
+        );
+        let mut values = g.grooms.clone();
+        values[3].bend = x;
+        let mut groom = null_mut();
+        non_finite(
+            pelage_groom_new(&strands_desc(&g.strands, &g.bindings, &values), &mut groom),
+            "grooms",
+        );
+    }
+
+    // expand and settle: their parameters
+    let params = pelage_expand_params_defaults();
+    let posed = frame(&d, &g.guides(), params.points_per_strand, 1).unwrap();
+    let strands = strands_desc(&g.strands, &g.bindings, &g.grooms);
+    let mut out = vec![[0.0f32; 4]; n * 18];
+    let mut settle_bytes = 0usize;
+    for x in bad_values {
+        for (what, p) in [
+            (
+                "orphan_length",
+                PelageExpandParams {
+                    orphan_length: x,
+                    ..params
+                },
+            ),
+            (
+                "width_scale",
+                PelageExpandParams {
+                    width_scale: x,
+                    ..params
+                },
+            ),
+        ] {
+            let mut per = 0usize;
+            non_finite(pelage_expand_query(&p, &mut per), what);
+            non_finite(
+                pelage_expand(posed.0, &strands, &p, &curves_desc(&mut out, None)),
+                what,
+            );
+            non_finite(
+                pelage_settle_query(&d, g.guide_roots.len(), &p, &mut settle_bytes),
+                what,
+            );
+            // patch boxes take the expansion's parameters
+            let patch = PelagePatch {
+                first: 0,
+                count: n as u32,
+            };
+            let mut boxes = [0.0f32; 6];
+            non_finite(
+                pelage_patch_boxes(posed.0, &strands, &p, &patch, 1, boxes.as_mut_ptr()),
+                what,
+            );
+        }
+    }
+    let zero_width = PelageExpandParams {
+        width_scale: 0.0,
+        ..params
+    };
+    let mut per = 0usize;
+    expect(
+        pelage_expand_query(&zero_width, &mut per),
+        PelageStatus::InvalidArgument,
+        &["width_scale"],
+    );
+
+    // patch plan: a root's barycentric coordinate
+    let mut roots_nan = c_strands.to_vec();
+    roots_nan[9].u = f32::NAN;
+    let mut order = vec![0u32; n];
+    let mut patches = vec![PelagePatch::default(); n];
+    let mut patch_count = 0usize;
+    non_finite(
+        pelage_patch_plan(
+            &d,
+            roots_nan.as_ptr(),
+            n,
+            64,
+            order.as_mut_ptr(),
+            patches.as_mut_ptr(),
+            n,
+            &mut patch_count,
+        ),
+        "strand roots",
+    );
+
+    // guide cache: the guide set's rest points, written and read
+    let file = groom_file(&m, &g, &g.bindings).unwrap();
+    let (guide_roots, mut guide_points) = read_groom_file(&g, &file).unwrap();
+    let mut info = PelageGroomFileInfo::default();
+    expect(
+        pelage_groom_file_info(file.as_ptr().cast(), file.len(), &mut info),
+        PelageStatus::Ok,
+        &[],
+    );
+    let pts = CVS as u32;
+    let rest = frame(&d, &g.guides(), pts, 1).unwrap();
+    let mut size = 0usize;
+    expect(
+        pelage_guide_cache_max_size(g.guide_roots.len(), pts, 1, 0, &mut size),
+        PelageStatus::Ok,
+        &[],
+    );
+    let mut cache = vec![0u8; size];
+    let mut written = 0usize;
+    let set = |points: &[f32]| PelageGuideSet {
+        guide_roots: guide_roots.as_ptr(),
+        guide_points: points.as_ptr(),
+        guide_count: g.guide_roots.len(),
+        points_per_guide: pts,
+        groom_id: info.id,
+    };
+    expect(
+        pelage_guide_cache_write(
+            &set(&guide_points),
+            &rest.0,
+            1,
+            0,
+            cache.as_mut_ptr().cast(),
+            size,
+            &mut written,
+        ),
+        PelageStatus::Ok,
+        &[],
+    );
+    for (x, want) in [
+        (f32::NAN, PelageStatus::NonFinite),
+        (f32::INFINITY, PelageStatus::NonFinite),
+        (2e9, PelageStatus::InvalidArgument),
+    ] {
+        let kept = guide_points[40];
+        guide_points[40] = x;
+        let mut unused = 0usize;
+        expect(
+            pelage_guide_cache_write(
+                &set(&guide_points),
+                &rest.0,
+                1,
+                0,
+                cache.as_mut_ptr().cast(),
+                size,
+                &mut unused,
+            ),
+            want,
+            &["guide rest points"],
+        );
+        expect(
+            pelage_guide_cache_read(
+                cache.as_ptr().cast(),
+                written,
+                &set(&guide_points),
+                0,
+                rest.0,
+                1,
+            ),
+            want,
+            &["guide rest points"],
+        );
+        guide_points[40] = kept;
+    }
+
+    // trim: a record's length, the cloth, the shot pass on the hairs
+    let groom = Groom::of(&g);
+    let record = PelageTrimRecord {
+        guide: 0,
+        cv: 1,
+        length: f32::NAN,
+    };
+    let mut trim_file = vec![0u8; 1024];
+    non_finite(
+        pelage_trim_records_write(
+            &record,
+            1,
+            g.guide_roots.len(),
+            pts,
+            trim_file.as_mut_ptr().cast(),
+            trim_file.len(),
+            &mut written,
+        ),
+        "trim records",
+    );
+    let mut lengths = vec![PELAGE_TRIM_WHOLE; n];
+    non_finite(
+        pelage_trim_shortest(
+            groom.0,
+            &record,
+            1,
+            g.guide_roots.len(),
+            pts,
+            lengths.as_mut_ptr(),
+            n,
+        ),
+        "trim records",
+    );
+    let mut cloth = m.clone();
+    cloth.positions[5][1] = f32::INFINITY;
+    let mut records = vec![PelageTrimRecord::default(); g.guide_roots.len()];
+    let mut count = 0usize;
+    non_finite(
+        pelage_trim_find(
+            posed.0,
+            &mesh_desc(&cloth),
+            null(),
+            1,
+            records.as_mut_ptr(),
+            records.len(),
+            &mut count,
+        ),
+        "positions",
+    );
+    let nan_params = PelageExpandParams {
+        orphan_length: f32::NAN,
+        ..params
+    };
+    non_finite(
+        pelage_trim_shortest_hairs(
+            groom.0,
+            posed.0,
+            null(),
+            null(),
+            &nan_params,
+            lengths.as_mut_ptr(),
+            n,
+        ),
+        "orphan_length",
+    );
+
+    // the frame's guides, the groom file's roots, roots and masks
+    let frame_nan = frame(&d, &guides_desc(&g.guide_roots, &nan_points), pts, 1);
+    assert_eq!(
+        frame_nan.err(),
+        Some(PelageStatus::NonFinite),
+        "{}",
+        last_error()
+    );
+    let mut root_nan = Groomed {
+        guide_roots: g.guide_roots.clone(),
+        guide_points: g.guide_points.clone(),
+        strands: g.strands.clone(),
+        bindings: g.bindings.clone(),
+        grooms: g.grooms.clone(),
+        info: g.info,
+    };
+    root_nan.strands[11].v = f32::INFINITY;
+    non_finite(
+        groom_file(&m, &root_nan, &g.bindings).unwrap_err(),
+        "strand roots",
+    );
+    let mut positions = vec![[0.0f32; 3]; n];
+    non_finite(
+        pelage_roots_evaluate(
+            &d,
+            roots_nan.as_ptr(),
+            n,
+            positions.as_mut_ptr().cast(),
+            12,
+            null_mut(),
+            0,
+        ),
+        "roots",
+    );
+    let mut mask = vec![0u8; n];
+    let map = pelage_groom_maps_defaults().length;
+    non_finite(
+        pelage_map_mask(&d, &map, c_strands.as_ptr(), n, f32::NAN, mask.as_mut_ptr()),
+        "threshold",
+    );
+}

@@ -167,9 +167,15 @@ pub(crate) fn check_guides(roots: &[Root], points: &[[f32; 3]]) -> Result<(), Er
         check_root(u32::MAX as usize, r, "guide roots").map_err(|e| e.shifted(i))?;
     }
     for (i, p) in points.iter().enumerate() {
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "guide rest points",
+                index: i,
+            });
+        }
         if !p.iter().all(|c| c.abs() <= MAX_COORDINATE) {
             return Err(Error::OutOfDomain {
-                what: "guide rest points (finite, within 1e9)",
+                what: "guide rest points (within 1e9)",
                 index: i,
             });
         }
@@ -516,7 +522,14 @@ mod tests {
         groom.guide_points = &points;
         assert!(matches!(
             encode(&groom, &mut out),
-            Err(Error::OutOfDomain { .. })
+            Err(Error::NonFinite { index: 3, .. })
+        ));
+        let mut far = scene.guide_local.clone();
+        far[3][1] = 2e9;
+        groom.guide_points = &far;
+        assert!(matches!(
+            encode(&groom, &mut out),
+            Err(Error::OutOfDomain { index: 3, .. })
         ));
         groom.guide_points = &points[1..];
         assert!(matches!(

@@ -160,15 +160,19 @@ fn check(params: &BindParams, mesh: &Mesh) -> Result<(), Error> {
             "min_neighbours exceeds max_neighbours",
         ));
     }
-    if !(params.min_normal_dot.is_finite()
-        && params.search_factor > 0.0
-        && params.search_factor.is_finite())
-    {
-        return Err(Error::InvalidArgument(
-            "min_normal_dot must be finite and search_factor positive",
-        ));
+    for (what, value) in [
+        ("min_normal_dot", params.min_normal_dot),
+        ("search_factor", params.search_factor),
+        ("max_wrap_slope", params.max_wrap_slope),
+    ] {
+        if !value.is_finite() {
+            return Err(Error::NonFinite { what, index: 0 });
+        }
     }
-    if params.max_wrap_slope.is_nan() || params.max_wrap_slope <= 0.0 {
+    if params.search_factor <= 0.0 {
+        return Err(Error::InvalidArgument("search_factor must be positive"));
+    }
+    if params.max_wrap_slope <= 0.0 {
         return Err(Error::InvalidArgument("max_wrap_slope must be positive"));
     }
     match params.regions {

@@ -63,12 +63,22 @@ impl ExpandParams {
         self.points_per_strand + 2 * (self.end_points == EndPoints::Pinned) as usize
     }
 
-    /// Checks the point count and orphan length.
+    /// Checks the point count, the orphan length and the width scale (a
+    /// NaN or infinite one is [`Error::NonFinite`], a finite one out of its
+    /// range [`Error::InvalidArgument`]).
     pub fn check(&self) -> Result<(), Error> {
         if !(2..=MAX_STRAND_POINTS).contains(&self.points_per_strand) {
             return Err(Error::InvalidArgument(
                 "points_per_strand must be in 2..=64",
             ));
+        }
+        for (what, value) in [
+            ("orphan_length", self.orphan_length),
+            ("width_scale", self.width_scale),
+        ] {
+            if !value.is_finite() {
+                return Err(Error::NonFinite { what, index: 0 });
+            }
         }
         if !(self.orphan_length >= 0.0 && self.orphan_length <= MAX_COORDINATE) {
             return Err(Error::InvalidArgument("orphan_length must be in 0..=1e9"));
