@@ -906,7 +906,8 @@ enum PelageStatus pelage_groom_file_info(const void *data, size_t length, struct
 // a record that fails is CORRUPT_DATA); on failure nothing is written.
 //
 // Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
-// CAPACITY_EXCEEDED (an array shorter than the file's counts),
+// CAPACITY_EXCEEDED (a capacity below the file's count; the message names
+// it, and `pelage_groom_file_info` gives every count),
 // MISALIGNED, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
@@ -1047,7 +1048,9 @@ enum PelageStatus pelage_map_mask(const struct PelageMeshDesc *mesh, const struc
 // sorted by LOD rank inside each (an LOD is a cutoff in every patch).
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (patch size 0), NON_FINITE,
-// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED, MISALIGNED, OUT_OF_MEMORY, PANIC.
+// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED (`patch_capacity` below
+// ceil(root_count / patch_size): `*patch_count` gets that count),
+// MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const struct PelageRoot *roots, size_t root_count, uint32_t patch_size, uint32_t *order, struct PelagePatch *patches, size_t patch_capacity, size_t *patch_count);
@@ -1365,8 +1368,8 @@ enum PelageStatus pelage_trim_find(PelageFrame frame, const struct PelageMeshDes
 //
 // Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
 // groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
-// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
-// MISALIGNED, OUT_OF_MEMORY, PANIC.
+// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1,
+// `points_per_guide` outside 2..64), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: may be called from any thread while `groom` is alive,
 // with distinct `lengths`.

@@ -163,7 +163,8 @@ pub extern "C" fn pelage_groom_file_info(
 /// a record that fails is CORRUPT_DATA); on failure nothing is written.
 ///
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
-/// CAPACITY_EXCEEDED (an array shorter than the file's counts),
+/// CAPACITY_EXCEEDED (a capacity below the file's count; the message names
+/// it, and `pelage_groom_file_info` gives every count),
 /// MISALIGNED, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
@@ -176,7 +177,8 @@ pub extern "C" fn pelage_groom_file_read(
     ffi_boundary! {
         let b = req(buffers, "buffers")?;
         let data = bytes(data, length, "data")?;
-        let points = groom_file::counts(data)?.points;
+        let counts = groom_file::counts(data)?;
+        let points = counts.points;
         let out = GroomBuffers {
             guide_roots: bytemuck::cast_slice_mut(slice_mut(b.guide_roots, b.guide_capacity, "guide_roots")?),
             guide_points: bytemuck::cast_slice_mut(slice_mut(
@@ -189,6 +191,16 @@ pub extern "C" fn pelage_groom_file_read(
             grooms: bytemuck::cast_slice_mut(slice_mut(b.grooms, b.strand_capacity, "grooms")?),
             patches: bytemuck::cast_slice_mut(slice_mut(b.patches, b.patch_capacity, "patches")?),
         };
+        // named here: the decoder's own report does not say which array
+        for (what, capacity, needed) in [
+            ("guide_capacity", b.guide_capacity, counts.guides),
+            ("strand_capacity", b.strand_capacity, counts.strands),
+            ("patch_capacity", b.patch_capacity, counts.patches),
+        ] {
+            if capacity < needed {
+                return Err(Failure::new(PelageStatus::CapacityExceeded, format!("buffers.{what} is {capacity}: the file holds {needed}")));
+            }
+        }
         groom_file::decode(data, out)?;
         Ok(())
     }

@@ -19,7 +19,9 @@ use pelage_core::interp::patch::{self, Patch};
 /// sorted by LOD rank inside each (an LOD is a cutoff in every patch).
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (patch size 0), NON_FINITE,
-/// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED, MISALIGNED, OUT_OF_MEMORY, PANIC.
+/// OUT_OF_RANGE (a root's face), CAPACITY_EXCEEDED (`patch_capacity` below
+/// ceil(root_count / patch_size): `*patch_count` gets that count),
+/// MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -40,7 +42,17 @@ pub extern "C" fn pelage_patch_plan(
         let order = slice_mut(order, root_count, "order")?;
         let patches: &mut [Patch] = bytemuck::cast_slice_mut(slice_mut(patches, patch_capacity, "patches")?);
         let mut keys = filled(root_count, 0u64, "the patch keys")?;
-        *count = patch::plan(&mesh, roots, patch_size as usize, &mut keys, order, patches)?;
+        match patch::plan(&mesh, roots, patch_size as usize, &mut keys, order, patches) {
+            Ok(n) => *count = n,
+            // the keys and `order` hold every strand: only the patches can be short
+            Err(pelage_core::Error::OutputTooSmall { needed, available }) => {
+                *count = needed;
+                return Err(Failure::new(PelageStatus::CapacityExceeded, format!(
+                    "patches: {needed} needed for {root_count} strands in patches of {patch_size}, patch_capacity is {available}"
+                )));
+            }
+            Err(e) => return Err(e.into()),
+        }
         Ok(())
     }
 }

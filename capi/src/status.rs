@@ -126,7 +126,7 @@ impl From<Error> for Failure {
             | Error::OutOfDomain { .. }
             | Error::WeightSum { .. } => PelageStatus::InvalidArgument,
             Error::NonFinite { .. } => PelageStatus::NonFinite,
-            Error::OutOfRange { .. } => PelageStatus::OutOfRange,
+            Error::OutOfRange { .. } | Error::NotBetween { .. } => PelageStatus::OutOfRange,
             Error::Corrupt { .. } => PelageStatus::CorruptData,
             Error::VersionMismatch { .. } => PelageStatus::VersionMismatch,
             Error::Cancelled => PelageStatus::Cancelled,

@@ -166,8 +166,8 @@ pub extern "C" fn pelage_trim_find(
 ///
 /// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a record's guide or cv, the
 /// groom's guides past `guide_count`), NON_FINITE, INVALID_ARGUMENT (a
-/// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1),
-/// MISALIGNED, OUT_OF_MEMORY, PANIC.
+/// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1,
+/// `points_per_guide` outside 2..64), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: may be called from any thread while `groom` is alive,
 /// with distinct `lengths`.

@@ -34,7 +34,8 @@ pub enum Error {
     },
     /// An index refers past the end of the array it indexes.
     OutOfRange {
-        /// Which input holds the bad index.
+        /// Which input holds the bad index: an array, or `array.field` for
+        /// a field of its records (shown as `array[index].field`).
         what: &'static str,
         /// Element index within that input.
         index: usize,
@@ -42,6 +43,21 @@ pub enum Error {
         value: usize,
         /// The exclusive upper bound it had to respect.
         bound: usize,
+    },
+    /// An index outside the range `first..=last` its field takes, where
+    /// that range does not start at 0 (a trim record's cv: the first point
+    /// past the meet, never the root).
+    NotBetween {
+        /// Which input holds the bad index, as for [`Error::OutOfRange`].
+        what: &'static str,
+        /// Element index within that input.
+        index: usize,
+        /// The offending value.
+        value: usize,
+        /// The smallest value it may take.
+        first: usize,
+        /// The largest value it may take.
+        last: usize,
     },
     /// A strided view does not fit its buffer or has a stride below the element size.
     BadStride {
@@ -103,6 +119,19 @@ impl Error {
                 what,
                 index: index + by,
             },
+            Error::NotBetween {
+                what,
+                index,
+                value,
+                first,
+                last,
+            } => Error::NotBetween {
+                what,
+                index: index + by,
+                value,
+                first,
+                last,
+            },
             Error::WeightSum { index, sum } => Error::WeightSum {
                 index: index + by,
                 sum,
@@ -119,6 +148,20 @@ impl Error {
                 bound,
             },
             other => other,
+        }
+    }
+}
+
+/// Where a value sits: `what[index]`, or `array[index].field` for a
+/// `what` of the form `array.field`.
+struct Place(&'static str, usize);
+
+impl fmt::Display for Place {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Place(what, index) = *self;
+        match what.split_once('.') {
+            Some((array, field)) => write!(f, "{array}[{index}].{field}"),
+            None => write!(f, "{what}[{index}]"),
         }
     }
 }
@@ -149,7 +192,19 @@ impl fmt::Display for Error {
                 bound,
             } => write!(
                 f,
-                "{what}[{index}] = {value} is out of range (must be below {bound})"
+                "{} = {value} is out of range (must be below {bound})",
+                Place(what, index)
+            ),
+            Error::NotBetween {
+                what,
+                index,
+                value,
+                first,
+                last,
+            } => write!(
+                f,
+                "{} = {value} is out of range (must be from {first} to {last})",
+                Place(what, index)
             ),
             Error::BadStride { what } => {
                 write!(

@@ -1026,3 +1026,143 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
         "threshold",
     );
 }
+
+#[test]
+fn messages_name_the_field_and_the_real_need() {
+    let (m, g) = fixture();
+    let d = mesh_desc(&m);
+    let n = g.strands.len();
+    let guides = g.guide_roots.len();
+    let pts = CVS as u32;
+
+    // a trim record's cv is 1 to points - 1: 0 is the root
+    let groom = Groom::of(&g);
+    let mut lengths = vec![PELAGE_TRIM_WHOLE; n];
+    let mut file = vec![0u8; 1024];
+    let mut written = 0usize;
+    for cv in [0, pts] {
+        let record = PelageTrimRecord {
+            guide: 3,
+            cv,
+            length: 0.5,
+        };
+        let want = format!("trim records[0].cv = {cv} is out of range (must be from 1 to 7)");
+        expect(
+            pelage_trim_shortest(groom.0, &record, 1, guides, pts, lengths.as_mut_ptr(), n),
+            PelageStatus::OutOfRange,
+            &[&want],
+        );
+        expect(
+            pelage_trim_records_write(
+                &record,
+                1,
+                guides,
+                pts,
+                file.as_mut_ptr().cast(),
+                file.len(),
+                &mut written,
+            ),
+            PelageStatus::OutOfRange,
+            &[&want],
+        );
+    }
+    let past = PelageTrimRecord {
+        guide: guides as u32,
+        cv: 1,
+        length: 0.5,
+    };
+    expect(
+        pelage_trim_shortest(groom.0, &past, 1, guides, pts, lengths.as_mut_ptr(), n),
+        PelageStatus::OutOfRange,
+        &[&format!(
+            "trim records[0].guide = {guides} is out of range (must be below {guides})"
+        )],
+    );
+
+    // a short patch table: the patches needed, not the strands
+    let c_strands = bytemuck::cast_slice::<_, PelageRoot>(&g.strands);
+    let mut order = vec![0u32; n];
+    let mut patches = vec![PelagePatch::default(); 4];
+    let mut patch_count = 0usize;
+    let needed = n.div_ceil(64);
+    expect(
+        pelage_patch_plan(
+            &d,
+            c_strands.as_ptr(),
+            n,
+            64,
+            order.as_mut_ptr(),
+            patches.as_mut_ptr(),
+            patches.len(),
+            &mut patch_count,
+        ),
+        PelageStatus::CapacityExceeded,
+        &[
+            &format!("patches: {needed} needed for {n} strands in patches of 64"),
+            "patch_capacity is 4",
+        ],
+    );
+    assert_eq!(patch_count, needed);
+
+    // bindings: the field that is out of range
+    let params = pelage_expand_params_defaults();
+    let posed = frame(&d, &g.guides(), params.points_per_strand, 1).unwrap();
+    let mut out = vec![[0.0f32; 4]; n * 18];
+    let bound = (0..n).find(|&i| g.bindings[i].count >= 2).unwrap();
+    for field in ["guides", "clump", "count"] {
+        let mut bindings = g.bindings.clone();
+        let b = &mut bindings[bound];
+        // the value written, and the bound it had to respect
+        let (value, below) = match field {
+            "guides" => {
+                b.guides[1] = guides as u32;
+                (guides, guides)
+            }
+            "clump" => {
+                b.clump = guides as u32;
+                (guides, guides)
+            }
+            _ => {
+                b.count = 9;
+                (9, 9)
+            }
+        };
+        let strands = strands_desc(&g.strands, &bindings, &g.grooms);
+        let want =
+            format!("bindings[{bound}].{field} = {value} is out of range (must be below {below})");
+        expect(
+            pelage_expand(posed.0, &strands, &params, &curves_desc(&mut out, None)),
+            PelageStatus::OutOfRange,
+            &[&want],
+        );
+    }
+
+    // a groom file read into short arrays: which capacity
+    let bytes = groom_file(&m, &g, &g.bindings).unwrap();
+    let mut guide_roots = vec![PelageRoot::default(); guides];
+    let mut guide_points = vec![0.0f32; guides * CVS * 3];
+    let (mut roots, mut bindings, mut grooms) = (
+        vec![PelageRoot::default(); n],
+        vec![PelageStrandBinding::default(); n],
+        vec![PelageStrandGroom::default(); n],
+    );
+    let buffers = PelageGroomFileBuffers {
+        guide_roots: guide_roots.as_mut_ptr(),
+        guide_points: guide_points.as_mut_ptr(),
+        guide_capacity: guides - 1,
+        roots: roots.as_mut_ptr(),
+        bindings: bindings.as_mut_ptr(),
+        grooms: grooms.as_mut_ptr(),
+        strand_capacity: n,
+        patches: null_mut(),
+        patch_capacity: 0,
+    };
+    expect(
+        pelage_groom_file_read(bytes.as_ptr().cast(), bytes.len(), &buffers),
+        PelageStatus::CapacityExceeded,
+        &[&format!(
+            "buffers.guide_capacity is {}: the file holds {guides}",
+            guides - 1
+        )],
+    );
+}

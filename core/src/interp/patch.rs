@@ -98,10 +98,17 @@ pub fn plan(
             "patch size must be 1..2^32 and strands fewer than 2^32",
         ));
     }
-    if keys.len() < s || order.len() < s || patches.len() < count {
+    // each buffer reported in its own count: strands, or patches
+    if keys.len() < s || order.len() < s {
         return Err(Error::OutputTooSmall {
-            needed: s.max(count),
-            available: keys.len().min(order.len()).min(patches.len()),
+            needed: s,
+            available: keys.len().min(order.len()),
+        });
+    }
+    if patches.len() < count {
+        return Err(Error::OutputTooSmall {
+            needed: count,
+            available: patches.len(),
         });
     }
     mesh.check()?;

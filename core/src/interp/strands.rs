@@ -57,8 +57,11 @@ impl<'a> Strands<'a> {
 pub struct StrandBounds {
     /// Largest root face + 1 (0 without strands), and a strand on it.
     faces: (usize, usize),
-    /// Largest guide index a binding uses + 1 (0 when none), and a strand using it.
+    /// Largest guide index a binding's guides use + 1 (0 when none), and a
+    /// strand using it.
     guides: (usize, usize),
+    /// The same for the clump guides.
+    clumps: (usize, usize),
 }
 
 impl StrandBounds {
@@ -84,7 +87,7 @@ impl StrandBounds {
         // passes the valid ones, and the detailed checks run only on a
         // strand it rejects, to name the fault
         for (i, ((r, b), g)) in roots.iter().zip(bindings).zip(grooms).enumerate() {
-            let (valid, used) = strand_is_valid(faces, guides, r, b, g);
+            let (valid, used, clump) = strand_is_valid(faces, guides, r, b, g);
             if !valid {
                 check_strand(faces, guides, r, b, g).map_err(|e| e.shifted(i))?;
             }
@@ -93,6 +96,9 @@ impl StrandBounds {
             }
             if used > bounds.guides.0 {
                 bounds.guides = (used, i);
+            }
+            if clump > bounds.clumps.0 {
+                bounds.clumps = (clump, i);
             }
         }
         Ok(bounds)
@@ -111,19 +117,20 @@ impl StrandBounds {
         StrandBounds {
             faces: pick(self.faces, other.faces),
             guides: pick(self.guides, other.guides),
+            clumps: pick(self.clumps, other.clumps),
         }
     }
 
     /// The fewest guides a frame needs for these strands: the largest
     /// guide index a binding uses (clump included) + 1, 0 when none.
     pub fn guides(&self) -> usize {
-        self.guides.0
+        self.guides.0.max(self.clumps.0)
     }
 
     /// Checks that the strands fit a mesh of `faces` triangles and a frame
     /// of `guides` guides.
     pub fn fits(&self, faces: usize, guides: usize) -> Result<(), Error> {
-        let ((needed, face_strand), (used, guide_strand)) = (self.faces, self.guides);
+        let (needed, face_strand) = self.faces;
         if needed > faces {
             return Err(Error::OutOfRange {
                 what: "strand roots",
@@ -132,13 +139,18 @@ impl StrandBounds {
                 bound: faces,
             });
         }
-        if used > guides {
-            return Err(Error::OutOfRange {
-                what: "bindings",
-                index: guide_strand,
-                value: used - 1,
-                bound: guides,
-            });
+        for (what, (used, strand)) in [
+            ("bindings.guides", self.guides),
+            ("bindings.clump", self.clumps),
+        ] {
+            if used > guides {
+                return Err(Error::OutOfRange {
+                    what,
+                    index: strand,
+                    value: used - 1,
+                    bound: guides,
+                });
+            }
         }
         Ok(())
     }
@@ -151,8 +163,8 @@ pub fn check_strands(strands: &Strands, faces: usize, guides: usize) -> Result<(
 }
 
 /// Exactly the conditions [`check_strand`] tests, without a branch; and
-/// the strand's largest guide (binding or clump) + 1, 0 without one, read
-/// in the same pass.
+/// the strand's largest guide + 1 and its clump guide + 1 (each 0 without
+/// one), read in the same pass.
 #[inline]
 fn strand_is_valid(
     faces: usize,
@@ -160,17 +172,18 @@ fn strand_is_valid(
     r: &Root,
     b: &StrandBinding,
     g: &StrandGroom,
-) -> (bool, usize) {
+) -> (bool, usize, usize) {
     // comparisons are false for NaN, and an infinite coordinate fails the sum
     let e = BARYCENTRIC_SLACK;
     let root = ((r.face as usize) < faces) & (r.u >= -e) & (r.v >= -e) & (r.u + r.v <= 1.0 + e);
     let count = b.count as usize;
     let mut binding = count <= MAX_NEIGHBOURS;
-    let mut used = if b.clump == NO_GUIDE {
+    let clump = if b.clump == NO_GUIDE {
         0
     } else {
         b.clump as usize + 1
     };
+    let mut used = 0;
     // summed in slot order, as `weight_sum` does
     let mut sum = 0.0f32;
     for k in 0..MAX_NEIGHBOURS {
@@ -192,7 +205,7 @@ fn strand_is_valid(
         & (g.tip_radius >= 0.0)
         & (g.length >= 0.0)
         & (Vec2::from(g.lift).length_squared() <= pi2);
-    (root & binding & groom, used)
+    (root & binding & groom, used, clump)
 }
 
 /// The float32 sum of `weights` in order: the one both checks compare.
@@ -212,7 +225,7 @@ fn check_strand(
     let count = b.count as usize;
     if count > MAX_NEIGHBOURS {
         return Err(Error::OutOfRange {
-            what: "binding counts",
+            what: "bindings.count",
             index: 0,
             value: count,
             bound: MAX_NEIGHBOURS + 1,
@@ -220,9 +233,12 @@ fn check_strand(
     }
     let bad_guide = b.guides[..count].iter().find(|&&g| g as usize >= bound);
     let bad_clump = (b.clump != NO_GUIDE && b.clump as usize >= bound).then_some(&b.clump);
-    if let Some(&value) = bad_guide.or(bad_clump) {
+    let bad = bad_guide
+        .map(|g| ("bindings.guides", g))
+        .or(bad_clump.map(|c| ("bindings.clump", c)));
+    if let Some((what, &value)) = bad {
         return Err(Error::OutOfRange {
-            what: "bindings",
+            what,
             index: 0,
             value: value as usize,
             bound,

@@ -50,6 +50,9 @@ pub fn guide_lengths(
             "more guide lengths than the frame has guides",
         ));
     }
+    if !(2..=MAX_STRAND_POINTS).contains(&points) {
+        return Err(Error::InvalidArgument("points per guide must be in 2..=64"));
+    }
     for (i, r) in records.iter().enumerate() {
         r.check(i, guides, points)?;
     }

@@ -13,7 +13,7 @@ use glam::Vec3;
 pub struct TrimRecord {
     /// The guide.
     pub guide: u32,
-    /// The first control point past the meet (1 .. points per guide).
+    /// The first control point past the meet (1 ..= points per guide - 1).
     pub cv: u32,
     /// The guide's curve parameter at the meet, in `[0, 1]`:
     /// `(cv - 1 + t) / (points - 1)` for the meet at `t` of the segment
@@ -27,18 +27,20 @@ impl TrimRecord {
     pub fn check(&self, index: usize, guides: usize, points: usize) -> Result<(), Error> {
         if self.guide as usize >= guides {
             return Err(Error::OutOfRange {
-                what: "trim records' guide",
+                what: "trim records.guide",
                 index,
                 value: self.guide as usize,
                 bound: guides,
             });
         }
+        // the point past the meet: 0, the root, lies past none
         if !(1..points).contains(&(self.cv as usize)) {
-            return Err(Error::OutOfRange {
-                what: "trim records' cv",
+            return Err(Error::NotBetween {
+                what: "trim records.cv",
                 index,
                 value: self.cv as usize,
-                bound: points,
+                first: 1,
+                last: points.saturating_sub(1),
             });
         }
         if !self.length.is_finite() {
