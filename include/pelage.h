@@ -851,8 +851,9 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // colliders are replaced or the frame is freed.
 // On failure the frame keeps the colliders it had.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
-// this frame's mesh too large), MISALIGNED, OUT_OF_MEMORY, PANIC.
+// Returns OK, NULL_PARAMETER, NON_FINITE (a collider's value),
+// INVALID_ARGUMENT (a collider, a body of this frame's mesh too large),
+// MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: no other call may use `frame` during this one.
 enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders, uint32_t thread_count);
@@ -1149,9 +1150,10 @@ struct PelageSimParams pelage_sim_params_defaults(void);
 // Memory bytes pelage_sim_new needs for `guide_count` guides on
 // `rest_mesh` with `params`.
 //
-// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also a guide count of 0
-// or of u32::MAX and above), MISALIGNED, PANIC. The mesh's and the maps'
-// values are not read: pelage_sim_new checks them.
+// Returns OK, NULL_PARAMETER, NON_FINITE (a parameter), INVALID_ARGUMENT
+// (also a guide count of 0 or of u32::MAX and above), MISALIGNED, PANIC.
+// The mesh's and the maps' values are not read: pelage_sim_new checks
+// them.
 //
 // Thread safety: may be called from any thread at any time.
 enum PelageStatus pelage_sim_query(const struct PelageMeshDesc *rest_mesh, size_t guide_count, const struct PelageSimParams *params, size_t *memory_bytes);
@@ -1201,11 +1203,12 @@ void pelage_sim_free(PelageSim sim);
 // worker thread that could not start, or a panic) can leave the step half
 // made: reset or restore the simulation before stepping again.
 //
-// Returns OK, NULL_PARAMETER, NON_FINITE (the distance callback gave a
-// NaN: the step is taken back), INVALID_ARGUMENT (dt, a collider, a frame of
-// another mesh, the body grid too large, a body of a frame without a
-// triangle of area, the external curves' count or
-// stride, an external point not finite or beyond 1e9 where
+// Returns OK, NULL_PARAMETER, NON_FINITE (dt, a collider's value, an
+// external point where `params.external` is above 0; a NaN from the
+// distance callback, and the step is taken back), INVALID_ARGUMENT (dt
+// out of range, a collider, a frame of another mesh, the body grid too
+// large, a body of a frame without a triangle of area, the external
+// curves' count or stride, an external point beyond 1e9 where
 // `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: no other call may use `sim` during this one; the frame

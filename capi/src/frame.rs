@@ -298,8 +298,9 @@ pub extern "C" fn pelage_frame_set_guides(
 /// colliders are replaced or the frame is freed.
 /// On failure the frame keeps the colliders it had.
 ///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a collider, a body of
-/// this frame's mesh too large), MISALIGNED, OUT_OF_MEMORY, PANIC.
+/// Returns OK, NULL_PARAMETER, NON_FINITE (a collider's value),
+/// INVALID_ARGUMENT (a collider, a body of this frame's mesh too large),
+/// MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: no other call may use `frame` during this one.
 #[no_mangle]

@@ -163,9 +163,10 @@ pub(crate) struct SimBox {
 /// Memory bytes pelage_sim_new needs for `guide_count` guides on
 /// `rest_mesh` with `params`.
 ///
-/// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also a guide count of 0
-/// or of u32::MAX and above), MISALIGNED, PANIC. The mesh's and the maps'
-/// values are not read: pelage_sim_new checks them.
+/// Returns OK, NULL_PARAMETER, NON_FINITE (a parameter), INVALID_ARGUMENT
+/// (also a guide count of 0 or of u32::MAX and above), MISALIGNED, PANIC.
+/// The mesh's and the maps' values are not read: pelage_sim_new checks
+/// them.
 ///
 /// Thread safety: may be called from any thread at any time.
 #[no_mangle]
@@ -258,11 +259,12 @@ pub extern "C" fn pelage_sim_free(sim: PelageSim) {
 /// worker thread that could not start, or a panic) can leave the step half
 /// made: reset or restore the simulation before stepping again.
 ///
-/// Returns OK, NULL_PARAMETER, NON_FINITE (the distance callback gave a
-/// NaN: the step is taken back), INVALID_ARGUMENT (dt, a collider, a frame of
-/// another mesh, the body grid too large, a body of a frame without a
-/// triangle of area, the external curves' count or
-/// stride, an external point not finite or beyond 1e9 where
+/// Returns OK, NULL_PARAMETER, NON_FINITE (dt, a collider's value, an
+/// external point where `params.external` is above 0; a NaN from the
+/// distance callback, and the step is taken back), INVALID_ARGUMENT (dt
+/// out of range, a collider, a frame of another mesh, the body grid too
+/// large, a body of a frame without a triangle of area, the external
+/// curves' count or stride, an external point beyond 1e9 where
 /// `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: no other call may use `sim` during this one; the frame

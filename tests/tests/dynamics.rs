@@ -573,3 +573,64 @@ fn a_nan_from_the_distance_callback_fails_the_call_and_changes_nothing() {
     assert_eq!(count, 99);
     assert!(records.iter().all(|r| r.guide == 7 && r.length == 7.0));
 }
+
+#[test]
+fn non_finite_simulation_inputs_are_non_finite() {
+    let shot = Shot::new();
+    let n = shot.roots.len();
+    let sim = SimHandle::new(&shot, &shot.params());
+    let frame = handle_of(&shot, 0);
+    let nan_capsule = [PelageCapsule {
+        a: [0.0, f32::NAN, 0.0],
+        b: [0.0; 3],
+        radius: 0.1,
+    }];
+    let bad = colliders(&nan_capsule, false);
+    assert_eq!(step(&sim, frame.0, &bad, 2), PelageStatus::NonFinite);
+    let far_capsule = [PelageCapsule {
+        a: [0.0, 2e9, 0.0],
+        ..nan_capsule[0]
+    }];
+    let far = colliders(&far_capsule, false);
+    assert_eq!(step(&sim, frame.0, &far, 2), PelageStatus::InvalidArgument);
+    assert_eq!(
+        pelage_frame_set_colliders(frame.0, &bad, 1),
+        PelageStatus::NonFinite
+    );
+    let mut records = vec![PelageTrimRecord::default(); n];
+    let mut count = 0;
+    let s = pelage_trim_find(
+        frame.0,
+        std::ptr::null(),
+        &bad,
+        1,
+        records.as_mut_ptr(),
+        n,
+        &mut count,
+    );
+    assert_eq!(s, PelageStatus::NonFinite);
+    let none = colliders(&[], false);
+    for (dt, status) in [
+        (f32::NAN, PelageStatus::NonFinite),
+        (f32::INFINITY, PelageStatus::NonFinite),
+        (2.0, PelageStatus::InvalidArgument),
+    ] {
+        let s = pelage_sim_step(sim.sim, frame.0, &none, std::ptr::null(), 0, dt, 1);
+        assert_eq!(s, status, "dt {dt}");
+    }
+    let desc = mesh_desc(&shot.rest);
+    let mut bytes = 0;
+    for params in [
+        PelageSimParams {
+            teleport: f32::NAN,
+            ..shot.params()
+        },
+        PelageSimParams {
+            link_radius: f32::INFINITY,
+            ..shot.params()
+        },
+    ] {
+        let s = pelage_sim_query(&desc, n, &params, &mut bytes);
+        assert_eq!(s, PelageStatus::NonFinite);
+    }
+}

@@ -90,11 +90,38 @@ impl Colliders<'_> {
     /// Checks that every shape is finite, within the coordinate range, with
     /// radii >= 0 and planes with a normal.
     pub fn check(&self) -> Result<(), Error> {
+        let finite = |v: &[f32]| v.iter().all(|c| c.is_finite());
+        let shapes = [
+            (
+                "spheres",
+                self.spheres
+                    .iter()
+                    .map(|s| finite(&s.centre) && finite(&[s.radius]))
+                    .position(|f| !f),
+            ),
+            (
+                "capsules",
+                self.capsules
+                    .iter()
+                    .map(|c| finite(&c.a) && finite(&c.b) && finite(&[c.radius]))
+                    .position(|f| !f),
+            ),
+            (
+                "planes",
+                self.planes
+                    .iter()
+                    .map(|p| finite(&p.normal) && finite(&[p.offset]))
+                    .position(|f| !f),
+            ),
+        ];
+        if let Some((what, Some(index))) = shapes.into_iter().find(|(_, at)| at.is_some()) {
+            return Err(Error::NonFinite { what, index });
+        }
         let fine = |v: &[f32]| v.iter().all(|c| c.abs() <= MAX_COORDINATE);
         for (i, s) in self.spheres.iter().enumerate() {
             if !(fine(&s.centre) && fine(&[s.radius]) && s.radius >= 0.0) {
                 return Err(Error::OutOfDomain {
-                    what: "spheres (finite, within 1e9, radius >= 0)",
+                    what: "spheres (within 1e9, radius >= 0)",
                     index: i,
                 });
             }
@@ -102,7 +129,7 @@ impl Colliders<'_> {
         for (i, c) in self.capsules.iter().enumerate() {
             if !(fine(&c.a) && fine(&c.b) && fine(&[c.radius]) && c.radius >= 0.0) {
                 return Err(Error::OutOfDomain {
-                    what: "capsules (finite, within 1e9, radius >= 0)",
+                    what: "capsules (within 1e9, radius >= 0)",
                     index: i,
                 });
             }
@@ -110,7 +137,7 @@ impl Colliders<'_> {
         for (i, p) in self.planes.iter().enumerate() {
             if !(fine(&p.normal) && fine(&[p.offset]) && Vec3::from(p.normal) != Vec3::ZERO) {
                 return Err(Error::OutOfDomain {
-                    what: "planes (finite, within 1e9, normal not zero)",
+                    what: "planes (within 1e9, normal not zero)",
                     index: i,
                 });
             }

@@ -66,6 +66,19 @@ impl SimParams<'_> {
                 "joints and points must be in 2..=64",
             ));
         }
+        let ik = &self.ik;
+        let links = &self.links;
+        let values = [
+            ("IK tolerance", ik.tolerance),
+            ("IK root stiffness", ik.root_stiffness),
+            ("IK tip stiffness", ik.tip_stiffness),
+            ("link radius", links.radius),
+            ("link stiffness", links.stiffness),
+            ("teleport", self.teleport),
+        ];
+        if let Some((what, _)) = values.iter().find(|(_, x)| !x.is_finite()) {
+            return Err(Error::NonFinite { what, index: 0 });
+        }
         if !self.ik.is_valid() {
             return Err(Error::InvalidArgument(
                 "IK: tolerance 0..=1, max_iterations 1..=256, stiffness 0..1",

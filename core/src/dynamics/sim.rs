@@ -399,6 +399,12 @@ impl<'a> Sim<'a> {
         external: Option<Strided<[f32; 3]>>,
         dt: f32,
     ) -> Result<(), Error> {
+        if !dt.is_finite() {
+            return Err(Error::NonFinite {
+                what: "dt",
+                index: 0,
+            });
+        }
         if !(MIN_DT..=1.0).contains(&dt) {
             return Err(Error::InvalidArgument("dt must be in [1e-5, 1] seconds"));
         }
@@ -417,16 +423,18 @@ impl<'a> Sim<'a> {
                 ));
             }
             let limit = crate::surface::mesh::MAX_COORDINATE;
-            for (g, c) in self.constants.iter().enumerate() {
-                let bad = (0..m).any(|k| {
-                    curves
-                        .get(g * m + k)
-                        .iter()
-                        .any(|x| x.is_nan() || x.abs() > limit)
-                });
-                if c.external > 0.0 && bad {
+            let taking = self.constants.iter().map(|c| c.external > 0.0);
+            for g in taking.enumerate().filter_map(|(g, t)| t.then_some(g)) {
+                let values = || (0..m).flat_map(|k| curves.get(g * m + k));
+                if values().any(|x| !x.is_finite()) {
+                    return Err(Error::NonFinite {
+                        what: "external curves",
+                        index: g,
+                    });
+                }
+                if values().any(|x| x.abs() > limit) {
                     return Err(Error::OutOfDomain {
-                        what: "external curves (finite, within 1e9)",
+                        what: "external curves (within 1e9)",
                         index: g,
                     });
                 }
