@@ -163,7 +163,7 @@ void write_png_rgb(const std::string& path, int width, int height, const std::ve
 std::vector<PelageRoot> stamp(const Mesh& mesh, const PelageStampParams& params, PelageStampInfo* info) {
   const PelageMeshDesc desc = mesh.desc();
   size_t arena_bytes = 0, max_roots = 0;
-  check(pelage_stamp_query(&desc, &params, &arena_bytes, &max_roots), "pelage_stamp_query");
+  check(pelage_stamp_size(&desc, &params, &arena_bytes, &max_roots), "pelage_stamp_size");
   // uninitialised: the stamp writes what it reads, and a host that zeroes a
   // quarter gigabyte first pays for it in page faults
   const std::unique_ptr<unsigned char[]> arena(new unsigned char[arena_bytes]);
@@ -294,7 +294,7 @@ std::vector<PelageStrandBinding> bind(const Mesh& mesh, const PelageGuidesDesc& 
                                       size_t count, const PelageBindParams& params, PelageBindInfo* info) {
   const PelageMeshDesc desc = mesh.desc();
   size_t arena_bytes = 0;
-  check(pelage_bind_query(&desc, guides.guide_count, &arena_bytes), "pelage_bind_query");
+  check(pelage_bind_size(&desc, guides.guide_count, &arena_bytes), "pelage_bind_size");
   std::vector<unsigned char> arena(arena_bytes);
   std::vector<PelageStrandBinding> bindings(count);
   check(pelage_bind(&desc, &guides, strands, count, &params, arena.data(), arena.size(), bindings.data(),
@@ -367,7 +367,7 @@ PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, c
   PelageExpandParams all_cores = params;
   all_cores.thread_count = 0;
   size_t bytes = 0;
-  check(pelage_settle_query(&desc, rest_guides.guide_count, &all_cores, &bytes), "pelage_settle_query");
+  check(pelage_settle_size(&desc, rest_guides.guide_count, &all_cores, &bytes), "pelage_settle_size");
   std::vector<unsigned char> arena(bytes);
   PelageSettleInfo info{};
   check(pelage_settle(&desc, &rest_guides, strands, bindings, grooms, count, &all_cores, arena.data(), arena.size(),
@@ -387,7 +387,7 @@ Frame::Frame(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageExpan
 }
 
 Expander::Expander(const PelageExpandParams& params) : params_(params) {
-  check(pelage_expand_query(&params_, &per_curve_), "pelage_expand_query");
+  check(pelage_expand_size(&params_, &per_curve_), "pelage_expand_size");
 }
 
 void Expander::expand(const Frame& frame, const PelageRoot* strands, const PelageStrandBinding* bindings,

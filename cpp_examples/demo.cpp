@@ -349,7 +349,7 @@ int main(int argc, char** argv) try {
     PelageSimParams simp = pelage_sim_params_defaults();
     simp.link_radius = 1.5f * bind_info.mean_spacing;
     size_t sim_bytes = 0;
-    creature::check(pelage_sim_query(&rest_desc, guide_roots.size(), &simp, &sim_bytes), "pelage_sim_query");
+    creature::check(pelage_sim_size(&rest_desc, guide_roots.size(), &simp, &sim_bytes), "pelage_sim_size");
     std::vector<unsigned char> sim_memory(sim_bytes);
     PelageSim sim = nullptr;
     creature::check(pelage_sim_new(&rest_desc, &guides, &simp, sim_memory.data(), sim_bytes, &sim), "pelage_sim_new");

@@ -55,7 +55,7 @@ int main(void) {
 
   /* 3. Size the call: arena bytes and an upper bound on the root count. */
   size_t arena_bytes = 0, max_roots = 0;
-  check(pelage_stamp_query(&mesh, &params, &arena_bytes, &max_roots), "pelage_stamp_query");
+  check(pelage_stamp_size(&mesh, &params, &arena_bytes, &max_roots), "pelage_stamp_size");
   void *arena = malloc(arena_bytes);
   PelageRoot *roots = malloc(max_roots * sizeof *roots);
   if (!arena || !roots) return EXIT_FAILURE;

@@ -91,7 +91,7 @@ void write_files(const creature::Mesh& rest, uint32_t hairs, const std::string& 
   creature::check(pelage_groom_file_read(file.data(), bytes, &out), "pelage_groom_file_read");
   const PelageGuideSet set{r.data(), guide_local.data(), r.size(), kCvs, info.id};
   size_t most = 0, written = 0;
-  creature::check(pelage_guide_cache_max_size(r.size(), kCvs, kSamples, 0, &most), "pelage_guide_cache_max_size");
+  creature::check(pelage_guide_cache_size(r.size(), kCvs, kSamples, 0, &most), "pelage_guide_cache_size");
   std::vector<unsigned char> cache(most);
   const PelageFrame samples[kSamples] = {frames[0]->get(), frames[1]->get()};
   creature::check(pelage_guide_cache_write(&set, samples, kSamples, 0, cache.data(), most, &written),

@@ -200,7 +200,7 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   PelageSimParams params = pelage_sim_params_defaults();
   params.link_radius = 0.05f;
   size_t bytes = 0;
-  check(pelage_sim_query(&rest_desc, guide_roots.size(), &params, &bytes), "pelage_sim_query");
+  check(pelage_sim_size(&rest_desc, guide_roots.size(), &params, &bytes), "pelage_sim_size");
   std::vector<unsigned char> memory(bytes);
   PelageSim raw = nullptr;
   check(pelage_sim_new(&rest_desc, &rest_guides, &params, memory.data(), bytes, &raw), "pelage_sim_new");
@@ -210,7 +210,7 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   PelageExpandParams ep = pelage_expand_params_defaults();
   ep.points_per_strand = kCvs;
 
-  check(pelage_guide_cache_max_size(set.guide_count, kCvs, kSamples, 0, &bytes), "pelage_guide_cache_max_size");
+  check(pelage_guide_cache_size(set.guide_count, kCvs, kSamples, 0, &bytes), "pelage_guide_cache_size");
   std::vector<unsigned char> cache(bytes);
   for (int f = 0; f < frames; ++f) {
     clock = {};

@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
     PelageSimParams params = pelage_sim_params_defaults();
     params.link_radius = 0.05f;
     size_t bytes = 0;
-    check(pelage_sim_query(&rest_desc, guide_roots.size(), &params, &bytes), "pelage_sim_query");
+    check(pelage_sim_size(&rest_desc, guide_roots.size(), &params, &bytes), "pelage_sim_size");
     std::vector<unsigned char> memory(bytes);
     PelageSim sim = nullptr;
     check(pelage_sim_new(&rest_desc, &guides, &params, memory.data(), bytes, &sim), "pelage_sim_new");

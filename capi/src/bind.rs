@@ -99,7 +99,7 @@ pub struct PelageBindInfo {
 /// Default binding parameters: 3 to 6 neighbours, seed 0, min_normal_dot 0.25,
 /// search_factor 2.5, max_wrap_slope 0.3, no regions, 1 thread.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
     let d = BindParams::default();
@@ -123,9 +123,9 @@ pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
 /// OUT_OF_RANGE, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
-pub extern "C" fn pelage_bind_query(
+pub extern "C" fn pelage_bind_size(
     rest_mesh: *const PelageMeshDesc,
     guide_count: usize,
     arena_bytes: *mut usize,
@@ -153,7 +153,7 @@ pub extern "C" fn pelage_bind_query(
 /// CAPACITY_EXCEEDED (the arena or `bindings_capacity`), MISALIGNED,
 /// CANCELLED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_bind(
     rest_mesh: *const PelageMeshDesc,

@@ -61,7 +61,7 @@ pub struct PelageExpandParams {
 /// width_scale 1, 1 thread,
 /// no progress callback.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_expand_params_defaults() -> PelageExpandParams {
     PelageExpandParams {
@@ -151,9 +151,9 @@ pub struct PelageCurves {
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
-pub extern "C" fn pelage_expand_query(
+pub extern "C" fn pelage_expand_size(
     params: *const PelageExpandParams,
     points_per_curve: *mut usize,
 ) -> PelageStatus {
@@ -178,8 +178,7 @@ pub extern "C" fn pelage_expand_query(
 /// guide index), CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED,
 /// CANCELLED (the curves already written are unspecified), PANIC.
 ///
-/// Thread safety: reentrant; concurrent calls may share the frame and need
-/// distinct outputs.
+/// Thread safety: reads `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_expand(
     frame: PelageFrame,
@@ -305,7 +304,7 @@ fn float4_out<'a>(ptr: *mut c_void, stride: usize, count: usize) -> Result<&'a m
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (fewer than 4 points, more
 /// points than a uint32 addresses), CAPACITY_EXCEEDED, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_curves_segment_indices(
     curve_count: usize,

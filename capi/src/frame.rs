@@ -204,7 +204,7 @@ fn copy<T: bytemuck::Pod>(s: Strided<T>, what: &str) -> Result<Buffer<T>, Failur
 /// bad stride, mesh values beyond 1e9), MISALIGNED, NON_FINITE,
 /// OUT_OF_RANGE (an index past the vertices), OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_frame_new(
     mesh: *const PelageMeshDesc,
@@ -267,7 +267,7 @@ pub extern "C" fn pelage_frame_new(
 /// 1e9), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC (also when a worker thread cannot start: the
 /// frame's guides are then unspecified until the next successful call).
 ///
-/// Thread safety: no other call may use `frame` during this one.
+/// Thread safety: writes `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_frame_set_guides(
     frame: PelageFrame,
@@ -302,7 +302,7 @@ pub extern "C" fn pelage_frame_set_guides(
 /// INVALID_ARGUMENT (a collider, a body of this frame's mesh too large),
 /// MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: no other call may use `frame` during this one.
+/// Thread safety: writes `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_frame_set_colliders(
     frame: PelageFrame,
@@ -357,7 +357,7 @@ pub extern "C" fn pelage_frame_set_colliders(
 
 /// Releases a frame. NULL is accepted and does nothing.
 ///
-/// Thread safety: no other call may use `frame` during or after this one.
+/// Thread safety: frees `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_frame_free(frame: PelageFrame) {
     free(frame);

@@ -81,7 +81,7 @@ fn constant(m: &ScalarMap) -> PelageMap {
 
 /// Default groom maps (constants; see the field docs), seed 0.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_groom_maps_defaults() -> PelageGroomMaps {
     let d = GroomMaps::default();
@@ -104,7 +104,7 @@ pub extern "C" fn pelage_groom_maps_defaults() -> PelageGroomMaps {
 /// stride; a texture map without mesh uvs), NON_FINITE, OUT_OF_RANGE (a
 /// root's face), CAPACITY_EXCEEDED (`grooms_capacity`), MISALIGNED, PANIC.
 ///
-/// Thread safety: reentrant; concurrent calls need distinct outputs.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_groom_evaluate(
     mesh: *const PelageMeshDesc,

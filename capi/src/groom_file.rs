@@ -93,8 +93,7 @@ pub struct PelageGroomFileBuffers {
 /// guides, patches that leave strands out, weights), NON_FINITE, OUT_OF_RANGE,
 /// CAPACITY_EXCEEDED (`*written` holds the bytes needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread; the frame may be read by
-/// other calls meanwhile.
+/// Thread safety: reads `desc->rest_frame`.
 #[no_mangle]
 pub extern "C" fn pelage_groom_file_write(
     desc: *const PelageGroomFileDesc,
@@ -137,16 +136,16 @@ pub extern "C" fn pelage_groom_file_write(
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, counts),
 /// VERSION_MISMATCH (another magic or version), PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_groom_file_info(
     data: *const std::ffi::c_void,
-    length: usize,
+    data_bytes: usize,
     info: *mut PelageGroomFileInfo,
 ) -> PelageStatus {
     ffi_boundary! {
         let info = req_mut(info, "info")?;
-        let c = groom_file::counts(bytes(data, length, "data")?)?;
+        let c = groom_file::counts(bytes(data, data_bytes, "data")?)?;
         *info = PelageGroomFileInfo {
             guide_count: c.guides,
             points_per_guide: c.points as u32,
@@ -167,16 +166,16 @@ pub extern "C" fn pelage_groom_file_info(
 /// it, and `pelage_groom_file_info` gives every count),
 /// MISALIGNED, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_groom_file_read(
     data: *const std::ffi::c_void,
-    length: usize,
+    data_bytes: usize,
     buffers: *const PelageGroomFileBuffers,
 ) -> PelageStatus {
     ffi_boundary! {
         let b = req(buffers, "buffers")?;
-        let data = bytes(data, length, "data")?;
+        let data = bytes(data, data_bytes, "data")?;
         let counts = groom_file::counts(data)?;
         let points = counts.points;
         let out = GroomBuffers {

@@ -57,7 +57,7 @@ impl Groom {
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
 /// MISALIGNED (a record pointer), OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_groom_new(
     strands: *const PelageStrands,
@@ -80,7 +80,7 @@ pub extern "C" fn pelage_groom_new(
 
 /// Releases a groom. NULL is accepted and does nothing.
 ///
-/// Thread safety: no other call may use `groom` during or after this one.
+/// Thread safety: frees `groom`.
 #[no_mangle]
 pub extern "C" fn pelage_groom_free(groom: PelageGroom) {
     free(groom);
@@ -90,7 +90,7 @@ pub extern "C" fn pelage_groom_free(groom: PelageGroom) {
 ///
 /// Returns OK, NULL_PARAMETER, PANIC.
 ///
-/// Thread safety: may be called from any thread while `groom` is alive.
+/// Thread safety: reads `groom`.
 #[no_mangle]
 pub extern "C" fn pelage_groom_strand_count(
     groom: PelageGroom,
@@ -117,8 +117,7 @@ pub extern "C" fn pelage_groom_strand_count(
 /// CAPACITY_EXCEEDED (`point_capacity`), MISALIGNED, CANCELLED (the curves
 /// already written are unspecified), PANIC.
 ///
-/// Thread safety: concurrent calls on the same groom and frame are safe
-/// with distinct outputs.
+/// Thread safety: reads `groom` and `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_groom_expand(
     groom: PelageGroom,
@@ -161,7 +160,7 @@ pub struct PelageStrandEdits {
 /// frame without colliders, NON_FINITE when the frame's distance callback
 /// gave a NaN (the curves are then unspecified).
 ///
-/// Thread safety: as `pelage_groom_expand`.
+/// Thread safety: reads `groom` and `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_groom_expand_edited(
     groom: PelageGroom,

@@ -80,9 +80,9 @@ fn mode(exact: u32) -> Result<Mode, Failure> {
 /// range, `exact` other than 0 or 1, or a cache past 4 GB, counts whose
 /// product overflows included), PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
-pub extern "C" fn pelage_guide_cache_max_size(
+pub extern "C" fn pelage_guide_cache_size(
     guide_count: usize,
     points_per_guide: u32,
     sample_count: u32,
@@ -101,7 +101,7 @@ pub extern "C" fn pelage_guide_cache_max_size(
 /// its guides (`pelage_frame_set_guides`, at the guide set's point count).
 /// Quantized (`exact` 0: every root-frame coordinate within 2^-15 of the
 /// guide's length) or exact float32 (`exact` 1). `out` holds `capacity`
-/// bytes (`pelage_guide_cache_max_size`); the bytes written go to
+/// bytes (`pelage_guide_cache_size`); the bytes written go to
 /// `*written`. On failure `out` is untouched.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts that differ from
@@ -109,8 +109,7 @@ pub extern "C" fn pelage_guide_cache_max_size(
 /// than 0 or 1), NON_FINITE,
 /// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
-/// Thread safety: may be called from any thread; the frames may be read by
-/// other calls meanwhile.
+/// Thread safety: reads the `samples` frames.
 #[no_mangle]
 pub extern "C" fn pelage_guide_cache_write(
     guides: *const PelageGuideSet,
@@ -141,16 +140,16 @@ pub extern "C" fn pelage_guide_cache_write(
 ///
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_guide_cache_info(
     data: *const std::ffi::c_void,
-    length: usize,
+    data_bytes: usize,
     info: *mut PelageGuideCacheInfo,
 ) -> PelageStatus {
     ffi_boundary! {
         let info = req_mut(info, "info")?;
-        let i = GuideCache::parse(bytes(data, length, "data")?)?.info();
+        let i = GuideCache::parse(bytes(data, data_bytes, "data")?)?.info();
         *info = PelageGuideCacheInfo {
             guide_count: i.guides,
             points_per_guide: i.points as u32,
@@ -179,11 +178,11 @@ pub extern "C" fn pelage_guide_cache_info(
 /// start: the frame's guides are then unspecified until the next
 /// successful call).
 ///
-/// Thread safety: no other call may use `frame` during this one.
+/// Thread safety: writes `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_guide_cache_read(
     data: *const std::ffi::c_void,
-    length: usize,
+    data_bytes: usize,
     guides: *const PelageGuideSet,
     sample: u32,
     frame: PelageFrame,
@@ -193,7 +192,7 @@ pub extern "C" fn pelage_guide_cache_read(
         let set = req(guides, "guides")?;
         let groom = set.view()?;
         let frame = object_mut(frame)?;
-        let cache = GuideCache::parse(bytes(data, length, "data")?)?;
+        let cache = GuideCache::parse(bytes(data, data_bytes, "data")?)?;
         frame.decode_guides(&cache, &groom, set.groom_id, sample as usize, thread_count)?;
         Ok(())
     }

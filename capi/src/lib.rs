@@ -31,13 +31,13 @@ mod threads;
 mod trim;
 
 pub use bind::{
-    pelage_bind, pelage_bind_params_defaults, pelage_bind_query, PelageBindInfo, PelageBindParams,
+    pelage_bind, pelage_bind_params_defaults, pelage_bind_size, PelageBindInfo, PelageBindParams,
     PelageStrandBinding, PELAGE_MAX_NEIGHBOURS, PELAGE_WEIGHT_SUM_TOLERANCE,
 };
 pub use colliders::{PelageCapsule, PelageColliders, PelageDistanceFn, PelagePlane, PelageSphere};
 pub use expand::{
     pelage_curves_segment_indices, pelage_expand, pelage_expand_params_defaults,
-    pelage_expand_query, PelageCurves, PelageEndPoints, PelageExpandParams, PelageStrands,
+    pelage_expand_size, PelageCurves, PelageEndPoints, PelageExpandParams, PelageStrands,
 };
 pub use frame::{
     pelage_frame_free, pelage_frame_new, pelage_frame_set_colliders, pelage_frame_set_guides,
@@ -55,7 +55,7 @@ pub use groom_handle::{
     pelage_groom_strand_count, PelageGroom, PelageGroomTy, PelageStrandEdits,
 };
 pub use guide_cache::{
-    pelage_guide_cache_info, pelage_guide_cache_max_size, pelage_guide_cache_read,
+    pelage_guide_cache_info, pelage_guide_cache_read, pelage_guide_cache_size,
     pelage_guide_cache_write, PelageGuideCacheInfo, PelageGuideSet,
 };
 pub use guides::PelageGuidesDesc;
@@ -64,14 +64,14 @@ pub use mesh::PelageMeshDesc;
 pub use patch::{pelage_groom_lod_counts, pelage_patch_boxes, pelage_patch_plan};
 pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
-pub use settle::{pelage_settle, pelage_settle_query, PelageSettleInfo};
+pub use settle::{pelage_settle, pelage_settle_size, PelageSettleInfo};
 pub use sim::{
     pelage_frame_set_sim_guides, pelage_sim_free, pelage_sim_new, pelage_sim_params_defaults,
-    pelage_sim_query, pelage_sim_read, pelage_sim_reset, pelage_sim_restore, pelage_sim_save,
+    pelage_sim_read, pelage_sim_reset, pelage_sim_restore, pelage_sim_save, pelage_sim_size,
     pelage_sim_state_size, pelage_sim_step, PelageSim, PelageSimParams, PelageSimTy,
 };
 pub use stamp::{
-    pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_query, PelageProgressFn,
+    pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_size, PelageProgressFn,
     PelageStampInfo, PelageStampParams,
 };
 pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
@@ -92,7 +92,7 @@ pub const PELAGE_VERSION_PATCH: u32 = 0;
 /// The library's version as `major * 10000 + minor * 100 + patch`; compare it
 /// with the header's PELAGE_VERSION_* macros to detect a mismatched binary.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_version() -> u32 {
     PELAGE_VERSION_MAJOR * 10000 + PELAGE_VERSION_MINOR * 100 + PELAGE_VERSION_PATCH

@@ -137,7 +137,7 @@ impl PelageMap {
 /// its triangle, a stride), NON_FINITE (also `threshold`), OUT_OF_RANGE (a
 /// face), MISALIGNED, PANIC.
 ///
-/// Thread safety: reentrant; concurrent calls may share inputs but not outputs.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_map_mask(
     mesh: *const PelageMeshDesc,

@@ -23,7 +23,7 @@ use pelage_core::interp::patch::{self, Patch};
 /// ceil(root_count / patch_size): `*patch_count` gets that count),
 /// MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_patch_plan(
     mesh: *const PelageMeshDesc,
@@ -75,8 +75,7 @@ pub extern "C" fn pelage_patch_plan(
 /// them), NON_FINITE, OUT_OF_RANGE (a strand's face
 /// or guide, a patch past the strands), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread; the frame may be read by
-/// other calls meanwhile.
+/// Thread safety: reads `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_patch_boxes(
     frame: crate::PelageFrame,
@@ -122,7 +121,7 @@ pub extern "C" fn pelage_patch_boxes(
 /// strands), INVALID_ARGUMENT (a patch not sorted by rank), MISALIGNED,
 /// PANIC.
 ///
-/// Thread safety: may be called from any thread while `groom` is alive.
+/// Thread safety: reads `groom`.
 #[no_mangle]
 pub extern "C" fn pelage_groom_lod_counts(
     groom: PelageGroom,

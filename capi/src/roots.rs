@@ -39,7 +39,7 @@ const _: () =
 /// triangle, a stride), NON_FINITE, OUT_OF_RANGE (a face), MISALIGNED,
 /// PANIC.
 ///
-/// Thread safety: reentrant; concurrent calls may share inputs but not outputs.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_roots_evaluate(
     mesh: *const PelageMeshDesc,

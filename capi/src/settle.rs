@@ -38,9 +38,9 @@ pub struct PelageSettleInfo {
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, MISALIGNED, NON_FINITE,
 /// OUT_OF_RANGE, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
-pub extern "C" fn pelage_settle_query(
+pub extern "C" fn pelage_settle_size(
     rest_mesh: *const PelageMeshDesc,
     guide_count: usize,
     params: *const PelageExpandParams,
@@ -77,7 +77,7 @@ pub extern "C" fn pelage_settle_query(
 /// reached are unchanged, the others settled: which ones is unspecified;
 /// `info` is not written), PANIC.
 ///
-/// Thread safety: reentrant; concurrent calls need distinct arenas and grooms.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_settle(
     rest_mesh: *const PelageMeshDesc,

@@ -30,7 +30,7 @@ pub struct PelageSimTy {
 
 /// Simulated guides: the state of the tip springs across frames, the rest
 /// shapes, the tip links. Created by `pelage_sim_new` in memory the host
-/// provides (sized by `pelage_sim_query`), stepped frame by frame by
+/// provides (sized by `pelage_sim_size`), stepped frame by frame by
 /// `pelage_sim_step`, read by `pelage_sim_read`; saved and restored as
 /// bytes; released by `pelage_sim_free`.
 pub type PelageSim = *mut PelageSimTy;
@@ -85,7 +85,7 @@ pub struct PelageSimParams {
 /// at the tip, no links (radius 0; 4 links, 2 relaxations, stiffness 0.5
 /// once a radius is set), teleport at 20 guide lengths.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_sim_params_defaults() -> PelageSimParams {
     let d = SimParams::default();
@@ -168,9 +168,9 @@ pub(crate) struct SimBox {
 /// The mesh's and the maps' values are not read: pelage_sim_new checks
 /// them.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
-pub extern "C" fn pelage_sim_query(
+pub extern "C" fn pelage_sim_size(
     rest_mesh: *const PelageMeshDesc,
     guide_count: usize,
     params: *const PelageSimParams,
@@ -190,7 +190,7 @@ pub extern "C" fn pelage_sim_query(
 
 /// Creates a simulation of `rest_guides` on `rest_mesh` (both at rest:
 /// the guides' shapes in their root frames are their neutral pose) in the
-/// host's `memory` (`memory_bytes` from pelage_sim_query, any alignment),
+/// host's `memory` (`memory_bytes` from pelage_sim_size, any alignment),
 /// which must stay valid and untouched until pelage_sim_free. The maps are
 /// sampled at the guide roots; tips within `link_radius` are linked. Every
 /// guide starts at its neutral pose. On failure `*out_sim` is untouched.
@@ -199,7 +199,7 @@ pub extern "C" fn pelage_sim_query(
 /// value out of its range at some guide), NON_FINITE, OUT_OF_RANGE,
 /// CAPACITY_EXCEEDED (the memory), MISALIGNED, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_sim_new(
     rest_mesh: *const PelageMeshDesc,
@@ -228,7 +228,7 @@ pub extern "C" fn pelage_sim_new(
 /// Releases a simulation (its memory is the host's again). NULL is
 /// accepted and does nothing.
 ///
-/// Thread safety: no other call may use `sim` during or after this one.
+/// Thread safety: frees `sim`.
 #[no_mangle]
 pub extern "C" fn pelage_sim_free(sim: PelageSim) {
     free(sim);
@@ -267,8 +267,7 @@ pub extern "C" fn pelage_sim_free(sim: PelageSim) {
 /// curves' count or stride, an external point beyond 1e9 where
 /// `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: no other call may use `sim` during this one; the frame
-/// may be read by other calls meanwhile.
+/// Thread safety: writes `sim`; reads `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_sim_step(
     sim: PelageSim,
@@ -472,8 +471,7 @@ fn step_beside_body(
 /// step), PANIC (also when a worker thread cannot start: the frame then
 /// has no guides until guides are set again).
 ///
-/// Thread safety: no other call may use `frame` during this one; `sim` may
-/// be read by other calls meanwhile (not stepped, reset or restored).
+/// Thread safety: writes `frame`; reads `sim`.
 #[no_mangle]
 pub extern "C" fn pelage_frame_set_sim_guides(
     frame: PelageFrame,
@@ -505,7 +503,7 @@ pub extern "C" fn pelage_frame_set_sim_guides(
 /// no step since pelage_sim_new or pelage_sim_reset, or a state restored
 /// that was saved before any step), CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
-/// Thread safety: concurrent reads of one sim are safe; not during a step.
+/// Thread safety: reads `sim`.
 #[no_mangle]
 pub extern "C" fn pelage_sim_read(
     sim: PelageSim,
@@ -543,7 +541,7 @@ pub extern "C" fn pelage_sim_read(
 ///
 /// Returns OK, NULL_PARAMETER, PANIC.
 ///
-/// Thread safety: no other call may use `sim` during this one.
+/// Thread safety: writes `sim`.
 #[no_mangle]
 pub extern "C" fn pelage_sim_reset(sim: PelageSim) -> PelageStatus {
     ffi_boundary! {
@@ -552,16 +550,16 @@ pub extern "C" fn pelage_sim_reset(sim: PelageSim) -> PelageStatus {
     }
 }
 
-/// Writes the bytes pelage_sim_save needs to `*state_bytes`.
+/// Writes the bytes pelage_sim_save needs to `*bytes`.
 ///
 /// Returns OK, NULL_PARAMETER, PANIC.
 ///
-/// Thread safety: concurrent with reads of `sim`; not during a step.
+/// Thread safety: reads `sim`.
 #[no_mangle]
-pub extern "C" fn pelage_sim_state_size(sim: PelageSim, state_bytes: *mut usize) -> PelageStatus {
+pub extern "C" fn pelage_sim_state_size(sim: PelageSim, bytes: *mut usize) -> PelageStatus {
     ffi_boundary! {
         let size = object(sim)?.sim.state_bytes();
-        *req_mut(state_bytes, "state_bytes")? = size;
+        *req_mut(bytes, "bytes")? = size;
         Ok(())
     }
 }
@@ -576,7 +574,7 @@ pub extern "C" fn pelage_sim_state_size(sim: PelageSim, state_bytes: *mut usize)
 /// Returns OK, NULL_PARAMETER, CAPACITY_EXCEEDED (the needed size is in
 /// `*written`), PANIC.
 ///
-/// Thread safety: concurrent with reads of `sim`; not during a step.
+/// Thread safety: reads `sim`.
 #[no_mangle]
 pub extern "C" fn pelage_sim_save(
     sim: PelageSim,
@@ -609,17 +607,16 @@ pub extern "C" fn pelage_sim_save(
 /// 1), INVALID_ARGUMENT (another guide count, other rest guides, roots,
 /// maps or parameters), PANIC.
 ///
-/// Thread safety: no other call may use `sim` during this one.
+/// Thread safety: writes `sim`.
 #[no_mangle]
 pub extern "C" fn pelage_sim_restore(
     sim: PelageSim,
-    state: *const c_void,
-    state_bytes: usize,
+    data: *const c_void,
+    data_bytes: usize,
 ) -> PelageStatus {
     ffi_boundary! {
         let sim = object_mut(sim)?;
-        let state = bytes(state, state_bytes, "state")?;
-        sim.sim.restore(state)?;
+        sim.sim.restore(bytes(data, data_bytes, "data")?)?;
         Ok(())
     }
 }

@@ -71,7 +71,7 @@ pub struct PelageStampInfo {
 /// seed 0, target_count 0, radius 0 (derived from the count), no progress
 /// callback.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_stamp_params_defaults() -> PelageStampParams {
     let d = StampParams::default();
@@ -108,9 +108,9 @@ fn core_params<'a>(
 /// strides, mesh values beyond 1e9), NON_FINITE, OUT_OF_RANGE, MISALIGNED,
 /// PANIC.
 ///
-/// Thread safety: reentrant; the inputs must not change during the call.
+/// Thread safety: free.
 #[no_mangle]
-pub extern "C" fn pelage_stamp_query(
+pub extern "C" fn pelage_stamp_size(
     mesh: *const PelageMeshDesc,
     params: *const PelageStampParams,
     arena_bytes: *mut usize,
@@ -138,7 +138,7 @@ pub extern "C" fn pelage_stamp_query(
 /// holes capped).
 ///
 /// `arena`/`arena_bytes`: scratch memory of at least the size from
-/// `pelage_stamp_query` (any alignment). `roots`: capacity `roots_capacity`;
+/// `pelage_stamp_size` (any alignment). `roots`: capacity `roots_capacity`;
 /// the max_roots bound from the query (the target count) always suffices. On success
 /// `*root_count` is the number written and `info` (optional, may be NULL) is
 /// filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
@@ -150,7 +150,7 @@ pub extern "C" fn pelage_stamp_query(
 /// CAPACITY_EXCEEDED (the arena, or `roots_capacity`), MISALIGNED,
 /// CANCELLED, PANIC.
 ///
-/// Thread safety: reentrant; concurrent calls need distinct arenas and outputs.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_stamp(
     mesh: *const PelageMeshDesc,

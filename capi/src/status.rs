@@ -45,7 +45,7 @@ pub enum PelageStatus {
 /// A static, human-readable description of a PelageStatus value (never NULL;
 /// "unknown status" for values this library does not define).
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_status_message(status: i32) -> *const c_char {
     const ALL: [PelageStatus; 12] = [
@@ -90,7 +90,7 @@ thread_local! {
 /// none yet; successful calls leave it unchanged). The pointer stays valid
 /// until the next failed pelage call on this thread.
 ///
-/// Thread safety: per-thread; may be called from any thread.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_last_error() -> *const c_char {
     // while the thread's locals are torn down there is no message to give

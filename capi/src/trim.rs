@@ -107,8 +107,7 @@ const _: () = assert!(PELAGE_TRIM_WHOLE == pelage_core::trim::WHOLE);
 /// CAPACITY_EXCEEDED (`capacity`; `*record_count` gets the count
 /// needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread; the frame may be read by
-/// other calls meanwhile.
+/// Thread safety: reads `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_trim_find(
     frame: PelageFrame,
@@ -169,8 +168,7 @@ pub extern "C" fn pelage_trim_find(
 /// length outside 0..1, `length_count`, `guide_count` above 2^32 - 1,
 /// `points_per_guide` outside 2..64), MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread while `groom` is alive,
-/// with distinct `lengths`.
+/// Thread safety: reads `groom`.
 #[no_mangle]
 pub extern "C" fn pelage_trim_shortest(
     groom: PelageGroom,
@@ -223,8 +221,7 @@ pub extern "C" fn pelage_trim_shortest(
 /// without guides or posed for another point count, a collider, the
 /// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
-/// Thread safety: may be called from any thread while `groom` is alive,
-/// with distinct `lengths`; the frame may be read by other calls meanwhile.
+/// Thread safety: reads `groom` and `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_trim_shortest_hairs(
     groom: PelageGroom,
@@ -266,7 +263,7 @@ pub extern "C" fn pelage_trim_shortest_hairs(
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (overflow), PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_trim_records_size(record_count: usize, bytes: *mut usize) -> PelageStatus {
     ffi_boundary! {
@@ -285,7 +282,7 @@ pub extern "C" fn pelage_trim_records_size(record_count: usize, bytes: *mut usiz
 /// 2^32 - 1, `points_per_guide` outside 2..64), OUT_OF_RANGE, NON_FINITE,
 /// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_trim_records_write(
     records: *const PelageTrimRecord,
@@ -305,37 +302,37 @@ pub extern "C" fn pelage_trim_records_write(
     }
 }
 
-/// Reads the header of a trim records file (`size` bytes) into `*info`,
+/// Reads the header of a trim records file (`data_bytes` bytes at `data`) into `*info`,
 /// checking its framing (magic, version, length, checksum).
 ///
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_trim_records_info(
-    file: *const std::ffi::c_void,
-    size: usize,
+    data: *const std::ffi::c_void,
+    data_bytes: usize,
     info: *mut PelageTrimRecordsInfo,
 ) -> PelageStatus {
     ffi_boundary! {
         let info = req_mut(info, "info")?;
-        *info = c_info(trim_file::records_info(bytes(file, size, "file")?)?);
+        *info = c_info(trim_file::records_info(bytes(data, data_bytes, "data")?)?);
         Ok(())
     }
 }
 
-/// Decodes a trim records file (`size` bytes) into `records` (capacity
+/// Decodes a trim records file (`data_bytes` bytes at `data`) into `records` (capacity
 /// `capacity`) and its counts into `*info`. Every record is checked first:
 /// on failure nothing is written.
 ///
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 /// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_trim_records_read(
-    file: *const std::ffi::c_void,
-    size: usize,
+    data: *const std::ffi::c_void,
+    data_bytes: usize,
     records: *mut PelageTrimRecord,
     capacity: usize,
     info: *mut PelageTrimRecordsInfo,
@@ -343,7 +340,7 @@ pub extern "C" fn pelage_trim_records_read(
     ffi_boundary! {
         let info = req_mut(info, "info")?;
         let out: &mut [TrimRecord] = bytemuck::cast_slice_mut(slice_mut(records, capacity, "records")?);
-        *info = c_info(trim_file::decode_records(bytes(file, size, "file")?, out)?);
+        *info = c_info(trim_file::decode_records(bytes(data, data_bytes, "data")?, out)?);
         Ok(())
     }
 }
@@ -361,7 +358,7 @@ fn c_info(info: RecordsInfo) -> PelageTrimRecordsInfo {
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (overflow), PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_trim_lengths_size(strand_count: usize, bytes: *mut usize) -> PelageStatus {
     ffi_boundary! {
@@ -379,7 +376,7 @@ pub extern "C" fn pelage_trim_lengths_size(strand_count: usize, bytes: *mut usiz
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, CAPACITY_EXCEEDED,
 /// MISALIGNED, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_trim_lengths_write(
     lengths: *const u16,
@@ -396,7 +393,7 @@ pub extern "C" fn pelage_trim_lengths_write(
     }
 }
 
-/// Decodes a trim lengths file (`size` bytes) into `lengths` (capacity
+/// Decodes a trim lengths file (`data_bytes` bytes at `data`) into `lengths` (capacity
 /// `capacity`; NULL with 0 to learn the count) and its strand count into
 /// `*strand_count`. On failure nothing is written to `lengths`; with too
 /// small a capacity, `*strand_count` still gets the count.
@@ -404,18 +401,18 @@ pub extern "C" fn pelage_trim_lengths_write(
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA, VERSION_MISMATCH,
 /// CAPACITY_EXCEEDED, MISALIGNED, PANIC.
 ///
-/// Thread safety: may be called from any thread at any time.
+/// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_trim_lengths_read(
-    file: *const std::ffi::c_void,
-    size: usize,
+    data: *const std::ffi::c_void,
+    data_bytes: usize,
     lengths: *mut u16,
     capacity: usize,
     strand_count: *mut usize,
 ) -> PelageStatus {
     ffi_boundary! {
         let count = req_mut(strand_count, "strand_count")?;
-        let file = bytes(file, size, "file")?;
+        let file = bytes(data, data_bytes, "data")?;
         *count = trim_file::lengths_count(file)?;
         trim_file::decode_lengths(file, slice_mut(lengths, capacity, "lengths")?)?;
         Ok(())

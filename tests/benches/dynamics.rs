@@ -259,7 +259,7 @@ fn full_frame(
         ..pelage_expand_params_defaults()
     };
     let mut per = 0;
-    assert_eq!(pelage_expand_query(&ep, &mut per), PelageStatus::Ok);
+    assert_eq!(pelage_expand_size(&ep, &mut per), PelageStatus::Ok);
     let mut out = vec![[0.0f32; 4]; hairs.len() * per];
     let mut posed = vec![[0.0f32; 3]; roots.len() * JOINTS];
     assert_eq!(pelage_sim_reset(sim), PelageStatus::Ok);

@@ -110,7 +110,7 @@ fn main() {
     let mut ep = pelage_expand_params_defaults();
     ep.points_per_strand = CVS as u32;
     let mut per = 0;
-    assert_eq!(pelage_expand_query(&ep, &mut per), PelageStatus::Ok);
+    assert_eq!(pelage_expand_size(&ep, &mut per), PelageStatus::Ok);
     let mut out = vec![[0.0f32; 4]; hairs.len() * per];
     let mb = (out.len() * 16) as f64 / 1e6;
     println!("bind: {:.1} ms ({:.2e} hairs/s); groom maps: {:.1} ms; output {mb:.0} MB per frame ({per} points per hair)", t_bind * 1e3, hairs.len() as f64 / t_bind, t_groom * 1e3);

@@ -205,8 +205,8 @@ static void bad_mesh_(int line, const char *name, const PelageMeshDesc *mesh, co
   char what[160];
   size_t sizes[2];
   FILL(sizes, sizeof sizes);
-  snprintf(what, sizeof what, "%s: pelage_stamp_query", name);
-  expect_(__FILE__, line, what, pelage_stamp_query(mesh, params, &sizes[0], &sizes[1]), want);
+  snprintf(what, sizeof what, "%s: pelage_stamp_size", name);
+  expect_(__FILE__, line, what, pelage_stamp_size(mesh, params, &sizes[0], &sizes[1]), want);
   if (!untouched(sizes, sizeof sizes)) ++g_failures, fprintf(stderr, "%s:%d: %s wrote its outputs\n", __FILE__, line, what);
 
   PelageRoot *roots = malloc(g_capacity * sizeof *roots);
@@ -226,8 +226,8 @@ static void bad_mesh_(int line, const char *name, const PelageMeshDesc *mesh, co
   if (evaluate) {
     size_t bind_bytes;
     FILL(&bind_bytes, sizeof bind_bytes);
-    snprintf(what, sizeof what, "%s: pelage_bind_query", name);
-    expect_(__FILE__, line, what, pelage_bind_query(mesh, 100, &bind_bytes), want);
+    snprintf(what, sizeof what, "%s: pelage_bind_size", name);
+    expect_(__FILE__, line, what, pelage_bind_size(mesh, 100, &bind_bytes), want);
     if (!untouched(&bind_bytes, sizeof bind_bytes)) {
       ++g_failures, fprintf(stderr, "%s:%d: %s wrote its outputs\n", __FILE__, line, what);
     }
@@ -307,7 +307,7 @@ static void test_success(void) {
   g_params.target_count = 3000;
   g_params.seed = 42;
   size_t arena_bytes = 0, max_roots = 0;
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&mesh, &g_params, &arena_bytes, &max_roots));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&mesh, &g_params, &arena_bytes, &max_roots));
   REQUIRE(arena_bytes > 0 && max_roots >= g_params.target_count);
   g_arena_bytes = arena_bytes;
   g_arena = malloc(arena_bytes + 8);
@@ -441,7 +441,7 @@ static void test_maps(void) {
   PelageRoot *roots = malloc(g_capacity * 2 * sizeof *roots);
   size_t n = 0, arena_bytes = 0, max_roots = 0;
   REQUIRE(roots);
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&mesh, &p, &arena_bytes, &max_roots));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&mesh, &p, &arena_bytes, &max_roots));
   unsigned char *arena = malloc(arena_bytes);
   REQUIRE(arena && max_roots <= 2 * g_capacity);
   EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, arena, arena_bytes, roots, max_roots, &n, NULL));
@@ -460,7 +460,7 @@ static void test_maps(void) {
   p.density.kind = PELAGE_MAP_KIND_TEXTURE_U8;
   p.density.data = tex;
   p.density.width = 8, p.density.height = 2, p.density.stride = 8;
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&mesh, &p, &arena_bytes, &max_roots));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&mesh, &p, &arena_bytes, &max_roots));
   arena = malloc(arena_bytes);
   REQUIRE(arena && max_roots <= 2 * g_capacity);
   EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, arena, arena_bytes, roots, max_roots, &n, NULL));
@@ -481,11 +481,11 @@ static void test_null_pointers(void) {
   const PelageMeshDesc mesh = sphere_desc(&g_sphere);
   size_t a, b;
   FILL(&a, sizeof a), FILL(&b, sizeof b);
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_query(NULL, &g_params, &a, &b));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_query(&mesh, NULL, &a, &b));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_query(&mesh, &g_params, NULL, &b));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_size(NULL, &g_params, &a, &b));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_size(&mesh, NULL, &a, &b));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_size(&mesh, &g_params, NULL, &b));
   CHECK(untouched(&b, sizeof b));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_query(&mesh, &g_params, &a, NULL));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_size(&mesh, &g_params, &a, NULL));
   CHECK(untouched(&a, sizeof a) && untouched(&b, sizeof b));
 
   PelageRoot *roots = malloc(g_capacity * sizeof *roots);
@@ -604,7 +604,7 @@ static void test_bad_meshes(void) {
   m = good, m.positions = restride(s->p, 12, s->nv, 16, 0), m.position_stride = 16;
   {
     size_t a = 0, b = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&m, &g_params, &a, &b));
+    EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&m, &g_params, &a, &b));
   }
   free(p), free(uv), free(n), free(t);
   scratch_free();
@@ -630,9 +630,9 @@ static void test_bad_params(void) {
   {
     size_t a = 0, b = 0;
     p = g_params, p.target_count = UINT32_MAX;
-    const PelageStatus s = pelage_stamp_query(&mesh, &p, &a, &b);
+    const PelageStatus s = pelage_stamp_size(&mesh, &p, &a, &b);
     CHECK(s != PELAGE_STATUS_PANIC);
-    printf("note: target_count UINT32_MAX: pelage_stamp_query gives %s, arena %zu bytes, max_roots %zu\n",
+    printf("note: target_count UINT32_MAX: pelage_stamp_size gives %s, arena %zu bytes, max_roots %zu\n",
            status_name(s), a, b);
   }
   p = g_params, p.bald_below = NAN;
@@ -671,7 +671,7 @@ static void test_bad_params(void) {
   p.density.data = ftex;
   {
     size_t a = 0, b = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&mesh, &p, &a, &b)); /* the same map without the NaN */
+    EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&mesh, &p, &a, &b)); /* the same map without the NaN */
   }
 
   /* per-vertex maps */
@@ -696,7 +696,7 @@ static void test_bad_params(void) {
   p = g_params, p.density = v, p.density.width = 0, p.density.height = 0;
   {
     size_t a = 0, b = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&mesh, &p, &a, &b)); /* width/height unused */
+    EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&mesh, &p, &a, &b)); /* width/height unused */
   }
   free(values);
   scratch_free();
@@ -927,7 +927,7 @@ static size_t stamp_sphere(uint32_t target, uint64_t seed, PelageRoot **out) {
   PelageStampParams p = pelage_stamp_params_defaults();
   p.target_count = target, p.seed = seed;
   size_t bytes = 0, max_roots = 0, n = 0;
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp_query(&g_in.mesh, &p, &bytes, &max_roots));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&g_in.mesh, &p, &bytes, &max_roots));
   void *arena = malloc(bytes);
   *out = malloc(max_roots * sizeof **out);
   REQUIRE(arena && *out);
@@ -1019,7 +1019,7 @@ static void test_interp_success(void) {
 
   /* bind */
   g_in.bind_params = pelage_bind_params_defaults();
-  EXPECT(PELAGE_STATUS_OK, pelage_bind_query(&g_in.mesh, g_in.guide_count, &g_in.bind_arena_bytes));
+  EXPECT(PELAGE_STATUS_OK, pelage_bind_size(&g_in.mesh, g_in.guide_count, &g_in.bind_arena_bytes));
   CHECK(g_in.bind_arena_bytes > 0);
   g_in.bind_arena = malloc(g_in.bind_arena_bytes);
   g_in.bindings = malloc(g_in.strand_count * sizeof *g_in.bindings);
@@ -1108,7 +1108,7 @@ static void test_interp_success(void) {
   /* expand: query, a frame posed with the guides, then pinned 16-point curves with counts and ids */
   g_in.expand_params = pelage_expand_params_defaults();
   g_in.expand_params.orphan_length = g_in.info.mean_guide_length;
-  EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&g_in.expand_params, &g_in.per));
+  EXPECT(PELAGE_STATUS_OK, pelage_expand_size(&g_in.expand_params, &g_in.per));
   CHECK(g_in.per == 18);
   REQUIRE(g_in.per >= 4);
   const size_t per = g_in.per, n = g_in.strand_count;
@@ -1199,7 +1199,7 @@ static void test_interp_success(void) {
     PelageExpandParams raw = g_in.expand_params;
     raw.end_points = PELAGE_END_POINTS_RAW;
     size_t raw_per = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&raw, &raw_per));
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_size(&raw, &raw_per));
     CHECK(raw_per == 16);
     FILL(g_in.points_out, points_out_bytes());
     EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &raw, g_in.points_out,
@@ -1255,7 +1255,7 @@ static void test_frame(void) {
     PelageExpandParams p = g_in.expand_params;
     size_t pp = 0;
     p.points_per_strand = good_points[i];
-    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&p, &pp));
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_size(&p, &pp));
     CHECK(pp == good_points[i] + 2u);
     FILL(g_in.points_out, points_out_bytes());
     EXPECT(PELAGE_STATUS_OK, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &p, g_in.points_out, 16, n * pp));
@@ -1353,7 +1353,7 @@ static void test_frame(void) {
     PelageExpandParams p12 = g_in.expand_params;
     p12.points_per_strand = 12;
     size_t per12 = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_expand_query(&p12, &per12));
+    EXPECT(PELAGE_STATUS_OK, pelage_expand_size(&p12, &per12));
     CHECK(per12 == 14);
     FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(f12, g_in.strands, g_in.bindings, g_in.grooms, n,
                                                  &g_in.expand_params, g_in.points_out, 16, POINTS_CAPACITY));
@@ -1459,9 +1459,9 @@ static void test_frame(void) {
 
 static void test_interp_null_pointers(void) {
   const size_t n = g_in.strand_count;
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_query(&g_in.mesh, g_in.guide_count, NULL));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_size(&g_in.mesh, g_in.guide_count, NULL));
   size_t bind_bytes = 0;
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_query(NULL, g_in.guide_count, &bind_bytes));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_bind_size(NULL, g_in.guide_count, &bind_bytes));
   CHECK(bind_bytes == 0);
 
   /* pelage_bind: every pointer argument, and the pointers inside the descriptors */
@@ -1526,10 +1526,10 @@ static void test_interp_null_pointers(void) {
     pelage_frame_free(NULL);
   }
 
-  /* pelage_expand_query */
+  /* pelage_expand_size */
   size_t *per = &g_in.sizes_out[1];
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(NULL, per));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_query(&g_in.expand_params, NULL));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_size(NULL, per));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_expand_size(&g_in.expand_params, NULL));
 
   /* pelage_expand: every pointer argument, and the pointers inside the records and the curves
    * (curve_counts and curve_ids are optional) */
@@ -1815,13 +1815,13 @@ static void test_interp_bad_input(void) {
 #undef BAD_MAPS
   }
 
-  /* expansion parameters (pelage_expand_query refuses what pelage_expand refuses) and output layout */
+  /* expansion parameters (pelage_expand_size refuses what pelage_expand refuses) and output layout */
   PelageExpandParams ep;
 #define BAD_EXPAND_PARAMS(want)                                                                                    \
   do {                                                                                                             \
     FAILS(want, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep, g_in.points_out, 16,         \
                        POINTS_CAPACITY));                                                                          \
-    FAILS(want, pelage_expand_query(&ep, &g_in.sizes_out[1]));                                                     \
+    FAILS(want, pelage_expand_size(&ep, &g_in.sizes_out[1]));                                                     \
   } while (0)
   ep = g_in.expand_params, ep.end_points = 9;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
@@ -1832,7 +1832,7 @@ static void test_interp_bad_input(void) {
   ep = g_in.expand_params, ep.points_per_strand = 65; /* points_out has room for 67 points per curve */
   FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,
                                                g_in.points_out, 16, n * 67));
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(&ep, &g_in.sizes_out[1]));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_size(&ep, &g_in.sizes_out[1]));
   ep = g_in.expand_params, ep.points_per_strand = UINT32_MAX;
   BAD_EXPAND_PARAMS(PELAGE_STATUS_INVALID_ARGUMENT);
   ep = g_in.expand_params, ep.orphan_length = NAN;
@@ -2091,8 +2091,8 @@ static void test_hostile(void) {
                                                    g_in.points_out, 16, POINTS_CAPACITY));
       FAILS(PELAGE_STATUS_INVALID_ARGUMENT, GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out,
                                                          POINTS_CAPACITY));
-      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_query(&ep, &g_in.sizes_out[1]));
-      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep,
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_expand_size(&ep, &g_in.sizes_out[1]));
+      FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle_size(&g_in.mesh, g_in.guide_count, &ep,
                                                                 &g_in.sizes_out[0]));
     }
   }
@@ -2374,7 +2374,7 @@ static void test_files(void) {
   const PelageGuideSet set = {guide_roots, guide_points, g, pts, info.id};
   size_t cache_bytes = 0;
   /* quantized may need more room than exact (a raw guide has a tag) */
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_max_size(g, pts, 1, 0, &cache_bytes));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_size(g, pts, 1, 0, &cache_bytes));
   unsigned char *cache = malloc(cache_bytes);
   REQUIRE(cache);
   EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 1, cache, cache_bytes, &written));
@@ -2442,7 +2442,7 @@ static void *worker(void *arg) {
   size_t a, b;
   snprintf(g_worker_first, sizeof g_worker_first, "%s", pelage_last_error());
   p.black_scale = 0.0f;
-  g_worker_status = pelage_stamp_query(mesh, &p, &a, &b);
+  g_worker_status = pelage_stamp_size(mesh, &p, &a, &b);
   snprintf(g_worker_after, sizeof g_worker_after, "%s", pelage_last_error());
   return NULL;
 }
@@ -2677,11 +2677,11 @@ static void test_settle(void) {
   const size_t n = g_in.strand_count, points = g_in.guide_count * GCVS;
   PelageExpandParams ep = g_in.expand_params;
   size_t bytes = 0;
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep, NULL));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(NULL, g_in.guide_count, &ep, &bytes));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_query(&g_in.mesh, g_in.guide_count, NULL, &bytes));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_size(&g_in.mesh, g_in.guide_count, &ep, NULL));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_size(NULL, g_in.guide_count, &ep, &bytes));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_settle_size(&g_in.mesh, g_in.guide_count, NULL, &bytes));
   CHECK(bytes == 0);
-  EXPECT(PELAGE_STATUS_OK, pelage_settle_query(&g_in.mesh, g_in.guide_count, &ep, &bytes));
+  EXPECT(PELAGE_STATUS_OK, pelage_settle_size(&g_in.mesh, g_in.guide_count, &ep, &bytes));
   CHECK(bytes > 0);
   unsigned char *arena = malloc(bytes);
   PelageStrandGroom *work = malloc(n * sizeof *work), *tilted = malloc(n * sizeof *tilted),
@@ -2788,7 +2788,7 @@ static void test_settle(void) {
       p[g_sphere.nv / 2][0] = huge[i];
       m.positions = p;
       SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&m, &g_in.guides, g_in.bindings, &ep));
-      EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle_query(&m, g_in.guide_count, &ep, &g_in.sizes_out[0]));
+      EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_settle_size(&m, g_in.guide_count, &ep, &g_in.sizes_out[0]));
       PelageGuidesDesc g = g_in.guides;
       memcpy(gp, g_in.guide_points, points * sizeof *gp);
       gp[7 * GCVS + GCVS - 1][1] += huge[i];
@@ -2845,7 +2845,7 @@ static void test_settle(void) {
   {
     Scaled big = scaled_new(5e8f);
     size_t big_bytes = 0;
-    EXPECT(PELAGE_STATUS_OK, pelage_settle_query(&big.mesh, g_in.guide_count, &ep, &big_bytes));
+    EXPECT(PELAGE_STATUS_OK, pelage_settle_size(&big.mesh, g_in.guide_count, &ep, &big_bytes));
     unsigned char *big_arena = malloc(big_bytes);
     REQUIRE(big_arena);
     for (size_t i = 0; i < n; ++i) {
@@ -2991,7 +2991,7 @@ static void test_threads(void) {
   const PelageMeshDesc mesh = sphere_desc(&g_sphere);
   size_t a, b;
   char mine[256];
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_query(&mesh, NULL, &a, &b));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_stamp_size(&mesh, NULL, &a, &b));
   snprintf(mine, sizeof mine, "%s", pelage_last_error());
   pthread_t thread;
   REQUIRE(pthread_create(&thread, NULL, worker, (void *)&mesh) == 0);

@@ -343,7 +343,7 @@ int main(int argc, char** argv) try {
   std::printf("groom: defaults (width %.4f -> %.4f) + kink 0.03 x 3, clump 0.25; expand: 16 points, pinned\n",
               double(pelage_groom_maps_defaults().root_width.constant),
               double(pelage_groom_maps_defaults().tip_width.constant));
-  expect(per == 18, fmt("pelage_expand_query: %zu points per pinned 16-point curve", per));
+  expect(per == 18, fmt("pelage_expand_size: %zu points per pinned 16-point curve", per));
   const float* pts = fur.points.data();
 
   // --- (a) every hair starts on the surface --------------------------------------

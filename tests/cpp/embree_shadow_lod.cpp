@@ -248,7 +248,7 @@ int main(int argc, char** argv) try {
   const creature::Groom groom(roots.data(), bindings.data(), grooms.data(), n);
   const creature::Frame frame(mesh, guides, ep);  // pelage_frame_new + pelage_frame_set_guides, at rest
   size_t per = 0;
-  creature::check(pelage_expand_query(&ep, &per), "pelage_expand_query");
+  creature::check(pelage_expand_size(&ep, &per), "pelage_expand_size");
   std::printf("bind, groom (width %.4f -> %.4f, kink, clump), settle (%u lifted, %u unresolved), groom handle, "
               "frame: %.2f s; %u orphans; %zu points per curve\n",
               double(maps.root_width.constant), double(maps.tip_width.constant), settled.lifted, settled.unresolved,

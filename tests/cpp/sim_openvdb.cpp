@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
     PelageSimParams params = pelage_sim_params_defaults();
     params.joints = params.points_per_guide = kJoints;
     size_t bytes = 0;
-    creature::check(pelage_sim_query(&desc, roots.size(), &params, &bytes), "pelage_sim_query");
+    creature::check(pelage_sim_size(&desc, roots.size(), &params, &bytes), "pelage_sim_size");
     PelageFrame frame = nullptr;
     creature::check(pelage_frame_new(&desc, roots.size(), kJoints, &frame), "pelage_frame_new");
     creature::check(pelage_frame_set_guides(frame, &guides, 0), "pelage_frame_set_guides");

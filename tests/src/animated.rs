@@ -182,7 +182,7 @@ impl ShotSim {
         };
         let mut bytes = 0;
         assert_eq!(
-            pelage_sim_query(&desc, roots.len(), &params, &mut bytes),
+            pelage_sim_size(&desc, roots.len(), &params, &mut bytes),
             PelageStatus::Ok
         );
         let mut memory = vec![0u8; bytes];

@@ -225,7 +225,7 @@ pub fn groomed(
     };
     let mut bytes = 0usize;
     assert_eq!(
-        pelage_bind_query(&d, guide_roots.len(), &mut bytes),
+        pelage_bind_size(&d, guide_roots.len(), &mut bytes),
         PelageStatus::Ok
     );
     let mut arena = vec![0u8; bytes];
@@ -280,7 +280,7 @@ impl Groomed {
         let d = mesh_desc(m);
         let mut bytes = 0usize;
         assert_eq!(
-            pelage_settle_query(&d, self.guide_roots.len(), params, &mut bytes),
+            pelage_settle_size(&d, self.guide_roots.len(), params, &mut bytes),
             PelageStatus::Ok
         );
         let mut arena = vec![0u8; bytes];

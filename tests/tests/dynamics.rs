@@ -60,7 +60,7 @@ impl SimHandle {
         let guides = guides_desc(&shot.roots, &shot.points);
         let mut bytes = 0;
         assert_eq!(
-            pelage_sim_query(&desc, shot.roots.len(), params, &mut bytes),
+            pelage_sim_size(&desc, shot.roots.len(), params, &mut bytes),
             PelageStatus::Ok
         );
         let mut memory = vec![0u8; bytes];
@@ -388,7 +388,7 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
         ..pelage_expand_params_defaults()
     };
     let mut per = 0;
-    assert_eq!(pelage_expand_query(&ep, &mut per), PelageStatus::Ok);
+    assert_eq!(pelage_expand_size(&ep, &mut per), PelageStatus::Ok);
     let grown = |frame: &Frame| {
         let mut out = vec![[0.0f32; 4]; hairs.len() * per];
         let curves = curves_desc(&mut out, None);
@@ -630,7 +630,7 @@ fn non_finite_simulation_inputs_are_non_finite() {
             ..shot.params()
         },
     ] {
-        let s = pelage_sim_query(&desc, n, &params, &mut bytes);
+        let s = pelage_sim_size(&desc, n, &params, &mut bytes);
         assert_eq!(s, PelageStatus::NonFinite);
     }
 }

@@ -47,7 +47,7 @@ fn expand(
         ..pelage_expand_params_defaults()
     };
     let mut per = 0usize;
-    assert_eq!(pelage_expand_query(&params, &mut per), PelageStatus::Ok);
+    assert_eq!(pelage_expand_size(&params, &mut per), PelageStatus::Ok);
     let mut out = vec![[0.0f32; 4]; strands.len() * per];
     let call = ExpandCall {
         mesh: &mesh_desc(m),

@@ -326,18 +326,14 @@ fn bound_weights_must_sum_to_one() {
     let n = g.strands.len();
     let per = {
         let mut per = 0usize;
-        expect(
-            pelage_expand_query(&params, &mut per),
-            PelageStatus::Ok,
-            &[],
-        );
+        expect(pelage_expand_size(&params, &mut per), PelageStatus::Ok, &[]);
         per
     };
     let mut out = vec![[0.0f32; 4]; n * per];
     let mut arena_bytes = 0usize;
     let d = mesh_desc(&m);
     expect(
-        pelage_settle_query(&d, g.guide_roots.len(), &params, &mut arena_bytes),
+        pelage_settle_size(&d, g.guide_roots.len(), &params, &mut arena_bytes),
         PelageStatus::Ok,
         &[],
     );
@@ -426,7 +422,7 @@ fn the_library_s_own_bindings_pass_and_its_groom_files_read() {
     let d = mesh_desc(&m);
     let mut bytes = 0usize;
     expect(
-        pelage_bind_query(&d, g.guide_roots.len(), &mut bytes),
+        pelage_bind_size(&d, g.guide_roots.len(), &mut bytes),
         PelageStatus::Ok,
         &[],
     );
@@ -505,7 +501,7 @@ fn guide_cache_flags_and_versions_take_only_what_is_documented() {
     let mut size = 0usize;
     // sizes: only counts a cache can hold, only the two modes
     expect(
-        pelage_guide_cache_max_size(guides, pts, 1, 0, &mut size),
+        pelage_guide_cache_size(guides, pts, 1, 0, &mut size),
         PelageStatus::Ok,
         &[],
     );
@@ -523,7 +519,7 @@ fn guide_cache_flags_and_versions_take_only_what_is_documented() {
     for (g, p, s, exact, what) in bad {
         let mut out = 12345usize;
         expect(
-            pelage_guide_cache_max_size(g, p, s, exact, &mut out),
+            pelage_guide_cache_size(g, p, s, exact, &mut out),
             PelageStatus::InvalidArgument,
             &[what],
         );
@@ -655,10 +651,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
                 },
             ),
         ] {
-            non_finite(
-                pelage_stamp_query(&d, &params, &mut arena, &mut roots),
-                what,
-            );
+            non_finite(pelage_stamp_size(&d, &params, &mut arena, &mut roots), what);
         }
     }
     let finite = PelageStampParams {
@@ -667,7 +660,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
     };
     let (mut arena, mut roots) = (0usize, 0usize);
     expect(
-        pelage_stamp_query(&d, &finite, &mut arena, &mut roots),
+        pelage_stamp_size(&d, &finite, &mut arena, &mut roots),
         PelageStatus::InvalidArgument,
         &["black_scale"],
     );
@@ -676,7 +669,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
     // INVALID_ARGUMENT
     let mut bytes = 0usize;
     expect(
-        pelage_bind_query(&d, g.guide_roots.len(), &mut bytes),
+        pelage_bind_size(&d, g.guide_roots.len(), &mut bytes),
         PelageStatus::Ok,
         &[],
     );
@@ -792,13 +785,13 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
             ),
         ] {
             let mut per = 0usize;
-            non_finite(pelage_expand_query(&p, &mut per), what);
+            non_finite(pelage_expand_size(&p, &mut per), what);
             non_finite(
                 pelage_expand(posed.0, &strands, &p, &curves_desc(&mut out, None)),
                 what,
             );
             non_finite(
-                pelage_settle_query(&d, g.guide_roots.len(), &p, &mut settle_bytes),
+                pelage_settle_size(&d, g.guide_roots.len(), &p, &mut settle_bytes),
                 what,
             );
             // patch boxes take the expansion's parameters
@@ -819,7 +812,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
     };
     let mut per = 0usize;
     expect(
-        pelage_expand_query(&zero_width, &mut per),
+        pelage_expand_size(&zero_width, &mut per),
         PelageStatus::InvalidArgument,
         &["width_scale"],
     );
@@ -857,7 +850,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
     let rest = frame(&d, &g.guides(), pts, 1).unwrap();
     let mut size = 0usize;
     expect(
-        pelage_guide_cache_max_size(g.guide_roots.len(), pts, 1, 0, &mut size),
+        pelage_guide_cache_size(g.guide_roots.len(), pts, 1, 0, &mut size),
         PelageStatus::Ok,
         &[],
     );

@@ -28,7 +28,7 @@ fn expand(m: &CreatureMesh, g: &Groomed, params: &PelageExpandParams) -> Vec<[f3
 /// The control points per curve `params` write.
 fn points_per_curve(params: &PelageExpandParams) -> usize {
     let mut per = 0usize;
-    assert_eq!(pelage_expand_query(params, &mut per), PelageStatus::Ok);
+    assert_eq!(pelage_expand_size(params, &mut per), PelageStatus::Ok);
     per
 }
 
@@ -439,7 +439,7 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     let render = stamp_roots(mesh, 50_000, 3);
     let mut bytes = 0;
     assert_eq!(
-        pelage_bind_query(&d, sim.strands.len(), &mut bytes),
+        pelage_bind_size(&d, sim.strands.len(), &mut bytes),
         PelageStatus::Ok
     );
     let mut arena = vec![0u8; bytes];

@@ -158,7 +158,7 @@ fn settle_leaves_no_point_inside_an_open_head_with_shells() {
     assert_eq!(settle.unresolved, 0, "{settle:?}");
 
     let mut per = 0usize;
-    assert_eq!(pelage_expand_query(&params, &mut per), PelageStatus::Ok);
+    assert_eq!(pelage_expand_size(&params, &mut per), PelageStatus::Ok);
     let mut out = vec![[0.0f32; 4]; g.strands.len() * per];
     let call = ExpandCall {
         mesh: &mesh_desc(&m),

@@ -13,7 +13,7 @@ int main() {
   PelageStampParams params = pelage_stamp_params_defaults();
   params.target_count = 100;
   size_t arena_bytes = 0, max_roots = 0, count = 0;
-  if (pelage_stamp_query(&mesh, &params, &arena_bytes, &max_roots) != PELAGE_STATUS_OK) return 1;
+  if (pelage_stamp_size(&mesh, &params, &arena_bytes, &max_roots) != PELAGE_STATUS_OK) return 1;
   std::vector<unsigned char> arena(arena_bytes);
   std::vector<PelageRoot> roots(max_roots);
   const PelageStatus s = pelage_stamp(&mesh, &params, arena.data(), arena.size(), roots.data(), roots.size(), &count, nullptr);
