@@ -343,7 +343,10 @@ fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
             2,
         )
     };
-    assert_eq!(step(&bad), PelageStatus::InvalidArgument);
+    assert_eq!(step(&bad), PelageStatus::NonFinite);
+    let mut far = sway_free.clone();
+    far[5][1] = 2e9;
+    assert_eq!(step(&far), PelageStatus::InvalidArgument);
     // a refused first step leaves no posed guides to read
     let mut out = vec![[0.0f32; 3]; n * JOINTS];
     assert_eq!(
