@@ -169,7 +169,7 @@ std::vector<PelageRoot> stamp(const Mesh& mesh, const PelageStampParams& params,
   const std::unique_ptr<unsigned char[]> arena(new unsigned char[arena_bytes]);
   std::vector<PelageRoot> roots(max_roots);
   size_t count = 0;
-  check(pelage_stamp(&desc, &params, arena.get(), arena_bytes, roots.data(), roots.size(), &count, info),
+  check(pelage_stamp(&desc, &params, PelageArena{arena.get(), arena_bytes}, roots.data(), roots.size(), &count, info),
         "pelage_stamp");
   roots.resize(count);
   return roots;
@@ -297,8 +297,8 @@ std::vector<PelageStrandBinding> bind(const Mesh& mesh, const PelageGuidesDesc& 
   check(pelage_bind_size(&desc, guides.guide_count, &arena_bytes), "pelage_bind_size");
   std::vector<unsigned char> arena(arena_bytes);
   std::vector<PelageStrandBinding> bindings(count);
-  check(pelage_bind(&desc, &guides, strands, count, &params, arena.data(), arena.size(), bindings.data(),
-                    bindings.size(), info),
+  const PelageRestPose rest_pose{&desc, &guides};
+  check(pelage_bind(&rest_pose, strands, count, &params, PelageArena{arena.data(), arena.size()}, bindings.data(), bindings.size(), info),
         "pelage_bind");
   return bindings;
 }
@@ -370,8 +370,8 @@ PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, c
   check(pelage_settle_size(&desc, rest_guides.guide_count, &all_cores, &bytes), "pelage_settle_size");
   std::vector<unsigned char> arena(bytes);
   PelageSettleInfo info{};
-  check(pelage_settle(&desc, &rest_guides, strands, bindings, grooms, count, &all_cores, arena.data(), arena.size(),
-                      &info),
+  const PelageRestPose rest_pose{&desc, &rest_guides};
+  check(pelage_settle(&rest_pose, strands, bindings, grooms, count, &all_cores, PelageArena{arena.data(), arena.size()}, &info),
         "pelage_settle");
   return info;
 }

@@ -352,7 +352,8 @@ int main(int argc, char** argv) try {
     creature::check(pelage_sim_size(&rest_desc, guide_roots.size(), &simp, &sim_bytes), "pelage_sim_size");
     std::vector<unsigned char> sim_memory(sim_bytes);
     PelageSim sim = nullptr;
-    creature::check(pelage_sim_new(&rest_desc, &guides, &simp, sim_memory.data(), sim_bytes, &sim), "pelage_sim_new");
+    const PelageRestPose rest_pose{&rest_desc, &guides};
+    creature::check(pelage_sim_new(&rest_pose, &simp, PelageArena{sim_memory.data(), sim_bytes}, &sim), "pelage_sim_new");
     const std::vector<float> rest_positions = mesh.positions;
     PelageColliders colliders{};
     colliders.body = 1;

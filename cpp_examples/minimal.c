@@ -63,7 +63,7 @@ int main(void) {
   /* 4. Stamp. */
   size_t count = 0;
   PelageStampInfo info;
-  check(pelage_stamp(&mesh, &params, arena, arena_bytes, roots, max_roots, &count, &info), "pelage_stamp");
+  check(pelage_stamp(&mesh, &params, (PelageArena){arena, arena_bytes}, roots, max_roots, &count, &info), "pelage_stamp");
   free(arena); /* scratch only: the roots do not point into it */
 
   /* 5. Evaluate root positions and normals (float3, packed). */

@@ -203,7 +203,8 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   check(pelage_sim_size(&rest_desc, guide_roots.size(), &params, &bytes), "pelage_sim_size");
   std::vector<unsigned char> memory(bytes);
   PelageSim raw = nullptr;
-  check(pelage_sim_new(&rest_desc, &rest_guides, &params, memory.data(), bytes, &raw), "pelage_sim_new");
+  const PelageRestPose rest_pose{&rest_desc, &rest_guides};
+  check(pelage_sim_new(&rest_pose, &params, PelageArena{memory.data(), bytes}, &raw), "pelage_sim_new");
   const std::unique_ptr<PelageSimTy, void (*)(PelageSim)> sim(raw, pelage_sim_free);
   PelageColliders colliders{};
   colliders.body = 1;

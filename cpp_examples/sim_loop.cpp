@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
     check(pelage_sim_size(&rest_desc, guide_roots.size(), &params, &bytes), "pelage_sim_size");
     std::vector<unsigned char> memory(bytes);
     PelageSim sim = nullptr;
-    check(pelage_sim_new(&rest_desc, &guides, &params, memory.data(), bytes, &sim), "pelage_sim_new");
+    const PelageRestPose rest_pose{&rest_desc, &guides};
+    check(pelage_sim_new(&rest_pose, &params, PelageArena{memory.data(), bytes}, &sim), "pelage_sim_new");
 
     PelageExpandParams ep = pelage_expand_params_defaults();
     ep.thread_count = 0;

@@ -271,6 +271,25 @@ typedef struct PelageGuidesDesc {
   const uint32_t *offsets;
 } PelageGuidesDesc;
 
+// The rest pose a groom is made on, read by pelage_bind, pelage_settle and
+// pelage_sim_new: the rest mesh and the rest guides on it.
+typedef struct PelageRestPose {
+  // The rest mesh.
+  const struct PelageMeshDesc *mesh;
+  // The rest guides, rooted on `mesh`.
+  const struct PelageGuidesDesc *guides;
+} PelageRestPose;
+
+// Working memory the host lends a call (pelage_stamp, pelage_bind,
+// pelage_settle) or a simulation (pelage_sim_new): `bytes` bytes at
+// `memory`, as many as the call's pelage_*_size reported.
+typedef struct PelageArena {
+  // The memory; any alignment.
+  void *memory;
+  // Its size in bytes.
+  size_t bytes;
+} PelageArena;
+
 // Guides and weights of one strand (the flat, Pod binding record; store it
 // with the roots as the groom's "root file").
 typedef struct PelageStrandBinding {
@@ -798,7 +817,7 @@ enum PelageStatus pelage_bind_size(const struct PelageMeshDesc *rest_mesh, size_
 // CANCELLED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: free.
-enum PelageStatus pelage_bind(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, void *arena, size_t arena_bytes, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);
+enum PelageStatus pelage_bind(const struct PelageRestPose *rest, const struct PelageRoot *strands, size_t strand_count, const struct PelageBindParams *params, struct PelageArena arena, struct PelageStrandBinding *bindings, size_t bindings_capacity, struct PelageBindInfo *info);
 
 // Defaults: 16 points per strand, pinned ends, orphan_length 0.1,
 // width_scale 1, 1 thread,
@@ -1162,7 +1181,7 @@ enum PelageStatus pelage_settle_size(const struct PelageMeshDesc *rest_mesh, siz
 // `info` is not written), PANIC.
 //
 // Thread safety: free.
-enum PelageStatus pelage_settle(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, void *arena, size_t arena_bytes, struct PelageSettleInfo *info);
+enum PelageStatus pelage_settle(const struct PelageRestPose *rest, const struct PelageRoot *strands, const struct PelageStrandBinding *bindings, struct PelageStrandGroom *grooms, size_t strand_count, const struct PelageExpandParams *params, struct PelageArena arena, struct PelageSettleInfo *info);
 
 // Defaults: 16 joints and points, frequency 1.5 Hz, amplitude 1, decay
 // 3/s, IK tolerance 1e-2 (of the guide length) with 8 sweeps, stiffness 0 at the root and 0.9
@@ -1183,9 +1202,9 @@ struct PelageSimParams pelage_sim_params_defaults(void);
 // Thread safety: free.
 enum PelageStatus pelage_sim_size(const struct PelageMeshDesc *rest_mesh, size_t guide_count, const struct PelageSimParams *params, size_t *memory_bytes);
 
-// Creates a simulation of `rest_guides` on `rest_mesh` (both at rest:
+// Creates a simulation of `rest->guides` on `rest->mesh` (both at rest:
 // the guides' shapes in their root frames are their neutral pose) in the
-// host's `memory` (`memory_bytes` from pelage_sim_size, any alignment),
+// host's `memory` (`memory.bytes` from pelage_sim_size, any alignment),
 // which must stay valid and untouched until pelage_sim_free. The maps are
 // sampled at the guide roots; tips within `link_radius` are linked. Every
 // guide starts at its neutral pose. On failure `*out_sim` is untouched.
@@ -1195,7 +1214,7 @@ enum PelageStatus pelage_sim_size(const struct PelageMeshDesc *rest_mesh, size_t
 // CAPACITY_EXCEEDED (the memory), MISALIGNED, PANIC.
 //
 // Thread safety: free.
-enum PelageStatus pelage_sim_new(const struct PelageMeshDesc *rest_mesh, const struct PelageGuidesDesc *rest_guides, const struct PelageSimParams *params, void *memory, size_t memory_bytes, PelageSim *out_sim);
+enum PelageStatus pelage_sim_new(const struct PelageRestPose *rest, const struct PelageSimParams *params, struct PelageArena memory, PelageSim *out_sim);
 
 // Releases a simulation (its memory is the host's again). NULL is
 // accepted and does nothing.
@@ -1341,8 +1360,8 @@ enum PelageStatus pelage_stamp_size(const struct PelageMeshDesc *mesh, const str
 // keep their spacing; no root grows on buried skin (inside the body, its
 // holes capped).
 //
-// `arena`/`arena_bytes`: scratch memory of at least the size from
-// `pelage_stamp_size` (any alignment). `roots`: capacity `roots_capacity`;
+// `arena`: scratch memory of at least the size from `pelage_stamp_size`
+// (any alignment). `roots`: capacity `roots_capacity`;
 // the max_roots bound from the query (the target count) always suffices. On success
 // `*root_count` is the number written and `info` (optional, may be NULL) is
 // filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
@@ -1355,7 +1374,7 @@ enum PelageStatus pelage_stamp_size(const struct PelageMeshDesc *mesh, const str
 // CANCELLED, PANIC.
 //
 // Thread safety: free.
-enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct PelageStampParams *params, void *arena, size_t arena_bytes, struct PelageRoot *roots, size_t roots_capacity, size_t *root_count, struct PelageStampInfo *info);
+enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct PelageStampParams *params, struct PelageArena arena, struct PelageRoot *roots, size_t roots_capacity, size_t *root_count, struct PelageStampInfo *info);
 
 // Finds where each posed guide of `frame` first meets `cloth` (a triangle
 // mesh such as a shirt, deformed to this frame; NULL: none) or enters one

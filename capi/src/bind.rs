@@ -1,11 +1,10 @@
 //! Binding strands to guides.
 
-use crate::buffers::{bytes_mut, filled, opt_mut, req, req_mut, slice, slice_mut};
+use crate::buffers::{filled, opt_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
 use crate::threads::{split_over_threads, split_with_progress, Progress};
-use crate::{
-    PelageGuidesDesc, PelageMeshDesc, PelageProgressFn, PelageRegionMap, PelageRoot, PelageStatus,
-};
+use crate::{PelageArena, PelageRestPose};
+use crate::{PelageMeshDesc, PelageProgressFn, PelageRegionMap, PelageRoot, PelageStatus};
 use bytemuck::{Pod, Zeroable};
 use pelage_core::interp::bind::{
     self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS, WEIGHT_SUM_TOLERANCE,
@@ -156,20 +155,17 @@ pub extern "C" fn pelage_bind_size(
 /// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_bind(
-    rest_mesh: *const PelageMeshDesc,
-    rest_guides: *const PelageGuidesDesc,
+    rest: *const PelageRestPose,
     strands: *const PelageRoot,
     strand_count: usize,
     params: *const PelageBindParams,
-    arena: *mut std::ffi::c_void,
-    arena_bytes: usize,
+    arena: PelageArena,
     bindings: *mut PelageStrandBinding,
     bindings_capacity: usize,
     info: *mut PelageBindInfo,
 ) -> PelageStatus {
     ffi_boundary! {
-        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
-        let guides = req(rest_guides, "rest_guides")?.view()?;
+        let (mesh, guides) = req(rest, "rest")?.view()?;
         let strands: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
         let p = req(params, "params")?;
         let regions = p.regions.view(mesh.positions.len())?;
@@ -189,7 +185,7 @@ pub extern "C" fn pelage_bind(
             ));
         }
         let out: &mut [StrandBinding] = bytemuck::cast_slice_mut(slice_mut(bindings, strand_count, "bindings")?);
-        let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        let arena = arena.view("arena")?;
         // with progress the bindings are made aside, and written only when
         // every range is done: their memory is asked for before anything
         let mut made = match p.progress {

@@ -328,3 +328,22 @@ mod tests {
         assert_eq!(collected(0..3u64, 3, "the items").unwrap(), [0, 1, 2]);
     }
 }
+
+/// Working memory the host lends a call (pelage_stamp, pelage_bind,
+/// pelage_settle) or a simulation (pelage_sim_new): `bytes` bytes at
+/// `memory`, as many as the call's pelage_*_size reported.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageArena {
+    /// The memory; any alignment.
+    pub memory: *mut std::ffi::c_void,
+    /// Its size in bytes.
+    pub bytes: usize,
+}
+
+impl PelageArena {
+    /// The memory, checked, for as long as the host lends it.
+    pub(crate) fn view<'a>(self, name: &str) -> Result<&'a mut [u8], Failure> {
+        bytes_mut(self.memory, self.bytes, name)
+    }
+}

@@ -1,10 +1,10 @@
 //! Guide curves from the host.
 
-use crate::buffers::{slice, strided};
+use crate::buffers::{req, slice, strided};
 use crate::status::Failure;
-use crate::{PelageRoot, PelageStatus};
+use crate::{PelageMeshDesc, PelageRoot, PelageStatus};
 use pelage_core::guides::{CvLayout, Guides};
-use pelage_core::Root;
+use pelage_core::{Mesh, Root};
 use std::ffi::c_void;
 
 /// Guide curves in host memory (rest or posed), borrowed for one call.
@@ -57,5 +57,25 @@ impl PelageGuidesDesc {
             points,
             layout,
         })
+    }
+}
+
+/// The rest pose a groom is made on, read by pelage_bind, pelage_settle and
+/// pelage_sim_new: the rest mesh and the rest guides on it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageRestPose {
+    /// The rest mesh.
+    pub mesh: *const PelageMeshDesc,
+    /// The rest guides, rooted on `mesh`.
+    pub guides: *const PelageGuidesDesc,
+}
+
+impl PelageRestPose {
+    /// The mesh and the guides, checked as views.
+    pub(crate) fn view(&self) -> Result<(Mesh<'_>, Guides<'_>), Failure> {
+        let mesh = req(self.mesh, "rest.mesh")?.view()?;
+        let guides = req(self.guides, "rest.guides")?.view()?;
+        Ok((mesh, guides))
     }
 }

@@ -34,6 +34,7 @@ pub use bind::{
     pelage_bind, pelage_bind_params_defaults, pelage_bind_size, PelageBindInfo, PelageBindParams,
     PelageStrandBinding, PELAGE_MAX_NEIGHBOURS, PELAGE_WEIGHT_SUM_TOLERANCE,
 };
+pub use buffers::PelageArena;
 pub use colliders::{PelageCapsule, PelageColliders, PelageDistanceFn, PelagePlane, PelageSphere};
 pub use expand::{
     pelage_curves_segment_indices, pelage_expand, pelage_expand_params_defaults,
@@ -58,7 +59,7 @@ pub use guide_cache::{
     pelage_guide_cache_info, pelage_guide_cache_read, pelage_guide_cache_size,
     pelage_guide_cache_write, PelageGuideCacheInfo, PelageGuideSet,
 };
-pub use guides::PelageGuidesDesc;
+pub use guides::{PelageGuidesDesc, PelageRestPose};
 pub use map::{pelage_map_mask, PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
 pub use patch::{pelage_groom_lod_counts, pelage_patch_boxes, pelage_patch_plan};

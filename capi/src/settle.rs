@@ -1,10 +1,10 @@
 //! Settling strands out of the body at rest.
 
-use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice, slice_mut};
+use crate::buffers::{opt_mut, req, req_mut, slice, slice_mut};
 use crate::expand::core_params;
 use crate::threads::{check_over_threads, split_over_threads, split_with_progress, Progress};
 use crate::{
-    PelageExpandParams, PelageGuidesDesc, PelageMeshDesc, PelageRoot, PelageStatus,
+    PelageArena, PelageExpandParams, PelageMeshDesc, PelageRestPose, PelageRoot, PelageStatus,
     PelageStrandBinding, PelageStrandGroom,
 };
 use pelage_core::arena::ArenaLayout;
@@ -80,26 +80,23 @@ pub extern "C" fn pelage_settle_size(
 /// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_settle(
-    rest_mesh: *const PelageMeshDesc,
-    rest_guides: *const PelageGuidesDesc,
+    rest: *const PelageRestPose,
     strands: *const PelageRoot,
     bindings: *const PelageStrandBinding,
     grooms: *mut PelageStrandGroom,
     strand_count: usize,
     params: *const PelageExpandParams,
-    arena: *mut std::ffi::c_void,
-    arena_bytes: usize,
+    arena: PelageArena,
     info: *mut PelageSettleInfo,
 ) -> PelageStatus {
     ffi_boundary! {
-        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
-        let guides = req(rest_guides, "rest_guides")?.view()?;
+        let (mesh, guides) = req(rest, "rest")?.view()?;
         let p = req(params, "params")?;
         let core = core_params(p)?;
         let roots: &[Root] = bytemuck::cast_slice(slice(strands, strand_count, "strands")?);
         let bindings: &[StrandBinding] = bytemuck::cast_slice(slice(bindings, strand_count, "bindings")?);
         let grooms: &mut [StrandGroom] = bytemuck::cast_slice_mut(slice_mut(grooms, strand_count, "grooms")?);
-        let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        let arena = arena.view("arena")?;
         let mut arena = Arena::new(arena);
         let body = Body::new(&mesh, &mut arena)?;
         let mut rest = PosedFrame::new(mesh, guides.len(), core.points_per_strand, &mut arena)?;

@@ -9,9 +9,8 @@ use crate::status::Failure;
 use crate::threads::{
     beside, split_in_chunks, split_over_threads, split_pairs_in_chunks, thread_total,
 };
-use crate::{
-    PelageColliders, PelageFrame, PelageGuidesDesc, PelageMap, PelageMeshDesc, PelageStatus,
-};
+use crate::{PelageArena, PelageRestPose};
+use crate::{PelageColliders, PelageFrame, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::collide::COLLISION_CELLS_PER_TRIANGLE;
 use pelage_core::dynamics::ik::IkParams;
@@ -188,9 +187,9 @@ pub extern "C" fn pelage_sim_size(
     }
 }
 
-/// Creates a simulation of `rest_guides` on `rest_mesh` (both at rest:
+/// Creates a simulation of `rest->guides` on `rest->mesh` (both at rest:
 /// the guides' shapes in their root frames are their neutral pose) in the
-/// host's `memory` (`memory_bytes` from pelage_sim_size, any alignment),
+/// host's `memory` (`memory.bytes` from pelage_sim_size, any alignment),
 /// which must stay valid and untouched until pelage_sim_free. The maps are
 /// sampled at the guide roots; tips within `link_radius` are linked. Every
 /// guide starts at its neutral pose. On failure `*out_sim` is untouched.
@@ -202,21 +201,18 @@ pub extern "C" fn pelage_sim_size(
 /// Thread safety: free.
 #[no_mangle]
 pub extern "C" fn pelage_sim_new(
-    rest_mesh: *const PelageMeshDesc,
-    rest_guides: *const PelageGuidesDesc,
+    rest: *const PelageRestPose,
     params: *const PelageSimParams,
-    memory: *mut c_void,
-    memory_bytes: usize,
+    memory: PelageArena,
     out_sim: *mut PelageSim,
 ) -> PelageStatus {
     ffi_boundary! {
         let out = req_mut(out_sim, "out_sim")?;
-        let mesh = req(rest_mesh, "rest_mesh")?.view()?;
-        let guides = req(rest_guides, "rest_guides")?.view()?;
+        let (mesh, guides) = req(rest, "rest")?.view()?;
         let p = core_params(req(params, "params")?, mesh.positions.len())?;
         // the memory outlives the handle (the header's contract), so the
         // simulation may borrow it for as long as the handle lives
-        let memory: &'static mut [u8] = bytes_mut(memory, memory_bytes, "memory")?;
+        let memory: &'static mut [u8] = memory.view("memory")?;
         // the rest mesh is read only while the simulation is made: the
         // guides' rest shapes and roots are copied into its memory
         let sim = Sim::new(mesh, &guides, &p, &mut Arena::new(memory))?;

@@ -1,7 +1,8 @@
 //! Poisson stamping of hair roots.
 
-use crate::buffers::{bytes_mut, opt_mut, req, req_mut, slice_mut};
+use crate::buffers::{opt_mut, req, req_mut, slice_mut};
 use crate::status::Failure;
+use crate::PelageArena;
 use crate::{PelageMap, PelageMeshDesc, PelageRoot, PelageStatus};
 use pelage_core::{stamp, Arena, Root, StampParams};
 
@@ -137,8 +138,8 @@ pub extern "C" fn pelage_stamp_size(
 /// keep their spacing; no root grows on buried skin (inside the body, its
 /// holes capped).
 ///
-/// `arena`/`arena_bytes`: scratch memory of at least the size from
-/// `pelage_stamp_size` (any alignment). `roots`: capacity `roots_capacity`;
+/// `arena`: scratch memory of at least the size from `pelage_stamp_size`
+/// (any alignment). `roots`: capacity `roots_capacity`;
 /// the max_roots bound from the query (the target count) always suffices. On success
 /// `*root_count` is the number written and `info` (optional, may be NULL) is
 /// filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
@@ -155,8 +156,7 @@ pub extern "C" fn pelage_stamp_size(
 pub extern "C" fn pelage_stamp(
     mesh: *const PelageMeshDesc,
     params: *const PelageStampParams,
-    arena: *mut std::ffi::c_void,
-    arena_bytes: usize,
+    arena: PelageArena,
     roots: *mut PelageRoot,
     roots_capacity: usize,
     root_count: *mut usize,
@@ -168,7 +168,7 @@ pub extern "C" fn pelage_stamp(
         let root_count = req_mut(root_count, "root_count")?;
         let mesh = desc.view()?;
         let p = core_params(desc, params)?;
-        let arena = bytes_mut(arena, arena_bytes, "arena")?;
+        let arena = arena.view("arena")?;
         let out = slice_mut(roots, roots_capacity, "roots")?;
         let out: &mut [Root] = bytemuck::cast_slice_mut(out);
         // the arena is checked here so that CAPACITY_EXCEEDED from the core

@@ -216,7 +216,7 @@ static void bad_mesh_(int line, const char *name, const PelageMeshDesc *mesh, co
   FILL(roots, g_capacity * sizeof *roots), FILL(&count, sizeof count), FILL(&info, sizeof info);
   snprintf(what, sizeof what, "%s: pelage_stamp", name);
   expect_(__FILE__, line, what,
-          pelage_stamp(mesh, params, g_arena, g_arena_bytes, roots, g_capacity, &count, &info), want);
+          pelage_stamp(mesh, params, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, &count, &info), want);
   if (!untouched(roots, g_capacity * sizeof *roots) || !untouched(&count, sizeof count) ||
       !untouched(&info, sizeof info)) {
     ++g_failures, fprintf(stderr, "%s:%d: %s wrote its outputs\n", __FILE__, line, what);
@@ -316,7 +316,7 @@ static void test_success(void) {
   REQUIRE(g_arena && g_roots);
   PelageStampInfo info;
   FILL(&info, sizeof info);
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &g_params, g_arena, arena_bytes, g_roots, max_roots, &g_count, &info));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, arena_bytes}, g_roots, max_roots, &g_count, &info));
   REQUIRE(g_count > 0 && g_count <= max_roots);
   const char *after_ok = pelage_last_error();
   CHECK(after_ok != NULL);
@@ -407,14 +407,14 @@ static void test_success(void) {
     size_t n = 0;
     FILL(again, max_roots * sizeof *again);
     EXPECT(PELAGE_STATUS_OK,
-           pelage_stamp(&mesh, &g_params, g_arena + offset, arena_bytes, again, max_roots, &n, NULL));
+           pelage_stamp(&mesh, &g_params, (PelageArena){g_arena + offset, arena_bytes}, again, max_roots, &n, NULL));
     CHECK(n == g_count && memcmp(again, g_roots, n * sizeof *again) == 0);
     CHECK(untouched(again + n, (max_roots - n) * sizeof *again)); /* nothing past the count */
   }
   PelageStampParams other = g_params;
   other.seed = 43;
   size_t n = 0;
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &other, g_arena, arena_bytes, again, max_roots, &n, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &other, (PelageArena){g_arena, arena_bytes}, again, max_roots, &n, NULL));
   CHECK(n != g_count || memcmp(again, g_roots, n * sizeof *again) != 0);
   free(again);
 
@@ -422,7 +422,7 @@ static void test_success(void) {
   other = g_params;
   other.target_count = 0;
   n = 99;
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &other, g_arena, arena_bytes, NULL, 0, &n, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &other, (PelageArena){g_arena, arena_bytes}, NULL, 0, &n, NULL));
   CHECK(n == 0);
 }
 
@@ -444,7 +444,7 @@ static void test_maps(void) {
   EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&mesh, &p, &arena_bytes, &max_roots));
   unsigned char *arena = malloc(arena_bytes);
   REQUIRE(arena && max_roots <= 2 * g_capacity);
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, arena, arena_bytes, roots, max_roots, &n, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, (PelageArena){arena, arena_bytes}, roots, max_roots, &n, NULL));
   float *pos = malloc(n * 12 + 12);
   REQUIRE(pos);
   EXPECT(PELAGE_STATUS_OK, pelage_roots_evaluate(&mesh, roots, n, pos, 12, NULL, 0));
@@ -463,7 +463,7 @@ static void test_maps(void) {
   EXPECT(PELAGE_STATUS_OK, pelage_stamp_size(&mesh, &p, &arena_bytes, &max_roots));
   arena = malloc(arena_bytes);
   REQUIRE(arena && max_roots <= 2 * g_capacity);
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, arena, arena_bytes, roots, max_roots, &n, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, (PelageArena){arena, arena_bytes}, roots, max_roots, &n, NULL));
   float min_u = 1.0f;
   for (size_t i = 0; i < n; ++i) {
     const uint32_t *t = g_sphere.t[roots[i].face];
@@ -500,16 +500,16 @@ static void test_null_pointers(void) {
     CHECK(untouched(&count, sizeof count));                                               \
     CHECK(untouched(&info, sizeof info));                                                 \
   } while (0)
-  STAMP_NULL(NULL, &g_params, g_arena, g_arena_bytes, roots, g_capacity, &count, &info);
-  STAMP_NULL(&mesh, NULL, g_arena, g_arena_bytes, roots, g_capacity, &count, &info);
-  STAMP_NULL(&mesh, &g_params, NULL, g_arena_bytes, roots, g_capacity, &count, &info);
-  STAMP_NULL(&mesh, &g_params, g_arena, g_arena_bytes, NULL, g_capacity, &count, &info);
+  STAMP_NULL(NULL, &g_params, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, &count, &info);
+  STAMP_NULL(&mesh, NULL, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, &count, &info);
+  STAMP_NULL(&mesh, &g_params, (PelageArena){NULL, g_arena_bytes}, roots, g_capacity, &count, &info);
+  STAMP_NULL(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes}, NULL, g_capacity, &count, &info);
   FILL(roots, g_capacity * sizeof *roots), FILL(&info, sizeof info);
   EXPECT(PELAGE_STATUS_NULL_PARAMETER,
-         pelage_stamp(&mesh, &g_params, g_arena, g_arena_bytes, roots, g_capacity, NULL, &info));
+         pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, NULL, &info));
   CHECK(untouched(roots, g_capacity * sizeof *roots) && untouched(&info, sizeof info));
   /* info is optional */
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &g_params, g_arena, g_arena_bytes, roots, g_capacity, &count, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, &count, NULL));
   CHECK(count == g_count);
   free(roots);
 
@@ -713,39 +713,39 @@ static void test_capacity(void) {
   /* arena one byte short: nothing written, not even root_count */
   FILL_OUTPUTS();
   EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED,
-         pelage_stamp(&mesh, &g_params, g_arena, g_arena_bytes - 1, roots, g_capacity, &count, &info));
+         pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes - 1}, roots, g_capacity, &count, &info));
   CHECK(untouched(roots, g_capacity * sizeof *roots));
   CHECK(untouched(&count, sizeof count));
   CHECK(untouched(&info, sizeof info));
   /* no arena at all */
   FILL_OUTPUTS();
-  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_stamp(&mesh, &g_params, NULL, 0, roots, g_capacity, &count, &info));
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_stamp(&mesh, &g_params, (PelageArena){NULL, 0}, roots, g_capacity, &count, &info));
   CHECK(untouched(roots, g_capacity * sizeof *roots) && untouched(&count, sizeof count) &&
         untouched(&info, sizeof info));
 
   /* root buffer one short: *root_count reports the count needed; the roots stay untouched */
   FILL_OUTPUTS();
   EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED,
-         pelage_stamp(&mesh, &g_params, g_arena, g_arena_bytes, roots, g_count - 1, &count, &info));
+         pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes}, roots, g_count - 1, &count, &info));
   CHECK(count == g_count);
   CHECK(untouched(roots, g_capacity * sizeof *roots));
   CHECK(untouched(&info, sizeof info));
   /* no root buffer: the count query idiom */
   FILL_OUTPUTS();
   EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED,
-         pelage_stamp(&mesh, &g_params, g_arena, g_arena_bytes, NULL, 0, &count, &info));
+         pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes}, NULL, 0, &count, &info));
   CHECK(count == g_count);
   CHECK(untouched(&info, sizeof info));
   /* exactly the count needed is enough */
   FILL_OUTPUTS();
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &g_params, g_arena, g_arena_bytes, roots, g_count, &count, &info));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes}, roots, g_count, &count, &info));
   CHECK(count == g_count && memcmp(roots, g_roots, g_count * sizeof *roots) == 0);
 
   /* both too small, and by chance arena_bytes == roots_capacity: the arena is
    * the limit, so *root_count must stay untouched (it is only written when
    * the root buffer was the limit) */
   FILL_OUTPUTS();
-  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_stamp(&mesh, &g_params, g_arena, 64, roots, 64, &count, &info));
+  EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, 64}, roots, 64, &count, &info));
   if (!untouched(&count, sizeof count)) {
     fprintf(stderr, "  (arena 64 bytes, roots_capacity 64: *root_count was set to %zu, the arena bytes needed "
                     "are %zu)\n", count, g_arena_bytes);
@@ -759,7 +759,7 @@ static void test_capacity(void) {
   FILL(raw, g_capacity * sizeof *roots + 8), FILL(&count, sizeof count), FILL(&info, sizeof info);
   PelageRoot *misaligned = (PelageRoot *)(void *)(raw + 2); /* never dereferenced here */
   EXPECT(PELAGE_STATUS_MISALIGNED,
-         pelage_stamp(&mesh, &g_params, g_arena, g_arena_bytes, misaligned, g_capacity, &count, &info));
+         pelage_stamp(&mesh, &g_params, (PelageArena){g_arena, g_arena_bytes}, misaligned, g_capacity, &count, &info));
   CHECK(untouched(raw, g_capacity * sizeof *roots + 8) && untouched(&count, sizeof count) &&
         untouched(&info, sizeof info));
   free(raw), free(roots);
@@ -913,10 +913,10 @@ static PelageStatus groom_expand_(PelageGroom groom, PelageFrame frame, size_t f
 
 /* The calls with the fixture's valid arguments, one argument replaced. */
 #define BIND(mesh, guides, strands, count, params, arena, bytes, out, capacity) \
-  pelage_bind(mesh, guides, strands, count, params, arena, bytes, out, capacity, &g_in.info_out)
-#define BIND_OK_ARGS                                                                                    \
-  &g_in.mesh, &g_in.guides, g_in.strands, g_in.strand_count, &g_in.bind_params, g_in.bind_arena, \
-      g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count
+  pelage_bind(&(PelageRestPose){mesh, guides}, strands, count, params, (PelageArena){arena, bytes}, out, capacity, &g_in.info_out)
+#define BIND_OK_ARGS                                                                          \
+  &(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.strand_count, &g_in.bind_params, \
+      (PelageArena){g_in.bind_arena, g_in.bind_arena_bytes}, g_in.bind_out, g_in.strand_count
 #define EXPAND(frame, strands, bindings, grooms, count, params, points, stride, capacity) \
   expand_(frame, strands, bindings, grooms, count, params, points, stride, capacity, g_in.counts_out, g_in.ids_out)
 #define GROOM_EXPAND(groom, frame, first, count, params, points, capacity) \
@@ -931,7 +931,7 @@ static size_t stamp_sphere(uint32_t target, uint64_t seed, PelageRoot **out) {
   void *arena = malloc(bytes);
   *out = malloc(max_roots * sizeof **out);
   REQUIRE(arena && *out);
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&g_in.mesh, &p, arena, bytes, *out, max_roots, &n, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&g_in.mesh, &p, (PelageArena){arena, bytes}, *out, max_roots, &n, NULL));
   free(arena);
   return n;
 }
@@ -1026,9 +1026,7 @@ static void test_interp_success(void) {
   g_in.bind_out = malloc(g_in.strand_count * sizeof *g_in.bind_out);
   REQUIRE(g_in.bind_arena && g_in.bindings && g_in.bind_out);
   FILL(g_in.bindings, g_in.strand_count * sizeof *g_in.bindings), FILL(&g_in.info, sizeof g_in.info);
-  EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &g_in.guides, g_in.strands, g_in.strand_count, &g_in.bind_params,
-                                       g_in.bind_arena, g_in.bind_arena_bytes, g_in.bindings, g_in.strand_count,
-                                       &g_in.info));
+  EXPECT(PELAGE_STATUS_OK, pelage_bind(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.strand_count, &g_in.bind_params, (PelageArena){g_in.bind_arena, g_in.bind_arena_bytes}, g_in.bindings, g_in.strand_count, &g_in.info));
   size_t bad_binding = 0, orphans = 0, fewer = 0;
   for (size_t i = 0; i < g_in.strand_count; ++i) {
     const PelageStrandBinding *b = &g_in.bindings[i];
@@ -1065,9 +1063,7 @@ static void test_interp_success(void) {
     for (int t = 0; t < 3; ++t) {
       bp.thread_count = threads[t];
       FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
-      EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &g_in.guides, g_in.strands, g_in.strand_count, &bp,
-                                           g_in.bind_arena, g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count,
-                                           NULL));
+      EXPECT(PELAGE_STATUS_OK, pelage_bind(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.strand_count, &bp, (PelageArena){g_in.bind_arena, g_in.bind_arena_bytes}, g_in.bind_out, g_in.strand_count, NULL));
       CHECK(memcmp(g_in.bind_out, g_in.bindings, g_in.strand_count * sizeof *g_in.bind_out) == 0);
     }
   }
@@ -1076,15 +1072,12 @@ static void test_interp_success(void) {
     PelageGuidesDesc wide = g_in.guides;
     wide.points = restride(g_in.guide_points, 12, g_in.guide_count * GCVS, 16, 0), wide.point_stride = 16;
     FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
-    EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &wide, g_in.strands, g_in.strand_count, &g_in.bind_params,
-                                         g_in.bind_arena, g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count,
-                                         NULL));
+    EXPECT(PELAGE_STATUS_OK, pelage_bind(&(PelageRestPose){&g_in.mesh, &wide}, g_in.strands, g_in.strand_count, &g_in.bind_params, (PelageArena){g_in.bind_arena, g_in.bind_arena_bytes}, g_in.bind_out, g_in.strand_count, NULL));
     CHECK(memcmp(g_in.bind_out, g_in.bindings, g_in.strand_count * sizeof *g_in.bind_out) == 0);
     scratch_free();
   }
   /* no strands: nothing to do, NULL buffers are fine */
-  EXPECT(PELAGE_STATUS_OK, pelage_bind(&g_in.mesh, &g_in.guides, NULL, 0, &g_in.bind_params, g_in.bind_arena,
-                                       g_in.bind_arena_bytes, NULL, 0, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_bind(&(PelageRestPose){&g_in.mesh, &g_in.guides}, NULL, 0, &g_in.bind_params, (PelageArena){g_in.bind_arena, g_in.bind_arena_bytes}, NULL, 0, NULL));
 
   /* groom */
   g_in.maps = pelage_groom_maps_defaults();
@@ -2693,23 +2686,20 @@ static void test_settle(void) {
   CHECK(before > n / 2);
   PelageSettleInfo info, again, out_info;
   memcpy(settled, tilted, n * sizeof *work);
-  EXPECT(PELAGE_STATUS_OK, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, settled, n, &ep,
-                                         arena, bytes, &info));
+  EXPECT(PELAGE_STATUS_OK, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, settled, n, &ep, (PelageArena){arena, bytes}, &info));
   CHECK(info.lifted >= before && info.unresolved == 0);
   CHECK(strands_inside(settled) == 0);
   /* the same grooms on any thread count */
   for (uint32_t threads = 0; threads < 4; threads += 3) {
     ep.thread_count = threads;
     memcpy(work, tilted, n * sizeof *work);
-    EXPECT(PELAGE_STATUS_OK, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena,
-                                           bytes, &again));
+    EXPECT(PELAGE_STATUS_OK, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){arena, bytes}, &again));
     CHECK(memcmp(work, settled, n * sizeof *work) == 0 && memcmp(&info, &again, sizeof info) == 0);
   }
   ep = g_in.expand_params;
   /* settled grooms stay settled */
   memcpy(work, settled, n * sizeof *work);
-  EXPECT(PELAGE_STATUS_OK, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena,
-                                         bytes, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){arena, bytes}, NULL));
   CHECK(memcmp(work, settled, n * sizeof *work) == 0);
 
   /* failures leave the grooms and the info untouched */
@@ -2722,23 +2712,19 @@ static void test_settle(void) {
     CHECK(untouched(&out_info, sizeof out_info));                          \
   } while (0)
 #define SETTLE(mesh, guides, bindings, params) \
-  pelage_settle(mesh, guides, g_in.strands, bindings, work, n, params, arena, bytes, &out_info)
+  pelage_settle(&(PelageRestPose){mesh, guides}, g_in.strands, bindings, work, n, params, (PelageArena){arena, bytes}, &out_info)
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(NULL, &g_in.guides, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &out_info));
+               pelage_settle(&(PelageRestPose){NULL, &g_in.guides}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){arena, bytes}, &out_info));
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, NULL, g_in.strands, g_in.bindings, work, n, &ep, arena, bytes, &out_info));
+               pelage_settle(&(PelageRestPose){&g_in.mesh, NULL}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){arena, bytes}, &out_info));
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, &g_in.guides, NULL, g_in.bindings, work, n, &ep, arena, bytes, &out_info));
+               pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, NULL, g_in.bindings, work, n, &ep, (PelageArena){arena, bytes}, &out_info));
   SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER,
-               pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, NULL, work, n, &ep, arena, bytes, &out_info));
-  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
-                                                           NULL, n, &ep, arena, bytes, &out_info));
-  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
-                                                           work, n, NULL, arena, bytes, &out_info));
-  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
-                                                              work, n, &ep, arena, bytes / 2, &out_info));
-  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_settle(&g_in.mesh, &g_in.guides, g_in.strands, g_in.bindings,
-                                                              work, n, &ep, NULL, 0, &out_info));
+               pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, NULL, work, n, &ep, (PelageArena){arena, bytes}, &out_info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, NULL, n, &ep, (PelageArena){arena, bytes}, &out_info));
+  SETTLE_FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, work, n, NULL, (PelageArena){arena, bytes}, &out_info));
+  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){arena, bytes / 2}, &out_info));
+  SETTLE_FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){NULL, 0}, &out_info));
   tilted[5].lift[1] = NAN;
   SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
   /* split over threads, the error still names the element in the whole array */
@@ -2854,8 +2840,7 @@ static void test_settle(void) {
       work[i].clump = 1e6f, work[i].root_radius = 1e6f;
     }
     ep.orphan_length = 1e9f;
-    const PelageStatus st = pelage_settle(&big.mesh, &big.guides, g_in.strands, g_in.bindings, work, n, &ep,
-                                          big_arena, big_bytes, &out_info);
+    const PelageStatus st = pelage_settle(&(PelageRestPose){&big.mesh, &big.guides}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){big_arena, big_bytes}, &out_info);
     size_t bad = 0;
     for (size_t i = 0; i < n; ++i) {
       bad += count_non_finite((const float *)(const void *)&work[i], sizeof *work / sizeof(float));
@@ -3014,7 +2999,7 @@ static void test_progress(void) {
   PelageRoot *roots = malloc(g_capacity * sizeof *roots);
   REQUIRE(roots);
   size_t count = 0;
-  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, g_arena, g_arena_bytes, roots, g_capacity, &count, NULL));
+  EXPECT(PELAGE_STATUS_OK, pelage_stamp(&mesh, &p, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, &count, NULL));
   CHECK(count == g_count && memcmp(roots, g_roots, g_count * sizeof *roots) == 0);
   CHECK(seen.calls >= 3 && progress_rose(&seen));
   /* the first call, one in the middle, and the last (1.0, before any root is written) */
@@ -3025,7 +3010,7 @@ static void test_progress(void) {
     p.progress_user_data = &stop;
     PelageStampInfo info;
     FILL(roots, g_capacity * sizeof *roots), FILL(&count, sizeof count), FILL(&info, sizeof info);
-    EXPECT(PELAGE_STATUS_CANCELLED, pelage_stamp(&mesh, &p, g_arena, g_arena_bytes, roots, g_capacity, &count, &info));
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_stamp(&mesh, &p, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, &count, &info));
     CHECK(stop.calls == at);
     CHECK(untouched(roots, g_capacity * sizeof *roots) && untouched(&count, sizeof count) &&
           untouched(&info, sizeof info));

@@ -132,7 +132,8 @@ int main(int argc, char** argv) {
     for (uint32_t threads : {1u, 2u}) {
       std::vector<unsigned char> memory(bytes);
       PelageSim sim = nullptr;
-      creature::check(pelage_sim_new(&desc, &guides, &params, memory.data(), bytes, &sim), "pelage_sim_new");
+      const PelageRestPose rest_pose{&desc, &guides};
+      creature::check(pelage_sim_new(&rest_pose, &params, PelageArena{memory.data(), bytes}, &sim), "pelage_sim_new");
       std::vector<float> posed(points.size());
       for (int step = 0; step < 3; ++step) {
         creature::check(pelage_sim_step(sim, frame, &colliders, nullptr, 0, 1.0f / 24.0f, threads), "pelage_sim_step");

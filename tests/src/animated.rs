@@ -189,11 +189,15 @@ impl ShotSim {
         let mut sim = std::ptr::null_mut();
         let guides = guides_desc(roots, points);
         let s = pelage_sim_new(
-            &desc,
-            &guides,
+            &PelageRestPose {
+                mesh: &desc,
+                guides: &guides,
+            },
             &params,
-            memory.as_mut_ptr().cast(),
-            bytes,
+            PelageArena {
+                memory: memory.as_mut_ptr().cast(),
+                bytes,
+            },
             &mut sim,
         );
         assert_eq!(s, PelageStatus::Ok);

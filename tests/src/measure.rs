@@ -232,13 +232,17 @@ pub fn groomed(
     let mut bindings = vec![PelageStrandBinding::default(); strands.len()];
     let mut info = PelageBindInfo::default();
     let s = pelage_bind(
-        &d,
-        &g,
+        &PelageRestPose {
+            mesh: &d,
+            guides: &g,
+        },
         c_strands.as_ptr(),
         strands.len(),
         &params,
-        arena.as_mut_ptr().cast(),
-        bytes,
+        PelageArena {
+            memory: arena.as_mut_ptr().cast(),
+            bytes,
+        },
         bindings.as_mut_ptr(),
         bindings.len(),
         &mut info,
@@ -286,15 +290,19 @@ impl Groomed {
         let mut arena = vec![0u8; bytes];
         let mut info = PelageSettleInfo::default();
         let s = pelage_settle(
-            &d,
-            &self.guides(),
+            &PelageRestPose {
+                mesh: &d,
+                guides: &self.guides(),
+            },
             bytemuck::cast_slice::<Root, PelageRoot>(&self.strands).as_ptr(),
             self.bindings.as_ptr(),
             self.grooms.as_mut_ptr(),
             self.strands.len(),
             params,
-            arena.as_mut_ptr().cast(),
-            bytes,
+            PelageArena {
+                memory: arena.as_mut_ptr().cast(),
+                bytes,
+            },
             &mut info,
         );
         assert_eq!(s, PelageStatus::Ok);

@@ -66,11 +66,15 @@ impl SimHandle {
         let mut memory = vec![0u8; bytes];
         let mut sim = null_mut();
         let s = pelage_sim_new(
-            &desc,
-            &guides,
+            &PelageRestPose {
+                mesh: &desc,
+                guides: &guides,
+            },
             params,
-            memory.as_mut_ptr().cast(),
-            bytes,
+            PelageArena {
+                memory: memory.as_mut_ptr().cast(),
+                bytes,
+            },
             &mut sim,
         );
         assert_eq!(s, PelageStatus::Ok);

@@ -353,15 +353,19 @@ fn bound_weights_must_sum_to_one() {
         let boxes = pelage_patch_boxes(posed.0, &strands, &params, &patch, 1, boxes.as_mut_ptr());
         let mut grooms = g.grooms.clone();
         let settle = pelage_settle(
-            &d,
-            &g.guides(),
+            &PelageRestPose {
+                mesh: &d,
+                guides: &g.guides(),
+            },
             bytemuck::cast_slice::<_, PelageRoot>(&g.strands).as_ptr(),
             bindings.as_ptr(),
             grooms.as_mut_ptr(),
             n,
             &params,
-            arena.as_mut_ptr().cast(),
-            arena_bytes,
+            PelageArena {
+                memory: arena.as_mut_ptr().cast(),
+                bytes: arena_bytes,
+            },
             null_mut(),
         );
         let file = groom_file(&m, &g, bindings)
@@ -438,13 +442,17 @@ fn the_library_s_own_bindings_pass_and_its_groom_files_read() {
         let n = g.strands.len();
         expect(
             pelage_bind(
-                &d,
-                &g.guides(),
+                &PelageRestPose {
+                    mesh: &d,
+                    guides: &g.guides(),
+                },
                 bytemuck::cast_slice::<_, PelageRoot>(&g.strands).as_ptr(),
                 n,
                 &params,
-                arena.as_mut_ptr().cast(),
-                bytes,
+                PelageArena {
+                    memory: arena.as_mut_ptr().cast(),
+                    bytes,
+                },
                 g.bindings.as_mut_ptr(),
                 n,
                 null_mut(),
@@ -677,13 +685,17 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
     let mut bindings = vec![PelageStrandBinding::default(); n];
     let mut bind = |params: &PelageBindParams| {
         pelage_bind(
-            &d,
-            &g.guides(),
+            &PelageRestPose {
+                mesh: &d,
+                guides: &g.guides(),
+            },
             c_strands.as_ptr(),
             n,
             params,
-            arena.as_mut_ptr().cast(),
-            bytes,
+            PelageArena {
+                memory: arena.as_mut_ptr().cast(),
+                bytes,
+            },
             bindings.as_mut_ptr(),
             n,
             null_mut(),
@@ -729,13 +741,17 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
     nan_points[17][2] = f32::NAN;
     non_finite(
         pelage_bind(
-            &d,
-            &guides_desc(&g.guide_roots, &nan_points),
+            &PelageRestPose {
+                mesh: &d,
+                guides: &guides_desc(&g.guide_roots, &nan_points),
+            },
             c_strands.as_ptr(),
             n,
             &defaults,
-            arena.as_mut_ptr().cast(),
-            bytes,
+            PelageArena {
+                memory: arena.as_mut_ptr().cast(),
+                bytes,
+            },
             bindings.as_mut_ptr(),
             n,
             null_mut(),

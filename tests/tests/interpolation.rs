@@ -446,13 +446,17 @@ fn three_level_hierarchy_groom_to_sim_to_render() {
     let mut bindings = vec![PelageStrandBinding::default(); render.len()];
     let bp = pelage_bind_params_defaults();
     let s = pelage_bind(
-        &d,
-        &sim_guides,
+        &PelageRestPose {
+            mesh: &d,
+            guides: &sim_guides,
+        },
         as_c(&render).as_ptr(),
         render.len(),
         &bp,
-        arena.as_mut_ptr().cast(),
-        bytes,
+        PelageArena {
+            memory: arena.as_mut_ptr().cast(),
+            bytes,
+        },
         bindings.as_mut_ptr(),
         bindings.len(),
         null_mut(),
@@ -511,13 +515,14 @@ fn bad_input_gets_a_status_and_leaves_outputs_alone() {
     let mut out = vec![canary; g.strands.len()];
     let mut bind = |guides: &PelageGuidesDesc, p: &PelageBindParams, arena_len: usize| {
         pelage_bind(
-            &d,
-            guides,
+            &PelageRestPose { mesh: &d, guides },
             as_c(&g.strands).as_ptr(),
             g.strands.len(),
             p,
-            arena.as_mut_ptr().cast(),
-            arena_len,
+            PelageArena {
+                memory: arena.as_mut_ptr().cast(),
+                bytes: arena_len,
+            },
             out.as_mut_ptr(),
             g.strands.len(),
             null_mut(),

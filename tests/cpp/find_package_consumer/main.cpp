@@ -16,7 +16,7 @@ int main() {
   if (pelage_stamp_size(&mesh, &params, &arena_bytes, &max_roots) != PELAGE_STATUS_OK) return 1;
   std::vector<unsigned char> arena(arena_bytes);
   std::vector<PelageRoot> roots(max_roots);
-  const PelageStatus s = pelage_stamp(&mesh, &params, arena.data(), arena.size(), roots.data(), roots.size(), &count, nullptr);
+  const PelageStatus s = pelage_stamp(&mesh, &params, PelageArena{arena.data(), arena.size()}, roots.data(), roots.size(), &count, nullptr);
   std::printf("consumer: pelage %u, %s, %zu roots\n", pelage_version(), pelage_status_message(s), count);
   return s == PELAGE_STATUS_OK && count > 90 && count < 110 ? 0 : 1;
 }
