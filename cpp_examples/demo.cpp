@@ -367,7 +367,9 @@ int main(int argc, char** argv) try {
       }
       creature::Stopwatch step_clock;
       const creature::Frame frame(mesh, guides, ep);
-      creature::check(pelage_sim_step(sim, frame.get(), &colliders, nullptr, 0, 1.0f / 24.0f, 0), "pelage_sim_step");
+      PelageStepParams step = pelage_step_params_defaults();
+      step.colliders = &colliders;
+      creature::check(pelage_sim_step(sim, frame.get(), &step, nullptr), "pelage_sim_step");
       creature::check(pelage_frame_set_sim_guides(frame.get(), sim, 0), "pelage_frame_set_sim_guides");
       sim_s.push_back(step_clock.seconds());
       step_clock = {};

@@ -222,8 +222,10 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
       meshes.push_back(posed(rest, (float(f) + float(k) / kSamples) / kFps));
       samples.push_back(std::make_unique<creature::Frame>(meshes[k], rest_guides, ep));
       const PelageFrame frame = samples[k]->get();
-      check(pelage_sim_step(sim.get(), frame, &colliders, nullptr, 0, 1.0f / (kFps * kSamples), 0),
-            "pelage_sim_step");
+      PelageStepParams step = pelage_step_params_defaults();
+      step.dt = 1.0f / (kFps * kSamples);
+      step.colliders = &colliders;
+      check(pelage_sim_step(sim.get(), frame, &step, nullptr), "pelage_sim_step");
       check(pelage_frame_set_sim_guides(frame, sim.get(), 0), "pelage_frame_set_sim_guides");
       met = std::max(met, write_trim_records(records_path(dir, f, k), frame, meshes[k], colliders, set.guide_count));
     }

@@ -75,7 +75,9 @@ int main(int argc, char** argv) {
       colliders.capsule_count = 1;
       const creature::Frame frame(posed, guides, ep);
       const auto t1 = std::chrono::steady_clock::now();
-      check(pelage_sim_step(sim, frame.get(), &colliders, nullptr, 0, 1.0f / 24.0f, 0), "pelage_sim_step");
+      PelageStepParams step = pelage_step_params_defaults();
+      step.colliders = &colliders;
+      check(pelage_sim_step(sim, frame.get(), &step, nullptr), "pelage_sim_step");
       check(pelage_frame_set_sim_guides(frame.get(), sim, 0), "pelage_frame_set_sim_guides");
       const auto t2 = std::chrono::steady_clock::now();
       expander.expand(frame, fur, 0, hairs.size(), curves.data(), curves.size() / 4);

@@ -687,6 +687,41 @@ typedef struct PelageSimParams {
 // bytes; released by `pelage_sim_free`.
 typedef struct PelageSimTy *PelageSim;
 
+// What one step of a simulation takes besides the simulation and the
+// frame; start from pelage_step_params_defaults().
+typedef struct PelageStepParams {
+  // Seconds since the last step (1e-5 <= dt <= 1; it may change from
+  // step to step).
+  float dt;
+  // Threads the step is split over (0: all cores); the bits do not
+  // depend on it.
+  uint32_t thread_count;
+  // What the guides collide with (NULL: nothing).
+  const struct PelageColliders *colliders;
+  // Another simulator's curves (NULL: none): float3 world points
+  // `external_stride` bytes apart, points_per_guide per guide; the
+  // guides the simulation's `external` map selects take their shape
+  // from them (blended, lengths kept).
+  const void *external_points;
+  // Bytes between consecutive external points (>= 12, a multiple of 4).
+  size_t external_stride;
+  // Optional progress callback (NULL: none), called on the calling
+  // thread before the step and after each of its phases (the advance,
+  // each link relaxation, the bend and push-out) with the share done;
+  // returning false cancels, and the step is taken back.
+  PelageProgressFn progress;
+  // Passed unchanged to `progress`.
+  void *progress_user_data;
+} PelageStepParams;
+
+// What a step reports.
+typedef struct PelageStepInfo {
+  // Guides left in their groomed shape (pushed out as far as it goes):
+  // no tried rotation freed their bent curve from a collider (a crease,
+  // a landing), or their bend overflowed near the coordinate limit.
+  size_t groomed_guides;
+} PelageStepInfo;
+
 // Stamping parameters; start from pelage_stamp_params_defaults().
 typedef struct PelageStampParams {
   // Number of roots wanted on the whole mesh (at most 2^28; unused when
@@ -1222,41 +1257,45 @@ enum PelageStatus pelage_sim_new(const struct PelageRestPose *rest, const struct
 // Thread safety: frees `sim`.
 void pelage_sim_free(PelageSim sim);
 
-// Advances the simulation by `dt` seconds (1e-5 <= dt <= 1; it may change
-// from step to step) to `frame` (this frame's deformed mesh; its guides
-// are not read), colliding with `colliders` (NULL: none). Per guide: the
-// neutral pose (the rest shape carried by the root frame), the tip spring,
-// the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
-// `thread_count` threads (0: all cores); the bits do not depend on it.
-// The body collider (`colliders->body`) is the frame's mesh: the body
+// Defaults: dt 1/24, all cores, no colliders, no external curves, no
+// progress callback.
+//
+// Thread safety: free.
+struct PelageStepParams pelage_step_params_defaults(void);
+
+// Advances the simulation by `params->dt` seconds to `frame` (this
+// frame's deformed mesh; its guides are not read, nor its colliders:
+// the step collides with `params->colliders` only, and takes from the
+// frame only the body it built, below). Per guide: the neutral pose (the
+// rest shape carried by the root frame), the tip spring, the tip links,
+// CCD IK, the Catmull-Rom curve, the push-out. The body collider
+// (`colliders->body`) is the frame's mesh: the body
 // `pelage_frame_set_colliders` built for the frame when it has one (the
 // same solid, built once per frame), else built here, every step: on
 // several threads, beside the guides' advance, links and IK (the body's
 // stages that run on one thread run on one while the guides bend on the
 // others), so the body costs less than built first; a body that cannot
 // be built then (no triangle with area, memory) takes the step back, and
-// the state is unchanged, as when it is built first.
-// `external_points` (NULL: none) holds another simulator's curves, float3
-// world points `external_stride` bytes apart, points_per_guide per guide:
-// the guides `params.external` selects take their shape from them
-// (blended, lengths kept). A root whose triangle has collapsed in the
-// frame (zero area, no vertex normals) has no frame there (every axis
-// zero): its guide collapses onto the root for that step, as render hairs
-// expanded there do, and comes back with the triangle. Everything is
-// checked first; when a check fails the state is unchanged. PANIC (a
-// worker thread that could not start, or a panic) can leave the step half
-// made: reset or restore the simulation before stepping again.
+// the state is unchanged, as when it is built first. A root whose
+// triangle has collapsed in the frame (zero area, no vertex normals) has
+// no frame there (every axis zero): its guide collapses onto the root for
+// that step, as render hairs expanded there do, and comes back with the
+// triangle. Everything is checked first; when a check fails the state is
+// unchanged. `info` (optional, NULL to skip) gets what the step reports.
+// PANIC (a worker thread that could not start, or a panic) can leave the
+// step half made: reset or restore the simulation before stepping again.
 //
 // Returns OK, NULL_PARAMETER, NON_FINITE (dt, a collider's value, an
-// external point where `params.external` is above 0; a NaN from the
+// external point where the `external` map is above 0; a NaN from the
 // distance callback, and the step is taken back), INVALID_ARGUMENT (dt
 // out of range, a collider, a frame of another mesh, the body grid too
 // large, a body of a frame without a triangle of area, the external
-// curves' count or stride, an external point beyond 1e9 where
-// `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
+// curves' count or stride, an external point beyond 1e9 where the
+// `external` map is above 0), CANCELLED (the step is taken back),
+// MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: writes `sim`; reads `frame`.
-enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct PelageColliders *colliders, const void *external_points, size_t external_stride, float dt, uint32_t thread_count);
+enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct PelageStepParams *params, struct PelageStepInfo *info);
 
 // Poses `frame`'s guides with `sim`'s posed guides of the last step,
 // without copying them out: the bits and the statuses of pelage_sim_read
@@ -1430,12 +1469,16 @@ enum PelageStatus pelage_trim_shortest(PelageGroom groom, const struct PelageTri
 // frame. A cut is checked on the frame that makes it and the ones after
 // it, so go over the shot's frames again until no length changes (one
 // more pass that changes some, then one that changes none, on the test
-// shot): then no cut hair crosses the cloth on any frame. Store the result with `pelage_trim_lengths_write` as the shot's (or one
-// frame's, to reduce later) lengths. On failure `lengths` is unchanged.
+// shot): then no cut hair crosses the cloth on any frame. Store the
+// result with `pelage_trim_lengths_write` as the shot's (or one frame's,
+// to reduce later) lengths. `params->progress`, when set, hears the share
+// of strands done on the calling thread and may cancel. On failure
+// `lengths` is unchanged.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
 // without guides or posed for another point count, a collider, the
-// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, OUT_OF_MEMORY, PANIC.
+// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, CANCELLED,
+// MISALIGNED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: reads `groom` and `frame`.
 enum PelageStatus pelage_trim_shortest_hairs(PelageGroom groom, PelageFrame frame, const struct PelageMeshDesc *cloth, const struct PelageColliders *colliders, const struct PelageExpandParams *params, uint16_t *lengths, size_t length_count);

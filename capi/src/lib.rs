@@ -69,7 +69,8 @@ pub use settle::{pelage_settle, pelage_settle_size, PelageSettleInfo};
 pub use sim::{
     pelage_frame_set_sim_guides, pelage_sim_free, pelage_sim_new, pelage_sim_params_defaults,
     pelage_sim_read, pelage_sim_reset, pelage_sim_restore, pelage_sim_save, pelage_sim_size,
-    pelage_sim_state_size, pelage_sim_step, PelageSim, PelageSimParams, PelageSimTy,
+    pelage_sim_state_size, pelage_sim_step, pelage_step_params_defaults, PelageSim,
+    PelageSimParams, PelageSimTy, PelageStepInfo, PelageStepParams,
 };
 pub use stamp::{
     pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_size, PelageProgressFn,

@@ -1,15 +1,15 @@
 //! The simulation handle: guide dynamics across frames (paper 3).
 
 use crate::body::BodyMemory;
-use crate::buffers::{bytes, bytes_mut, grow, req, req_mut, strided, Float3Out};
+use crate::buffers::{bytes, bytes_mut, grow, opt_mut, req, req_mut, strided, Float3Out};
 use crate::colliders::HostColliders;
 use crate::frame::Frame;
 use crate::handles::{free, into_handle, object, object_mut, Handle};
 use crate::status::Failure;
 use crate::threads::{
-    beside, split_in_chunks, split_over_threads, split_pairs_in_chunks, thread_total,
+    beside, split_in_chunks, split_over_threads, split_pairs_in_chunks, thread_total, Progress,
 };
-use crate::{PelageArena, PelageRestPose};
+use crate::{PelageArena, PelageProgressFn, PelageRestPose};
 use crate::{PelageColliders, PelageFrame, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::collide::COLLISION_CELLS_PER_TRIANGLE;
@@ -19,7 +19,7 @@ use pelage_core::dynamics::sim::{PosedFaults, Sim, SimParams, Step, KEPT_FLOATS}
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::{Arena, Strided};
 use std::ffi::c_void;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// The opaque object a `PelageSim` points to.
 // not repr(C): cbindgen declares it in C without a definition
@@ -230,89 +230,153 @@ pub extern "C" fn pelage_sim_free(sim: PelageSim) {
     free(sim);
 }
 
-/// Advances the simulation by `dt` seconds (1e-5 <= dt <= 1; it may change
-/// from step to step) to `frame` (this frame's deformed mesh; its guides
-/// are not read), colliding with `colliders` (NULL: none). Per guide: the
-/// neutral pose (the rest shape carried by the root frame), the tip spring,
-/// the tip links, CCD IK, the Catmull-Rom curve, the push-out. Split over
-/// `thread_count` threads (0: all cores); the bits do not depend on it.
-/// The body collider (`colliders->body`) is the frame's mesh: the body
+/// What one step of a simulation takes besides the simulation and the
+/// frame; start from pelage_step_params_defaults().
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageStepParams {
+    /// Seconds since the last step (1e-5 <= dt <= 1; it may change from
+    /// step to step).
+    pub dt: f32,
+    /// Threads the step is split over (0: all cores); the bits do not
+    /// depend on it.
+    pub thread_count: u32,
+    /// What the guides collide with (NULL: nothing).
+    pub colliders: *const PelageColliders,
+    /// Another simulator's curves (NULL: none): float3 world points
+    /// `external_stride` bytes apart, points_per_guide per guide; the
+    /// guides the simulation's `external` map selects take their shape
+    /// from them (blended, lengths kept).
+    pub external_points: *const c_void,
+    /// Bytes between consecutive external points (>= 12, a multiple of 4).
+    pub external_stride: usize,
+    /// Optional progress callback (NULL: none), called on the calling
+    /// thread before the step and after each of its phases (the advance,
+    /// each link relaxation, the bend and push-out) with the share done;
+    /// returning false cancels, and the step is taken back.
+    pub progress: PelageProgressFn,
+    /// Passed unchanged to `progress`.
+    pub progress_user_data: *mut c_void,
+}
+
+/// Defaults: dt 1/24, all cores, no colliders, no external curves, no
+/// progress callback.
+///
+/// Thread safety: free.
+#[no_mangle]
+pub extern "C" fn pelage_step_params_defaults() -> PelageStepParams {
+    PelageStepParams {
+        dt: 1.0 / 24.0,
+        thread_count: 0,
+        colliders: std::ptr::null(),
+        external_points: std::ptr::null(),
+        external_stride: 12,
+        progress: None,
+        progress_user_data: std::ptr::null_mut(),
+    }
+}
+
+/// What a step reports.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PelageStepInfo {
+    /// Guides left in their groomed shape (pushed out as far as it goes):
+    /// no tried rotation freed their bent curve from a collider (a crease,
+    /// a landing), or their bend overflowed near the coordinate limit.
+    pub groomed_guides: usize,
+}
+
+/// Advances the simulation by `params->dt` seconds to `frame` (this
+/// frame's deformed mesh; its guides are not read, nor its colliders:
+/// the step collides with `params->colliders` only, and takes from the
+/// frame only the body it built, below). Per guide: the neutral pose (the
+/// rest shape carried by the root frame), the tip spring, the tip links,
+/// CCD IK, the Catmull-Rom curve, the push-out. The body collider
+/// (`colliders->body`) is the frame's mesh: the body
 /// `pelage_frame_set_colliders` built for the frame when it has one (the
 /// same solid, built once per frame), else built here, every step: on
 /// several threads, beside the guides' advance, links and IK (the body's
 /// stages that run on one thread run on one while the guides bend on the
 /// others), so the body costs less than built first; a body that cannot
 /// be built then (no triangle with area, memory) takes the step back, and
-/// the state is unchanged, as when it is built first.
-/// `external_points` (NULL: none) holds another simulator's curves, float3
-/// world points `external_stride` bytes apart, points_per_guide per guide:
-/// the guides `params.external` selects take their shape from them
-/// (blended, lengths kept). A root whose triangle has collapsed in the
-/// frame (zero area, no vertex normals) has no frame there (every axis
-/// zero): its guide collapses onto the root for that step, as render hairs
-/// expanded there do, and comes back with the triangle. Everything is
-/// checked first; when a check fails the state is unchanged. PANIC (a
-/// worker thread that could not start, or a panic) can leave the step half
-/// made: reset or restore the simulation before stepping again.
+/// the state is unchanged, as when it is built first. A root whose
+/// triangle has collapsed in the frame (zero area, no vertex normals) has
+/// no frame there (every axis zero): its guide collapses onto the root for
+/// that step, as render hairs expanded there do, and comes back with the
+/// triangle. Everything is checked first; when a check fails the state is
+/// unchanged. `info` (optional, NULL to skip) gets what the step reports.
+/// PANIC (a worker thread that could not start, or a panic) can leave the
+/// step half made: reset or restore the simulation before stepping again.
 ///
 /// Returns OK, NULL_PARAMETER, NON_FINITE (dt, a collider's value, an
-/// external point where `params.external` is above 0; a NaN from the
+/// external point where the `external` map is above 0; a NaN from the
 /// distance callback, and the step is taken back), INVALID_ARGUMENT (dt
 /// out of range, a collider, a frame of another mesh, the body grid too
 /// large, a body of a frame without a triangle of area, the external
-/// curves' count or stride, an external point beyond 1e9 where
-/// `params.external` is above 0), MISALIGNED, OUT_OF_MEMORY, PANIC.
+/// curves' count or stride, an external point beyond 1e9 where the
+/// `external` map is above 0), CANCELLED (the step is taken back),
+/// MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: writes `sim`; reads `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_sim_step(
     sim: PelageSim,
     frame: PelageFrame,
-    colliders: *const PelageColliders,
-    external_points: *const c_void,
-    external_stride: usize,
-    dt: f32,
-    thread_count: u32,
+    params: *const PelageStepParams,
+    info: *mut PelageStepInfo,
 ) -> PelageStatus {
     ffi_boundary! {
         let sim = object_mut(sim)?;
         let frame = object(frame)?;
-        let host = HostColliders::read(colliders)?;
-        let external = match external_points.is_null() {
+        let p = req(params, "params")?;
+        let host = HostColliders::read(p.colliders)?;
+        let external = match p.external_points.is_null() {
             true => None,
-            false => Some(strided::<[f32; 3]>(external_points, external_stride, sim.sim.len() * sim.sim.points(), "external_points")?),
+            false => Some(strided::<[f32; 3]>(p.external_points, p.external_stride, sim.sim.len() * sim.sim.points(), "params.external_points")?),
         };
-        // a NaN from the host's field fails the step: the state before it
-        // is kept to put back
-        if host.field.is_some() {
+        let progress = Progress::new(p.progress, p.progress_user_data);
+        // a NaN from the host's field or a cancel fails the step after it
+        // moved the guides: the state before it is kept to put back
+        let whole = host.field.is_some() || progress.is_set();
+        if whole {
             let blocks = sim.sim.blocks();
             grow(&mut sim.whole, blocks.len(), 0.0, "the state kept through a step")?;
             sim.whole[..blocks.len()].copy_from_slice(blocks);
         }
         let stepped = sim.sim.has_stepped();
-        let done = step(sim, frame, &host, external, dt, thread_count);
-        if done.is_ok() {
-            if let Err(failure) = host.check_field() {
-                let n = sim.sim.blocks().len();
-                sim.sim.put_back(&sim.whole[..n], stepped);
-                return Err(failure);
+        let done = step(sim, frame, &host, external, p, &progress)
+            .and_then(|groomed| host.check_field().map(|()| groomed));
+        match done {
+            Ok(groomed) => {
+                if let Some(info) = opt_mut(info) {
+                    *info = PelageStepInfo { groomed_guides: groomed };
+                }
+                Ok(())
+            }
+            Err(failure) => {
+                if whole {
+                    let n = sim.sim.blocks().len();
+                    sim.sim.put_back(&sim.whole[..n], stepped);
+                }
+                Err(failure)
             }
         }
-        done
     }
 }
 
-/// [`pelage_sim_step`] with its inputs read.
+/// [`pelage_sim_step`] with its inputs read: the guides it left in their
+/// groomed shape.
 fn step(
     sim: &mut SimBox,
     frame: &Frame,
     host: &HostColliders,
     external: Option<Strided<[f32; 3]>>,
-    dt: f32,
-    thread_count: u32,
-) -> Result<(), Failure> {
+    p: &PelageStepParams,
+    progress: &Progress,
+) -> Result<usize, Failure> {
+    let (dt, thread_count) = (p.dt, p.thread_count);
     if host.body && frame.body().is_none() && thread_total(thread_count) > 1 {
-        return step_beside_body(sim, frame.posed(), host, external, dt, thread_count);
+        return step_beside_body(sim, frame.posed(), host, external, p, progress);
     }
     // the frame's own body, when its colliders have one, is this mesh's:
     // built once per frame, shared with the render strands' push-out
@@ -340,14 +404,46 @@ fn step(
         snapshot,
     } = sim.sim.begin(frame.posed(), &colliders, external, dt)?;
     let (n, per) = (snapshot.len(), context.block_floats());
+    let phases = Phases::new(progress, context.link_iterations())?;
     context.bend(blocks, snapshot, |blocks, phase| {
         split_in_chunks(n, thread_count, blocks, per, |range, part| {
             phase(range.start, part)
-        })
+        })?;
+        phases.done()
     })?;
+    let groomed = AtomicUsize::new(0);
     split_in_chunks(n, thread_count, &mut *blocks, per, |range, part| {
-        context.finish(range.start, part)
-    })
+        groomed.fetch_add(context.finish(range.start, part), Ordering::Relaxed);
+    })?;
+    phases.done()?;
+    Ok(groomed.into_inner())
+}
+
+/// A step's phases as the host hears of them: before the first, and after
+/// each (the advance, each link relaxation, the bend and push-out).
+struct Phases<'p> {
+    progress: &'p Progress,
+    total: u32,
+    done: std::cell::Cell<u32>,
+}
+
+impl<'p> Phases<'p> {
+    /// Reports the start of a step of `relaxations` link relaxations.
+    fn new(progress: &'p Progress, relaxations: u32) -> Result<Self, Failure> {
+        progress.report(0.0)?;
+        Ok(Phases {
+            progress,
+            total: relaxations + 2,
+            done: std::cell::Cell::new(0),
+        })
+    }
+
+    /// Reports one more phase done; CANCELLED when the host says so.
+    fn done(&self) -> Result<(), Failure> {
+        self.done.set(self.done.get() + 1);
+        self.progress
+            .report(f64::from(self.done.get()) / f64::from(self.total))
+    }
 }
 
 /// A step on several threads that builds its own body collider: the
@@ -364,9 +460,10 @@ fn step_beside_body(
     frame: &PosedFrame,
     host: &HostColliders,
     external: Option<Strided<[f32; 3]>>,
-    dt: f32,
-    thread_count: u32,
-) -> Result<(), Failure> {
+    p: &PelageStepParams,
+    progress: &Progress,
+) -> Result<usize, Failure> {
+    let (dt, thread_count) = (p.dt, p.thread_count);
     let SimBox {
         sim,
         body: memory,
@@ -404,10 +501,12 @@ fn step_beside_body(
             )
         },
         || -> Result<(), Failure> {
+            let phases = Phases::new(progress, context.link_iterations())?;
             context.bend(blocks, snapshot, |blocks, phase| {
                 split_in_chunks(n, guide_threads, blocks, per, |range, part| {
                     phase(range.start, part)
-                })
+                })?;
+                phases.done()
             })?;
             let shaped = split_pairs_in_chunks(
                 n,
@@ -434,15 +533,16 @@ fn step_beside_body(
         }
     };
     let shaped = &*shaped;
+    let groomed = AtomicUsize::new(0);
     // a thread that cannot start here leaves the step half made (PANIC)
     split_in_chunks(n, thread_count, blocks, per, |range, part| {
-        context.collide(
-            range.start,
-            part,
-            &shaped[range.start * 3 * m..range.end * 3 * m],
-            Some(&body),
-        )
-    })
+        let mine = &shaped[range.start * 3 * m..range.end * 3 * m];
+        let count = context.collide(range.start, part, mine, Some(&body));
+        groomed.fetch_add(count, Ordering::Relaxed);
+    })?;
+    // the last phase's report: a cancel here is taken back by the caller
+    progress.report(1.0)?;
+    Ok(groomed.into_inner())
 }
 
 // a frame's guides from the simulation: here, above both objects

@@ -96,8 +96,13 @@ impl Progress {
         }
     }
 
+    /// True when the host gave a callback.
+    pub(crate) fn is_set(&self) -> bool {
+        self.callback.is_some()
+    }
+
     /// Reports `fraction` done; CANCELLED when the host returns false.
-    fn report(&self, fraction: f64) -> Result<(), Failure> {
+    pub(crate) fn report(&self, fraction: f64) -> Result<(), Failure> {
         let Some(callback) = self.callback else {
             return Ok(());
         };

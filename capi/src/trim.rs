@@ -7,7 +7,7 @@ use crate::colliders::HostColliders;
 use crate::expand::{core_params, PelageExpandParams};
 use crate::handles::object;
 use crate::status::Failure;
-use crate::threads::split_over_threads;
+use crate::threads::{split_over_threads, split_with_progress, Progress};
 use crate::{PelageColliders, PelageFrame, PelageGroom, PelageMeshDesc, PelageStatus};
 use pelage_core::cache::trim_file::{self, RecordsInfo};
 use pelage_core::interp::expand::ExpandJob;
@@ -214,12 +214,16 @@ pub extern "C" fn pelage_trim_shortest(
 /// frame. A cut is checked on the frame that makes it and the ones after
 /// it, so go over the shot's frames again until no length changes (one
 /// more pass that changes some, then one that changes none, on the test
-/// shot): then no cut hair crosses the cloth on any frame. Store the result with `pelage_trim_lengths_write` as the shot's (or one
-/// frame's, to reduce later) lengths. On failure `lengths` is unchanged.
+/// shot): then no cut hair crosses the cloth on any frame. Store the
+/// result with `pelage_trim_lengths_write` as the shot's (or one frame's,
+/// to reduce later) lengths. `params->progress`, when set, hears the share
+/// of strands done on the calling thread and may cancel. On failure
+/// `lengths` is unchanged.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
 /// without guides or posed for another point count, a collider, the
-/// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, MISALIGNED, OUT_OF_MEMORY, PANIC.
+/// cloth, `length_count`), OUT_OF_RANGE, NON_FINITE, CANCELLED,
+/// MISALIGNED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: reads `groom` and `frame`.
 #[no_mangle]
@@ -250,7 +254,8 @@ pub extern "C" fn pelage_trim_shortest_hairs(
         colliders.check()?;
         let lengths = slice_mut(lengths, length_count, "lengths")?;
         let mut own = collected(lengths.iter().copied(), lengths.len(), "the lengths")?;
-        split_over_threads(n, p.thread_count, &mut own, 1, |range, part| {
+        let progress = Progress::new(p.progress, p.progress_user_data);
+        split_with_progress(n, p.thread_count, &mut own, 1, progress, |range, part| {
             shortest_own(&job, range, cloth_body.as_ref(), &colliders, part)
         })?;
         host.check_field()?;

@@ -144,11 +144,13 @@ fn main() {
                         let s = pelage_sim_step(
                             sim,
                             frames[f].0,
-                            &colliders,
-                            std::ptr::null(),
-                            0,
-                            1.0 / 24.0,
-                            threads,
+                            &PelageStepParams {
+                                dt: 1.0 / 24.0,
+                                thread_count: threads,
+                                colliders: &colliders,
+                                ..pelage_step_params_defaults()
+                            },
+                            std::ptr::null_mut(),
                         );
                         let e = t.elapsed().as_secs_f64();
                         assert_eq!(s, PelageStatus::Ok);
@@ -272,11 +274,13 @@ fn full_frame(
             pelage_sim_step(
                 sim,
                 handle.0,
-                &colliders,
-                std::ptr::null(),
-                0,
-                1.0 / 24.0,
-                2
+                &PelageStepParams {
+                    dt: 1.0 / 24.0,
+                    thread_count: 2,
+                    colliders: &colliders,
+                    ..pelage_step_params_defaults()
+                },
+                std::ptr::null_mut()
             ),
             PelageStatus::Ok
         );

@@ -136,7 +136,10 @@ int main(int argc, char** argv) {
       creature::check(pelage_sim_new(&rest_pose, &params, PelageArena{memory.data(), bytes}, &sim), "pelage_sim_new");
       std::vector<float> posed(points.size());
       for (int step = 0; step < 3; ++step) {
-        creature::check(pelage_sim_step(sim, frame, &colliders, nullptr, 0, 1.0f / 24.0f, threads), "pelage_sim_step");
+        PelageStepParams step_params = pelage_step_params_defaults();
+        step_params.colliders = &colliders;
+        step_params.thread_count = threads;
+        creature::check(pelage_sim_step(sim, frame, &step_params, nullptr), "pelage_sim_step");
         creature::check(pelage_sim_read(sim, posed.data(), 12, posed.size() / 3), "pelage_sim_read");
         const size_t left = crossing(posed);
         std::printf("%u thread(s), step %d: %zu guides with a point inside the props\n", threads, step, left);

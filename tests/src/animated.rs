@@ -220,11 +220,13 @@ impl ShotSim {
         let s = pelage_sim_step(
             self.sim,
             neutral.0,
-            colliders,
-            std::ptr::null(),
-            0,
-            1.0 / FPS,
-            2,
+            &PelageStepParams {
+                dt: 1.0 / FPS,
+                thread_count: 2,
+                colliders,
+                ..pelage_step_params_defaults()
+            },
+            std::ptr::null_mut(),
         );
         assert_eq!(s, PelageStatus::Ok);
         let mut posed = vec![[0.0f32; 3]; self.points.len()];

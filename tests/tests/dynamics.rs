@@ -108,11 +108,13 @@ fn step(
     pelage_sim_step(
         sim.sim,
         frame,
-        colliders,
-        std::ptr::null(),
-        0,
-        1.0 / 24.0,
-        threads,
+        &PelageStepParams {
+            dt: 1.0 / 24.0,
+            thread_count: threads,
+            colliders,
+            ..pelage_step_params_defaults()
+        },
+        std::ptr::null_mut(),
     )
 }
 
@@ -340,11 +342,15 @@ fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
         pelage_sim_step(
             sim.sim,
             handle.0,
-            std::ptr::null(),
-            points.as_ptr().cast(),
-            12,
-            1.0 / 24.0,
-            2,
+            &PelageStepParams {
+                dt: 1.0 / 24.0,
+                thread_count: 2,
+                colliders: std::ptr::null(),
+                external_points: points.as_ptr().cast(),
+                external_stride: 12,
+                ..pelage_step_params_defaults()
+            },
+            std::ptr::null_mut(),
         )
     };
     assert_eq!(step(&bad), PelageStatus::NonFinite);
@@ -416,11 +422,13 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
         let s = pelage_sim_step(
             sim.sim,
             read.0,
-            &colliders(&caps, true),
-            std::ptr::null(),
-            0,
-            1.0 / 24.0,
-            2,
+            &PelageStepParams {
+                dt: 1.0 / 24.0,
+                thread_count: 2,
+                colliders: &colliders(&caps, true),
+                ..pelage_step_params_defaults()
+            },
+            std::ptr::null_mut(),
         );
         assert_eq!(s, PelageStatus::Ok);
         let posed = sim.read(shot.roots.len());
@@ -622,7 +630,17 @@ fn non_finite_simulation_inputs_are_non_finite() {
         (f32::INFINITY, PelageStatus::NonFinite),
         (2.0, PelageStatus::InvalidArgument),
     ] {
-        let s = pelage_sim_step(sim.sim, frame.0, &none, std::ptr::null(), 0, dt, 1);
+        let s = pelage_sim_step(
+            sim.sim,
+            frame.0,
+            &PelageStepParams {
+                dt,
+                thread_count: 1,
+                colliders: &none,
+                ..pelage_step_params_defaults()
+            },
+            std::ptr::null_mut(),
+        );
         assert_eq!(s, status, "dt {dt}");
     }
     let desc = mesh_desc(&shot.rest);
@@ -639,5 +657,89 @@ fn non_finite_simulation_inputs_are_non_finite() {
     ] {
         let s = pelage_sim_size(&desc, n, &params, &mut bytes);
         assert_eq!(s, PelageStatus::NonFinite);
+    }
+}
+
+/// Counts the progress calls it hears and cancels at the `stop`th.
+struct Heard {
+    fractions: Vec<f64>,
+    stop: usize,
+}
+
+unsafe extern "C" fn hear(user_data: *mut std::ffi::c_void, fraction: f64) -> bool {
+    // SAFETY: the test passes a live `Heard` as the user data.
+    let heard = unsafe { &mut *user_data.cast::<Heard>() };
+    heard.fractions.push(fraction);
+    heard.fractions.len() < heard.stop
+}
+
+#[test]
+fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
+    let shot = Shot::new();
+    let n = shot.roots.len();
+    let params = shot.params();
+    // a half-space holding the whole creature: no rotation frees a guide
+    let buried = [PelagePlane {
+        normal: [0.0, 1.0, 0.0],
+        offset: 1e3,
+    }];
+    let all_inside = PelageColliders {
+        planes: buried.as_ptr(),
+        plane_count: 1,
+        ..colliders(&[], false)
+    };
+    let frame = handle_of(&shot, 0);
+    for threads in [1, 3] {
+        let sim = SimHandle::new(&shot, &params);
+        let mut info = PelageStepInfo { groomed_guides: 7 };
+        let mut step = PelageStepParams {
+            thread_count: threads,
+            colliders: &all_inside,
+            ..pelage_step_params_defaults()
+        };
+        assert_eq!(
+            pelage_sim_step(sim.sim, frame.0, &step, &mut info),
+            PelageStatus::Ok
+        );
+        assert_eq!(info.groomed_guides, n, "{threads} threads");
+        step.colliders = std::ptr::null();
+        assert_eq!(
+            pelage_sim_step(sim.sim, frame.0, &step, &mut info),
+            PelageStatus::Ok
+        );
+        assert_eq!(info.groomed_guides, 0);
+        // heard before the step and after each phase, never decreasing;
+        // a cancel after the first phase takes the step back
+        let (state, posed) = (save(&sim), sim.read(n));
+        let mut heard = Heard {
+            fractions: vec![],
+            stop: usize::MAX,
+        };
+        step.progress = Some(hear);
+        step.progress_user_data = (&mut heard as *mut Heard).cast();
+        let moved = handle_of(&shot, 2);
+        let listened = SimHandle::new(&shot, &params);
+        run(&shot, &listened, 0..1, threads, false, |_, _, _, _| {});
+        assert_eq!(
+            pelage_sim_step(listened.sim, moved.0, &step, std::ptr::null_mut()),
+            PelageStatus::Ok
+        );
+        let f = &heard.fractions;
+        assert!(
+            f.len() >= 3 && f[0] == 0.0 && *f.last().unwrap() == 1.0,
+            "{f:?}"
+        );
+        assert!(f.windows(2).all(|w| w[0] <= w[1]), "{f:?}");
+        heard = Heard {
+            fractions: vec![],
+            stop: 2,
+        };
+        step.progress_user_data = (&mut heard as *mut Heard).cast();
+        assert_eq!(
+            pelage_sim_step(sim.sim, moved.0, &step, std::ptr::null_mut()),
+            PelageStatus::Cancelled
+        );
+        assert!(save(&sim) == state, "a cancelled step changed the state");
+        assert!(sim.read(n) == posed, "a cancelled step changed the guides");
     }
 }

@@ -279,6 +279,44 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
     }
     println!("the exact pass went over the shot {again} more times");
 
+    // a pass its progress callback cancels halfway leaves the lengths as
+    // they were; the same pass run through cuts some
+    unsafe extern "C" fn halfway(_: *mut std::ffi::c_void, fraction: f64) -> bool {
+        fraction < 0.5
+    }
+    let (body, cloth, posed, _, _) = &frames[0];
+    let handle = frame(
+        &mesh_desc(body),
+        &guides_desc(&fur.guide_roots, posed),
+        JOINTS as u32,
+        2,
+    )
+    .unwrap();
+    let shapes = capsules(&rest, &fur.guide_roots, 0);
+    let caps = colliders(&shapes, false);
+    let cancelled = PelageExpandParams {
+        progress: Some(halfway),
+        ..params
+    };
+    let whole = vec![PELAGE_TRIM_WHOLE; n];
+    let mut pass = whole.clone();
+    for (p, status) in [
+        (&cancelled, PelageStatus::Cancelled),
+        (&params, PelageStatus::Ok),
+    ] {
+        let s = pelage_trim_shortest_hairs(
+            groom,
+            handle.0,
+            &mesh_desc(cloth),
+            &caps,
+            p,
+            pass.as_mut_ptr(),
+            n,
+        );
+        assert_eq!(s, status);
+        assert_eq!(pass == whole, status == PelageStatus::Cancelled);
+    }
+
     // the shot pass's file: 2 bytes a hair
     let mut size = 0;
     ok(pelage_trim_lengths_size(n, &mut size), "size");

@@ -481,13 +481,14 @@ impl<'a> Sim<'a> {
     }
 
     /// One step of `dt` seconds on `frame` (the step's deformed mesh) with
-    /// `colliders`, on the calling thread.
+    /// `colliders`, on the calling thread. Returns how many guides took
+    /// their groomed shape ([`StepContext::finish`]).
     pub fn step(
         &mut self,
         frame: &PosedFrame,
         colliders: &Colliders,
         dt: f32,
-    ) -> Result<(), Error> {
+    ) -> Result<usize, Error> {
         let Step {
             context: ctx,
             blocks,
@@ -497,8 +498,7 @@ impl<'a> Sim<'a> {
             phase(0, blocks);
             Ok::<(), Error>(())
         })?;
-        ctx.finish(0, blocks);
-        Ok(())
+        Ok(ctx.finish(0, blocks))
     }
 }
 

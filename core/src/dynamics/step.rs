@@ -182,27 +182,32 @@ impl StepContext<'_> {
     /// toward the target, the Catmull-Rom curve, the push-out from the
     /// step's colliders. The same as [`shape`](Self::shape) then
     /// [`collide`](Self::collide), without keeping the curves in between.
-    pub fn finish(&self, first: usize, blocks: &mut [f32]) {
+    /// Returns how many of them took their groomed shape: no tried rotation
+    /// freed their curve from a collider, or their bend overflowed.
+    pub fn finish(&self, first: usize, blocks: &mut [f32]) -> usize {
         let m = self.params.points;
         if self.colliders.field.is_none() {
+            let mut groomed = 0;
             self.solve(first, blocks, |g, b, joints| {
                 let mut posed = [Vec3::ZERO; MAX_JOINTS];
                 self.curve(g, b, joints, &mut posed[..m]);
-                self.push(g, b, &mut posed[..m], self.colliders, None);
+                groomed += self.push(g, b, &mut posed[..m], self.colliders, None) as usize;
             });
-            return;
+            return groomed;
         }
         // with a host field, the guides' curves are made a batch at a time
         // and the field asked once for the batch (each guide's curve is its
         // own whatever it is solved with: the same bits)
+        let mut groomed = 0;
         for (k, part) in blocks.chunks_mut(FIELD_BATCH * self.block).enumerate() {
             let first = first + k * FIELD_BATCH;
             let mut curves = [[Vec3::ZERO; MAX_JOINTS]; FIELD_BATCH];
             self.solve(first, part, |g, b, joints| {
                 self.curve(g, b, joints, &mut curves[g - first][..m]);
             });
-            self.push_batch(first, part, &mut curves, self.colliders);
+            groomed += self.push_batch(first, part, &mut curves, self.colliders);
         }
+        groomed
     }
 
     /// Phase 3 without its push-out, for a host that builds a collider
@@ -228,15 +233,22 @@ impl StepContext<'_> {
     /// The rest of phase 3 after [`shape`](Self::shape): the push-out of
     /// the guides `first ..` whose blocks `blocks` holds and whose curves
     /// `shaped` holds, from the step's colliders with `body` (built
-    /// meanwhile) as their body, into the blocks. The bits are
-    /// [`finish`](Self::finish)'s with that body.
-    pub fn collide(&self, first: usize, blocks: &mut [f32], shaped: &[f32], body: Option<&Body>) {
+    /// meanwhile) as their body, into the blocks. The bits and the count
+    /// returned are [`finish`](Self::finish)'s with that body.
+    pub fn collide(
+        &self,
+        first: usize,
+        blocks: &mut [f32],
+        shaped: &[f32],
+        body: Option<&Body>,
+    ) -> usize {
         let colliders = Colliders {
             body,
             ..*self.colliders
         };
         let colliders = &colliders;
         let m = self.params.points;
+        let mut groomed = 0;
         for (k, part) in blocks.chunks_mut(FIELD_BATCH * self.block).enumerate() {
             let first = first + k * FIELD_BATCH;
             let shaped = &shaped[k * FIELD_BATCH * 3 * m..];
@@ -246,8 +258,9 @@ impl StepContext<'_> {
                     *p = Vec3::new(s[0], s[1], s[2]);
                 }
             }
-            self.push_batch(first, part, &mut curves, colliders);
+            groomed += self.push_batch(first, part, &mut curves, colliders);
         }
+        groomed
     }
 
     /// The push-outs of the guides `first ..` whose blocks `blocks` holds
@@ -259,7 +272,7 @@ impl StepContext<'_> {
         blocks: &mut [f32],
         curves: &mut [[Vec3; MAX_JOINTS]; FIELD_BATCH],
         colliders: &Colliders,
-    ) {
+    ) -> usize {
         let m = self.params.points;
         let mut verdicts = [None; FIELD_BATCH];
         let guides = blocks.len() / self.block;
@@ -277,9 +290,12 @@ impl StepContext<'_> {
             },
             &mut verdicts[..guides],
         );
+        let mut groomed = 0;
         for (i, b) in blocks.chunks_exact_mut(self.block).enumerate() {
-            self.push(first + i, b, &mut curves[i][..m], colliders, verdicts[i]);
+            groomed +=
+                self.push(first + i, b, &mut curves[i][..m], colliders, verdicts[i]) as usize;
         }
+        groomed
     }
 
     /// IK toward the target for the guides `first ..` whose blocks `blocks`
@@ -379,7 +395,7 @@ impl StepContext<'_> {
         posed: &mut [Vec3],
         colliders: &Colliders,
         field: Option<bool>,
-    ) {
+    ) -> bool {
         let j = self.params.joints;
         let frame = state(b).root_frame();
         let reach = self.constants[g].reach;
@@ -387,7 +403,9 @@ impl StepContext<'_> {
         // coordinate limit (lengths past ~1e9 each way): such a guide takes
         // its groomed shape rather than a non-finite point
         let lost = !posed.iter().all(|p| p.is_finite());
-        if lost || push_out_known(colliders, &frame, posed, reach, field) == PushOut::Stuck {
+        let groomed =
+            lost || push_out_known(colliders, &frame, posed, reach, field) == PushOut::Stuck;
+        if groomed {
             // bent into a place no rotation leaves (a crease, a landing), or
             // lost: the groomed shape, pushed out in turn
             let mut rest = [Vec3::ZERO; MAX_JOINTS];
@@ -401,6 +419,7 @@ impl StepContext<'_> {
         for (o, p) in out.chunks_exact_mut(3).zip(posed.iter()) {
             o.copy_from_slice(&p.to_array());
         }
+        groomed
     }
 }
 
