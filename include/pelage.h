@@ -1051,6 +1051,20 @@ enum PelageStatus pelage_groom_expand(PelageGroom groom, PelageFrame frame, size
 // Thread safety: reads `groom` and `frame`.
 enum PelageStatus pelage_groom_expand_edited(PelageGroom groom, PelageFrame frame, size_t first, size_t count, const struct PelageStrandEdits *edits, const struct PelageExpandParams *params, const struct PelageCurves *curves);
 
+// The shadow or distance LOD that keeps `groom`'s strands of rank below
+// `cutoff` (for example half the strand count): writes to `counts[i]` how
+// many of patch `i`'s strands it keeps, always its first ones, since
+// `pelage_patch_plan` sorts each patch by rank (the groom's strands must
+// be in that plan's order). Expand those with `width_scale` = strand
+// count / kept strands in PelageExpandParams so the fur covers as much.
+//
+// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
+// strands), INVALID_ARGUMENT (a patch not sorted by rank), MISALIGNED,
+// PANIC.
+//
+// Thread safety: reads `groom`.
+enum PelageStatus pelage_groom_lod_counts(PelageGroom groom, const struct PelagePatch *patches, size_t patch_count, uint32_t cutoff, uint32_t *counts);
+
 // The most bytes `pelage_guide_cache_write` writes for `sample_count`
 // shutter samples (1..255) of `guide_count` guides (at least 1) of
 // `points_per_guide` points (2..64), quantized (`exact` 0) or exact
@@ -1156,20 +1170,6 @@ enum PelageStatus pelage_patch_plan(const struct PelageMeshDesc *mesh, const str
 //
 // Thread safety: reads `frame`.
 enum PelageStatus pelage_patch_boxes(PelageFrame frame, const struct PelageStrands *strands, const struct PelageExpandParams *params, const struct PelagePatch *patches, size_t patch_count, float *boxes);
-
-// The shadow or distance LOD that keeps `groom`'s strands of rank below
-// `cutoff` (for example half the strand count): writes to `counts[i]` how
-// many of patch `i`'s strands it keeps, always its first ones, since
-// `pelage_patch_plan` sorts each patch by rank (the groom's strands must
-// be in that plan's order). Expand those with `width_scale` = strand
-// count / kept strands in PelageExpandParams so the fur covers as much.
-//
-// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
-// strands), INVALID_ARGUMENT (a patch not sorted by rank), MISALIGNED,
-// PANIC.
-//
-// Thread safety: reads `groom`.
-enum PelageStatus pelage_groom_lod_counts(PelageGroom groom, const struct PelagePatch *patches, size_t patch_count, uint32_t cutoff, uint32_t *counts);
 
 // Evaluates `root_count` roots on `mesh` (rest or deformed, same topology):
 // positions into `positions` (float3, `position_stride` bytes apart) and, if

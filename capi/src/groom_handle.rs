@@ -1,14 +1,17 @@
 //! The groom handle: a groom's render strands, checked once and kept for
 //! expanding every frame.
 
-use crate::buffers::{collected, req, req_mut, slice};
+use crate::buffers::{collected, req, req_mut, slice, slice_mut};
 use crate::colliders::HostField;
 use crate::expand::{run, Edits};
 use crate::handles::{free, into_handle, object, Handle};
 use crate::status::Failure;
-use crate::{PelageCurves, PelageExpandParams, PelageFrame, PelageStatus, PelageStrands};
+use crate::{
+    PelageCurves, PelageExpandParams, PelageFrame, PelagePatch, PelageStatus, PelageStrands,
+};
 use pelage_core::interp::bind::StrandBinding;
 use pelage_core::interp::groom::StrandGroom;
+use pelage_core::interp::patch::{self, Patch};
 use pelage_core::interp::strands::{StrandBounds, Strands};
 use pelage_core::Root;
 
@@ -231,4 +234,44 @@ fn expand_range(
         req(curves, "curves")?,
     )?;
     field.as_ref().map_or(Ok(()), HostField::check)
+}
+
+/// The shadow or distance LOD that keeps `groom`'s strands of rank below
+/// `cutoff` (for example half the strand count): writes to `counts[i]` how
+/// many of patch `i`'s strands it keeps, always its first ones, since
+/// `pelage_patch_plan` sorts each patch by rank (the groom's strands must
+/// be in that plan's order). Expand those with `width_scale` = strand
+/// count / kept strands in PelageExpandParams so the fur covers as much.
+///
+/// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
+/// strands), INVALID_ARGUMENT (a patch not sorted by rank), MISALIGNED,
+/// PANIC.
+///
+/// Thread safety: reads `groom`.
+#[no_mangle]
+pub extern "C" fn pelage_groom_lod_counts(
+    groom: PelageGroom,
+    patches: *const PelagePatch,
+    patch_count: usize,
+    cutoff: u32,
+    counts: *mut u32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let roots = object(groom)?.strands().roots;
+        let patches: &[Patch] = bytemuck::cast_slice(slice(patches, patch_count, "patches")?);
+        for (i, p) in patches.iter().enumerate() {
+            if p.first as usize + p.count as usize > roots.len() {
+                return Err(pelage_core::Error::OutOfRange { what: "patches", index: i, value: p.first as usize + p.count as usize, bound: roots.len() }.into());
+            }
+            let range = p.first as usize..p.first as usize + p.count as usize;
+            if !roots[range].is_sorted_by_key(|r| r.rank) {
+                return Err(Failure::new(PelageStatus::InvalidArgument, format!("patch {i} is not sorted by rank (strands not in pelage_patch_plan's order)")));
+            }
+        }
+        let counts = slice_mut(counts, patch_count, "counts")?;
+        for (c, &p) in counts.iter_mut().zip(patches) {
+            *c = patch::lod_count(roots, p, cutoff);
+        }
+        Ok(())
+    }
 }

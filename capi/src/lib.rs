@@ -52,8 +52,8 @@ pub use groom_file::{
     PelageGroomFileBuffers, PelageGroomFileDesc, PelageGroomFileInfo, PelagePatch,
 };
 pub use groom_handle::{
-    pelage_groom_expand, pelage_groom_expand_edited, pelage_groom_free, pelage_groom_new,
-    pelage_groom_strand_count, PelageGroom, PelageGroomTy, PelageStrandEdits,
+    pelage_groom_expand, pelage_groom_expand_edited, pelage_groom_free, pelage_groom_lod_counts,
+    pelage_groom_new, pelage_groom_strand_count, PelageGroom, PelageGroomTy, PelageStrandEdits,
 };
 pub use guide_cache::{
     pelage_guide_cache_info, pelage_guide_cache_read, pelage_guide_cache_size,
@@ -62,7 +62,7 @@ pub use guide_cache::{
 pub use guides::{PelageGuidesDesc, PelageRestPose};
 pub use map::{pelage_map_mask, PelageMap, PelageMapKind};
 pub use mesh::PelageMeshDesc;
-pub use patch::{pelage_groom_lod_counts, pelage_patch_boxes, pelage_patch_plan};
+pub use patch::{pelage_patch_boxes, pelage_patch_plan};
 pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_size, PelageSettleInfo};

@@ -7,7 +7,7 @@ use crate::groom_file::PelagePatch;
 use crate::handles::object;
 use crate::status::Failure;
 use crate::threads::split_over_threads;
-use crate::{PelageGroom, PelageMeshDesc, PelageRoot, PelageStatus};
+use crate::{PelageMeshDesc, PelageRoot, PelageStatus};
 use pelage_core::interp::patch::{self, Patch};
 
 /// Orders `root_count` strands rooted at `roots` on the rest `mesh` into
@@ -106,46 +106,6 @@ pub extern "C" fn pelage_patch_boxes(
                 out.copy_from_slice(&[b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z]);
             }
         })?;
-        Ok(())
-    }
-}
-
-/// The shadow or distance LOD that keeps `groom`'s strands of rank below
-/// `cutoff` (for example half the strand count): writes to `counts[i]` how
-/// many of patch `i`'s strands it keeps, always its first ones, since
-/// `pelage_patch_plan` sorts each patch by rank (the groom's strands must
-/// be in that plan's order). Expand those with `width_scale` = strand
-/// count / kept strands in PelageExpandParams so the fur covers as much.
-///
-/// Returns OK, NULL_PARAMETER, OUT_OF_RANGE (a patch past the groom's
-/// strands), INVALID_ARGUMENT (a patch not sorted by rank), MISALIGNED,
-/// PANIC.
-///
-/// Thread safety: reads `groom`.
-#[no_mangle]
-pub extern "C" fn pelage_groom_lod_counts(
-    groom: PelageGroom,
-    patches: *const PelagePatch,
-    patch_count: usize,
-    cutoff: u32,
-    counts: *mut u32,
-) -> PelageStatus {
-    ffi_boundary! {
-        let roots = object(groom)?.strands().roots;
-        let patches: &[Patch] = bytemuck::cast_slice(slice(patches, patch_count, "patches")?);
-        for (i, p) in patches.iter().enumerate() {
-            if p.first as usize + p.count as usize > roots.len() {
-                return Err(pelage_core::Error::OutOfRange { what: "patches", index: i, value: p.first as usize + p.count as usize, bound: roots.len() }.into());
-            }
-            let range = p.first as usize..p.first as usize + p.count as usize;
-            if !roots[range].is_sorted_by_key(|r| r.rank) {
-                return Err(Failure::new(PelageStatus::InvalidArgument, format!("patch {i} is not sorted by rank (strands not in pelage_patch_plan's order)")));
-            }
-        }
-        let counts = slice_mut(counts, patch_count, "counts")?;
-        for (c, &p) in counts.iter_mut().zip(patches) {
-            *c = patch::lod_count(roots, p, cutoff);
-        }
         Ok(())
     }
 }
