@@ -51,7 +51,7 @@
 #define PELAGE_VERSION_MAJOR 0
 
 // Minor version.
-#define PELAGE_VERSION_MINOR 11
+#define PELAGE_VERSION_MINOR 12
 
 // Patch version.
 #define PELAGE_VERSION_PATCH 0

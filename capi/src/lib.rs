@@ -87,7 +87,7 @@ pub use trim::{
 /// Major version of the library this header belongs to.
 pub const PELAGE_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const PELAGE_VERSION_MINOR: u32 = 11;
+pub const PELAGE_VERSION_MINOR: u32 = 12;
 /// Patch version.
 pub const PELAGE_VERSION_PATCH: u32 = 0;
 
