@@ -439,8 +439,9 @@ typedef struct PelagePlane {
 // expands with a push mask on a frame holding it), possibly at once: it
 // must be safe to call concurrently. pelage asks for many points a call
 // where it can: a step asks once for the guides of a batch of 32 (some
-// 500 points for guides of 16) before their push-outs, and once for all
-// the rotations of a guide it tries toward its normal. A NaN distance
+// 500 points for guides of 16) before their push-outs, an expansion once
+// for the pushed strands of a batch of 32, and both once for all the
+// rotations of a strand they try toward its normal. A NaN distance
 // fails the call with NON_FINITE: a step is taken back whole, trimming
 // writes nothing, an expansion's curves are unspecified.
 typedef void (*PelageDistanceFn)(void *user_data, const float *points, size_t count, float *distances);

@@ -523,8 +523,19 @@ fn turned(turn: Option<Turn>, l: Vec3) -> Vec3 {
 /// is turned fully toward its normal and then cut where it enters a
 /// collider (as trimming cuts): where its first control point inside enters.
 pub fn push_out_curve(colliders: &Colliders, frame: &Frame, points: &mut [[f32; 4]]) -> PushOut {
+    push_out_curve_known(colliders, frame, points, None)
+}
+
+/// A render strand's points (at most [`MAX_POINTS`]) in its root frame, as
+/// [`push_out_curve`] turns them, into `local`; returns their count and
+/// the strand's length. [`field_verdicts`] on them gives the answer
+/// [`push_out_curve_known`] takes.
+pub fn curve_local(
+    frame: &Frame,
+    points: &[[f32; 4]],
+    local: &mut [Vec3; MAX_POINTS],
+) -> (usize, f32) {
     let n = points.len().min(MAX_POINTS);
-    let mut local = [Vec3::ZERO; MAX_POINTS];
     let mut reach = 0.0f32;
     for (j, p) in points[..n].iter().enumerate() {
         local[j] = frame.to_local(Vec3::new(p[0], p[1], p[2]));
@@ -532,7 +543,20 @@ pub fn push_out_curve(colliders: &Colliders, frame: &Frame, points: &mut [[f32; 
             reach += local[j].distance(local[j - 1]);
         }
     }
-    let done = push_out(colliders, frame, &mut local[..n], reach);
+    (n, reach)
+}
+
+/// [`push_out_curve`] told `field`, the host field's answer for the strand
+/// as it is, when known: the same bits.
+pub fn push_out_curve_known(
+    colliders: &Colliders,
+    frame: &Frame,
+    points: &mut [[f32; 4]],
+    field: Option<bool>,
+) -> PushOut {
+    let mut local = [Vec3::ZERO; MAX_POINTS];
+    let (n, reach) = curve_local(frame, points, &mut local);
+    let done = push_out_known(colliders, frame, &mut local[..n], reach, field);
     if done == PushOut::Clear {
         return done;
     }

@@ -9,7 +9,10 @@
 //! records or their bounds, the output), then runs any ranges of strands
 //! without a further check or failure, on any threads.
 
-use crate::collide::{push_out_curve, Colliders};
+use crate::collide::{
+    curve_local, field_verdicts, push_out_curve, push_out_curve_known, Colliders, FIELD_BATCH,
+    MAX_POINTS,
+};
 use crate::curve::{cut, WHOLE};
 use crate::interp::posed::PosedFrame;
 use crate::interp::strand::{strand_n, EndPoints, ExpandParams, Lanes, MAX_STRAND_POINTS};
@@ -18,6 +21,7 @@ use crate::surface::frame::FaceBasis;
 use crate::surface::frame::{self, Frame, FRAME_LANES};
 use crate::Error;
 use core::ops::Range;
+use glam::Vec3;
 
 /// One expansion, checked: a posed frame, strands that fit it, parameters
 /// and an output layout. [`ExpandJob::run`] then writes any range of the
@@ -235,6 +239,9 @@ fn fill_all<const N: usize>(
         frames: [Frame::default(); FRAME_LANES],
     };
     let n = strands.len();
+    if filler.push.is_some_and(|p| p.colliders.field.is_some()) {
+        return fill_batched::<N>(&mut filler, n, per, out, stride);
+    }
     // packed float4 output is written in place
     if stride == 16 {
         if let Ok(all) = bytemuck::try_cast_slice_mut::<u8, [f32; 4]>(&mut out[..n * per * 16]) {
@@ -250,6 +257,53 @@ fn fill_all<const N: usize>(
         let region = &mut out[s * per * stride..];
         for (j, p) in buffer[..per].iter().enumerate() {
             region[j * stride..j * stride + 16].copy_from_slice(bytemuck::bytes_of(p));
+        }
+    }
+}
+
+/// [`fill_all`] for strands pushed out of colliders with a host field:
+/// [`FIELD_BATCH`] strands at a time are made and cut, the field asked
+/// once whether each strand to push is clear, then each pushed and
+/// written. The bits of [`Filler::fill`] strand by strand.
+#[inline(never)]
+fn fill_batched<const N: usize>(
+    filler: &mut Filler,
+    n: usize,
+    per: usize,
+    out: &mut [u8],
+    stride: usize,
+) {
+    let mut curves = [[[0.0f32; 4]; MAX_STRAND_POINTS + 2]; FIELD_BATCH];
+    let mut frames = [Frame::default(); FIELD_BATCH];
+    let mut pushed = [false; FIELD_BATCH];
+    let mut locals = [[Vec3::ZERO; MAX_POINTS]; FIELD_BATCH];
+    let mut counts = [0usize; FIELD_BATCH];
+    let mut verdicts = [None; FIELD_BATCH];
+    for start in (0..n).step_by(FIELD_BATCH) {
+        let batch = FIELD_BATCH.min(n - start);
+        for i in 0..batch {
+            let curve = &mut curves[i][..per];
+            pushed[i] = filler.fill_cut::<N>(start + i, curve, &mut frames[i]);
+            if pushed[i] {
+                let points = filler.pushed_points(curve);
+                counts[i] = curve_local(&frames[i], points, &mut locals[i]).0;
+            }
+        }
+        let colliders = filler.push.map(|p| p.colliders);
+        field_verdicts(
+            colliders.unwrap_or(&Colliders::default()),
+            |i| pushed[i].then(|| (frames[i], &locals[i][..counts[i]])),
+            &mut verdicts[..batch],
+        );
+        for i in 0..batch {
+            let curve = &mut curves[i][..per];
+            if pushed[i] {
+                filler.push_and_pin(curve, &frames[i], verdicts[i]);
+            }
+            let region = &mut out[(start + i) * per * stride..];
+            for (j, p) in curve.iter().enumerate() {
+                region[j * stride..j * stride + 16].copy_from_slice(bytemuck::bytes_of(p));
+            }
         }
     }
 }
@@ -308,6 +362,62 @@ impl Filler<'_, '_> {
         if let Some(p) = push {
             push_out_curve(p.colliders, &self.frames[slot], points);
         }
+        if pinned {
+            curve[0] = curve[1];
+            curve[n + 1] = curve[n];
+        }
+    }
+
+    /// [`fill`](Self::fill) up to the push-out: strand `s` made and cut
+    /// into `curve`, its root frame into `frame`; true when it is to be
+    /// pushed ([`push_and_pin`](Self::push_and_pin) finishes it then).
+    fn fill_cut<const N: usize>(
+        &mut self,
+        s: usize,
+        curve: &mut [[f32; 4]],
+        frame: &mut Frame,
+    ) -> bool {
+        let push = self.push.is_some_and(|p| p.mask[s] != 0);
+        let trim = self.trim;
+        // the push is left out of `fill` by leaving the strand whole there
+        // and cutting it here, as `fill` does
+        let kept = self.push.take();
+        self.trim = None;
+        self.fill::<N>(s, curve);
+        (self.push, self.trim) = (kept, trim);
+        *frame = self.frames[s % FRAME_LANES];
+        let length = trim.map_or(WHOLE, |t| t[s]);
+        if length != WHOLE || push {
+            let pinned = self.params.end_points == EndPoints::Pinned;
+            let n = self.params.points_per_strand;
+            let points = &mut curve[pinned as usize..pinned as usize + n];
+            cut(points, length);
+            if !push && pinned {
+                curve[0] = curve[1];
+                curve[n + 1] = curve[n];
+            }
+        }
+        push
+    }
+
+    /// The points of a strand's curve that its push-out moves (the pinned
+    /// ends left out).
+    fn pushed_points<'c>(&self, curve: &'c [[f32; 4]]) -> &'c [[f32; 4]] {
+        let pinned = self.params.end_points == EndPoints::Pinned;
+        &curve[pinned as usize..pinned as usize + self.params.points_per_strand]
+    }
+
+    /// The rest of [`fill`](Self::fill) for a strand [`fill_cut`](Self::fill_cut)
+    /// left to push: its push-out on `frame` told the host field's answer
+    /// `field`, then its pinned ends.
+    fn push_and_pin(&self, curve: &mut [[f32; 4]], frame: &Frame, field: Option<bool>) {
+        let Some(p) = self.push else {
+            return;
+        };
+        let pinned = self.params.end_points == EndPoints::Pinned;
+        let n = self.params.points_per_strand;
+        let points = &mut curve[pinned as usize..pinned as usize + n];
+        push_out_curve_known(p.colliders, frame, points, field);
         if pinned {
             curve[0] = curve[1];
             curve[n + 1] = curve[n];
@@ -892,5 +1002,109 @@ mod tests {
             let tip_b = straight[i * CVS + CVS - 1];
             assert!((0..3).all(|c| (tip_a[c] - tip_b[c]).abs() < 1e-5));
         }
+    }
+
+    /// A ball field over the graded plane, in the strands' way.
+    struct Ball;
+
+    impl crate::collide::SignedDistance for Ball {
+        fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
+            for (p, d) in points.iter().zip(out) {
+                *d = Vec3::from(*p).distance(Vec3::new(0.5, 0.5, 0.06)) - 0.1;
+            }
+        }
+    }
+
+    #[test]
+    fn strands_pushed_out_of_a_host_field_in_batches_keep_their_bits() {
+        let s = Scene::plane(200, 3000);
+        let b = s.bind(&BindParams::default());
+        let g = plain_grooms(s.strands.len());
+        let strands = Strands {
+            roots: &s.strands,
+            bindings: &b,
+            grooms: &g,
+        };
+        let bounds = StrandBounds::new(&strands).unwrap();
+        let mask: Vec<u8> = (0..s.strands.len()).map(|i| (i % 3 != 0) as u8).collect();
+        let trim: Vec<u16> = (0..s.strands.len())
+            .map(|i| if i % 5 == 0 { 40_000 } else { WHOLE })
+            .collect();
+        let ball = Ball;
+        let colliders = Colliders {
+            field: Some(&ball),
+            ..Colliders::default()
+        };
+        for end_points in [EndPoints::Raw, EndPoints::Pinned] {
+            let params = ExpandParams {
+                end_points,
+                ..raw(CVS)
+            };
+            let per = params.output_points();
+            let n = s.strands.len();
+            s.prepared(CVS, |frame| {
+                // through the batches, packed and strided
+                let mut packed = vec![[0.0f32; 4]; n * per];
+                let job = ExpandJob::new(frame, strands, &bounds, &params, n * per * 16, 16)
+                    .unwrap()
+                    .pushed(&mask, &colliders)
+                    .unwrap()
+                    .trimmed(&trim)
+                    .unwrap();
+                job.run(0..n, bytemuck::cast_slice_mut(&mut packed));
+                let mut strided = vec![[0.0f32; 5]; n * per];
+                let wide = ExpandJob::new(frame, strands, &bounds, &params, n * per * 20, 20)
+                    .unwrap()
+                    .pushed(&mask, &colliders)
+                    .unwrap()
+                    .trimmed(&trim)
+                    .unwrap();
+                wide.run(0..n, bytemuck::cast_slice_mut(&mut strided));
+                // strand by strand, each asking the field for itself
+                let mut filler = Filler {
+                    strands: &strands,
+                    trim: Some(&trim),
+                    push: Some(Push {
+                        mask: &mask,
+                        colliders: &colliders,
+                    }),
+                    guides: frame,
+                    params: &params,
+                    lanes: Lanes::new(params.points_per_strand),
+                    basis: None,
+                    frames: [Frame::default(); FRAME_LANES],
+                };
+                let mut one = vec![[0.0f32; 4]; n * per];
+                for (k, curve) in one.chunks_exact_mut(per).enumerate() {
+                    filler.fill::<0>(k, curve);
+                }
+                assert!(packed == one, "{end_points:?}: packed");
+                let narrow: Vec<[f32; 4]> =
+                    strided.iter().map(|p| [p[0], p[1], p[2], p[3]]).collect();
+                assert!(narrow == one, "{end_points:?}: strided");
+                let moved = (0..n)
+                    .filter(|&k| mask[k] != 0 && trim[k] == WHOLE)
+                    .filter(|&k| {
+                        let base = filler_free_expand(frame, &strands, &params, k, per);
+                        base != one[k * per..(k + 1) * per]
+                    })
+                    .count();
+                assert!(moved > 10, "{moved} strands pushed");
+            });
+        }
+    }
+
+    /// Strand `k` expanded with no trim and no push.
+    fn filler_free_expand(
+        frame: &PosedFrame,
+        strands: &Strands,
+        params: &ExpandParams,
+        k: usize,
+        per: usize,
+    ) -> Vec<[f32; 4]> {
+        let mut out = vec![[0.0f32; 4]; per];
+        let one = strands.range(k..k + 1);
+        expand(frame, &one, params, bytemuck::cast_slice_mut(&mut out), 16).unwrap();
+        out
     }
 }
