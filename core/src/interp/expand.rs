@@ -10,8 +10,7 @@
 //! without a further check or failure, on any threads.
 
 use crate::collide::{
-    curve_local, field_verdicts, push_out_curve, push_out_curve_known, Colliders, FIELD_BATCH,
-    MAX_POINTS,
+    curve_local, field_verdicts, push_out_curve_known, Colliders, FIELD_BATCH, MAX_POINTS,
 };
 use crate::curve::{cut, WHOLE};
 use crate::interp::posed::PosedFrame;
@@ -283,7 +282,8 @@ fn fill_batched<const N: usize>(
         let batch = FIELD_BATCH.min(n - start);
         for i in 0..batch {
             let curve = &mut curves[i][..per];
-            pushed[i] = filler.fill_cut::<N>(start + i, curve, &mut frames[i]);
+            pushed[i] = filler.fill_cut::<N>(start + i, curve);
+            frames[i] = filler.frames[(start + i) % FRAME_LANES];
             if pushed[i] {
                 let points = filler.pushed_points(curve);
                 counts[i] = curve_local(&frames[i], points, &mut locals[i]).0;
@@ -329,6 +329,17 @@ impl Filler<'_, '_> {
     /// square-root chains overlap (see `frame::frames`).
     #[inline(always)]
     fn fill<const N: usize>(&mut self, s: usize, curve: &mut [[f32; 4]]) {
+        if self.fill_cut::<N>(s, curve) {
+            self.push_and_pin(curve, &self.frames[s % FRAME_LANES], None);
+        }
+    }
+
+    /// [`fill`](Self::fill) up to the push-out: strand `s` made, cut and
+    /// (unless it is to be pushed) pinned into `curve`, its root frame in
+    /// `self.frames[s % FRAME_LANES]`; true when it is to be pushed
+    /// ([`push_and_pin`](Self::push_and_pin) finishes it then).
+    #[inline(always)]
+    fn fill_cut<const N: usize>(&mut self, s: usize, curve: &mut [[f32; 4]]) -> bool {
         let slot = s % FRAME_LANES;
         if slot == 0 {
             let roots = &self.strands.roots[s..];
@@ -351,51 +362,16 @@ impl Filler<'_, '_> {
             curve,
         );
         let length = self.trim.map_or(WHOLE, |t| t[s]);
-        let push = self.push.filter(|p| p.mask[s] != 0);
-        if length == WHOLE && push.is_none() {
-            return;
+        let push = self.push.is_some_and(|p| p.mask[s] != 0);
+        if length == WHOLE && !push {
+            return false;
         }
         let pinned = self.params.end_points == EndPoints::Pinned;
         let n = self.params.points_per_strand;
-        let points = &mut curve[pinned as usize..pinned as usize + n];
-        cut(points, length);
-        if let Some(p) = push {
-            push_out_curve(p.colliders, &self.frames[slot], points);
-        }
-        if pinned {
+        cut(&mut curve[pinned as usize..pinned as usize + n], length);
+        if !push && pinned {
             curve[0] = curve[1];
             curve[n + 1] = curve[n];
-        }
-    }
-
-    /// [`fill`](Self::fill) up to the push-out: strand `s` made and cut
-    /// into `curve`, its root frame into `frame`; true when it is to be
-    /// pushed ([`push_and_pin`](Self::push_and_pin) finishes it then).
-    fn fill_cut<const N: usize>(
-        &mut self,
-        s: usize,
-        curve: &mut [[f32; 4]],
-        frame: &mut Frame,
-    ) -> bool {
-        let push = self.push.is_some_and(|p| p.mask[s] != 0);
-        let trim = self.trim;
-        // the push is left out of `fill` by leaving the strand whole there
-        // and cutting it here, as `fill` does
-        let kept = self.push.take();
-        self.trim = None;
-        self.fill::<N>(s, curve);
-        (self.push, self.trim) = (kept, trim);
-        *frame = self.frames[s % FRAME_LANES];
-        let length = trim.map_or(WHOLE, |t| t[s]);
-        if length != WHOLE || push {
-            let pinned = self.params.end_points == EndPoints::Pinned;
-            let n = self.params.points_per_strand;
-            let points = &mut curve[pinned as usize..pinned as usize + n];
-            cut(points, length);
-            if !push && pinned {
-                curve[0] = curve[1];
-                curve[n + 1] = curve[n];
-            }
         }
         push
     }
