@@ -341,7 +341,7 @@ std::vector<unsigned char> groom_file(const Mesh& rest, const std::vector<Pelage
   for (size_t k = 0; k < n; ++k) roots[k] = stamped[order[k]];
   const PelageGuidesDesc rest_guides = guides_desc(guide_roots, rest_points, cvs);
   PelageBindParams bp = pelage_bind_params_defaults();
-  bp.thread_count = 0;
+  bp.run.thread_count = 0;
   const std::vector<PelageStrandBinding> bindings = bind(rest, rest_guides, roots.data(), n, bp);
   PelageGroomMaps maps = pelage_groom_maps_defaults();
   maps.root_width.constant = 0.0016f, maps.tip_width.constant = 0.0003f;
@@ -365,7 +365,7 @@ PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, c
                         const PelageExpandParams& params) {
   const PelageMeshDesc desc = rest.desc();
   PelageExpandParams all_cores = params;
-  all_cores.thread_count = 0;
+  all_cores.run.thread_count = 0;
   size_t bytes = 0;
   check(pelage_settle_size(&desc, rest_guides.guide_count, &all_cores, &bytes), "pelage_settle_size");
   std::vector<unsigned char> arena(bytes);
@@ -379,7 +379,7 @@ PelageSettleInfo settle(const Mesh& rest, const PelageGuidesDesc& rest_guides, c
 Frame::Frame(const Mesh& mesh, const PelageGuidesDesc& guides, const PelageExpandParams& params) {
   const PelageMeshDesc desc = mesh.desc();
   check(pelage_frame_new(&desc, guides.guide_count, params.points_per_strand, &frame_), "pelage_frame_new");
-  const PelageStatus s = pelage_frame_set_guides(frame_, &guides, params.thread_count);
+  const PelageStatus s = pelage_frame_set_guides(frame_, &guides, params.run);
   if (s != PELAGE_STATUS_OK) {
     pelage_frame_free(frame_);
     check(s, "pelage_frame_set_guides");

@@ -204,7 +204,7 @@ int main(int argc, char** argv) try {
   clock = {};
   PelageBindInfo bind_info{};
   PelageBindParams bind_params = pelage_bind_params_defaults();
-  bind_params.thread_count = 0;  // all cores; the bindings are the same for any count
+  bind_params.run.thread_count = 0;  // all cores; the bindings are the same for any count
   const std::vector<PelageStrandBinding> bindings =
       creature::bind(mesh, guides, roots.data(), n, bind_params, &bind_info);
   std::snprintf(note, sizeof note, "%u orphans, guide spacing %.4f", bind_info.orphans,
@@ -230,7 +230,7 @@ int main(int argc, char** argv) try {
   ep.points_per_strand = 16;
   ep.end_points = PELAGE_END_POINTS_PINNED;
   ep.orphan_length = bind_info.mean_guide_length;
-  ep.thread_count = 0;  // all cores
+  ep.run.thread_count = 0;  // all cores
   clock = {};
   const PelageSettleInfo settled = creature::settle(mesh, guides, roots.data(), bindings.data(), grooms.data(), n, ep);
   std::snprintf(note, sizeof note, "%u hairs lifted out of the body (%u turned, %u shortened, %u unresolved)",
@@ -370,7 +370,7 @@ int main(int argc, char** argv) try {
       PelageStepParams step = pelage_step_params_defaults();
       step.colliders = &colliders;
       creature::check(pelage_sim_step(sim, frame.get(), &step, nullptr), "pelage_sim_step");
-      creature::check(pelage_frame_set_sim_guides(frame.get(), sim, 0), "pelage_frame_set_sim_guides");
+      creature::check(pelage_frame_set_sim_guides(frame.get(), sim, PelageRun{0, nullptr, nullptr}), "pelage_frame_set_sim_guides");
       sim_s.push_back(step_clock.seconds());
       step_clock = {};
       expander.expand(frame, fur, 0, n, points.data(), per * n);

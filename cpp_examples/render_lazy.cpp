@@ -94,7 +94,7 @@ void write_files(const creature::Mesh& rest, uint32_t hairs, const std::string& 
   creature::check(pelage_guide_cache_size(r.size(), kCvs, kSamples, 0, &most), "pelage_guide_cache_size");
   std::vector<unsigned char> cache(most);
   const PelageFrame samples[kSamples] = {frames[0]->get(), frames[1]->get()};
-  creature::check(pelage_guide_cache_write(&set, samples, kSamples, 0, cache.data(), most, &written),
+  creature::check(pelage_guide_cache_write(&set, samples, kSamples, 0, PelageRun{1, nullptr, nullptr}, cache.data(), most, &written),
                   "pelage_guide_cache_write");
   creature::write_file(cache_path, cache.data(), written);
   std::printf("pipeline: %zu hairs in %zu patches; groom file %.1f MB, frame cache (%d samples) %.1f KB (dense: %.1f "
@@ -142,20 +142,20 @@ void load_fur(Fur& fur, const std::string& groom_path, const std::string& cache_
   fur.params = pelage_expand_params_defaults();
   fur.params.points_per_strand = info.points_per_guide;
   fur.per = fur.params.points_per_strand + 2;  // pinned ends
-  fur.params.thread_count = 0;
+  fur.params.run.thread_count = 0;
   // a frame per shutter sample, on that sample's mesh; a box per sample
   fur.boxes.resize(6 * kSamples * info.patch_count);
   for (int k = 0; k < kSamples; ++k) {
     const PelageMeshDesc desc = meshes[k].desc();
     creature::check(pelage_frame_new(&desc, info.guide_count, info.points_per_guide, &fur.frames[k]),
                     "pelage_frame_new");
-    creature::check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), fur.frames[k], 0),
+    creature::check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), fur.frames[k], PelageRun{0, nullptr, nullptr}),
                     "pelage_guide_cache_read");
     creature::check(pelage_patch_boxes(fur.frames[k], &strands, &fur.params, fur.patches.data(), info.patch_count,
                                        &fur.boxes[6 * k * info.patch_count]),
                     "pelage_patch_boxes");
   }
-  fur.params.thread_count = 1;  // a patch is expanded on the ray's thread
+  fur.params.run.thread_count = 1;  // a patch is expanded on the ray's thread
 }
 
 // One patch's curves, built the first time a ray enters its box.
@@ -386,7 +386,7 @@ int main(int argc, char** argv) try {
     clock = {};
     std::vector<float> points[kSamples];
     PelageExpandParams ep = fur.params;
-    ep.thread_count = 0;
+    ep.run.thread_count = 0;
     for (int k = 0; k < kSamples; ++k) {
       points[k].resize(4 * fur.per * n);
       const PelageCurves all{points[k].data(), 16, fur.per * n, nullptr, nullptr};

@@ -164,7 +164,7 @@ size_t write_trim_records(const std::string& path, PelageFrame frame, const crea
   const PelageMeshDesc cloth_desc = cloth.desc();
   std::vector<PelageTrimRecord> records(guides);
   size_t count = 0, bytes = 0;
-  check(pelage_trim_find(frame, &cloth_desc, &colliders, 0, records.data(), records.size(), &count),
+  check(pelage_trim_find(frame, &cloth_desc, &colliders, PelageRun{0, nullptr, nullptr}, records.data(), records.size(), &count),
         "pelage_trim_find");
   check(pelage_trim_records_size(count, &bytes), "pelage_trim_records_size");
   std::vector<unsigned char> file(bytes);
@@ -226,11 +226,11 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
       step.dt = 1.0f / (kFps * kSamples);
       step.colliders = &colliders;
       check(pelage_sim_step(sim.get(), frame, &step, nullptr), "pelage_sim_step");
-      check(pelage_frame_set_sim_guides(frame, sim.get(), 0), "pelage_frame_set_sim_guides");
+      check(pelage_frame_set_sim_guides(frame, sim.get(), PelageRun{0, nullptr, nullptr}), "pelage_frame_set_sim_guides");
       met = std::max(met, write_trim_records(records_path(dir, f, k), frame, meshes[k], colliders, set.guide_count));
     }
     const PelageFrame at[kSamples] = {samples[0]->get(), samples[1]->get()};
-    check(pelage_guide_cache_write(&set, at, kSamples, 0, cache.data(), cache.size(), &bytes),
+    check(pelage_guide_cache_write(&set, at, kSamples, 0, PelageRun{1, nullptr, nullptr}, cache.data(), cache.size(), &bytes),
           "pelage_guide_cache_write");
     creature::write_file(frame_path(dir, f, ".pguide"), cache.data(), bytes);
     write_meshes(frame_path(dir, f, ".mesh"), meshes);
@@ -333,7 +333,7 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
   const PelageGuideSet set = asset.set();
   PelageExpandParams ep = pelage_expand_params_defaults();
   ep.points_per_strand = asset.info.points_per_guide;
-  ep.thread_count = 0;
+  ep.run.thread_count = 0;
   const creature::Expander expander(ep);
   const size_t n = asset.info.strand_count, per = expander.points_per_curve();
   const PelageStrandEdits edits{lengths.data(), nullptr};
@@ -343,7 +343,7 @@ void render_frame(const Asset& asset, const std::vector<uint16_t>& lengths, crea
     PelageFrame raw = nullptr;
     check(pelage_frame_new(&desc, set.guide_count, set.points_per_guide, &raw), "pelage_frame_new");
     const FramePtr frame(raw, pelage_frame_free);
-    check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), frame.get(), 0),
+    check(pelage_guide_cache_read(cache.data(), cache.size(), &set, uint32_t(k), frame.get(), PelageRun{0, nullptr, nullptr}),
           "pelage_guide_cache_read");
     points[k].resize(4 * per * n);
     const PelageCurves curves{points[k].data(), 16, per * n, nullptr, nullptr};

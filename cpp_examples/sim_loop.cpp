@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
     sp.seed = 2;
     const std::vector<PelageRoot> hairs = creature::stamp(rest, sp);
     PelageBindParams bp = pelage_bind_params_defaults();
-    bp.thread_count = 0;
+    bp.run.thread_count = 0;
     const std::vector<PelageStrandBinding> bindings = creature::bind(rest, guides, hairs.data(), hairs.size(), bp);
     const std::vector<PelageStrandGroom> grooms =
         creature::groom(rest, pelage_groom_maps_defaults(), hairs.data(), hairs.size());
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
     check(pelage_sim_new(&rest_pose, &params, PelageArena{memory.data(), bytes}, &sim), "pelage_sim_new");
 
     PelageExpandParams ep = pelage_expand_params_defaults();
-    ep.thread_count = 0;
+    ep.run.thread_count = 0;
     creature::Expander expander(ep);
     std::vector<float> curves(4 * expander.points_per_curve() * hairs.size());
     creature::Mesh posed = rest;
@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
       PelageStepParams step = pelage_step_params_defaults();
       step.colliders = &colliders;
       check(pelage_sim_step(sim, frame.get(), &step, nullptr), "pelage_sim_step");
-      check(pelage_frame_set_sim_guides(frame.get(), sim, 0), "pelage_frame_set_sim_guides");
+      check(pelage_frame_set_sim_guides(frame.get(), sim, PelageRun{0, nullptr, nullptr}), "pelage_frame_set_sim_guides");
       const auto t2 = std::chrono::steady_clock::now();
       expander.expand(frame, fur, 0, hairs.size(), curves.data(), curves.size() / 4);
       const auto t3 = std::chrono::steady_clock::now();

@@ -36,8 +36,20 @@
  *            handles it takes it only reads;
  *   frees H  releases H (NULL does nothing): no call may use H during or
  *            after it.
- * Calls with a thread_count split their work over that many threads of
- * their own (0: every core); the results do not depend on it.
+ *
+ * Long calls. Every call that can take long (stamp, bind, settle, expand,
+ * the step, trimming, posing a frame, building its colliders, cache encode
+ * and decode) takes a PelageRun, by value or as its parameters' `run`: the
+ * threads of its own it splits the work over (0: every core; the results
+ * do not depend on it) and an optional progress callback, called on the
+ * calling thread with a never-decreasing share of the work, that cancels
+ * the call (PELAGE_STATUS_CANCELLED) when it returns false. A zeroed
+ * PelageRun is every core, no callback.
+ *
+ * Names. pelage_<object>_<verb>; a stage of the pipeline (stamp, bind,
+ * settle, expand, trim) is its own object, so its entry point is
+ * pelage_<stage> and its sizing pelage_<stage>_size; a noun in the verb's
+ * place is what the call gets (pelage_patch_boxes).
  */
 
 #ifndef PELAGE_H
@@ -167,6 +179,23 @@ typedef struct PelageRegionMap {
 // the work done in [0, 1]. Returns true to go on, false to cancel.
 typedef bool (*PelageProgressFn)(void *user_data, double fraction);
 
+// How a long call runs: the threads it splits its work over and the
+// progress callback that hears from it and may cancel it. A
+// zero-initialised PelageRun (or `pelage_run_defaults()`) uses every core
+// and reports nothing.
+typedef struct PelageRun {
+  // Threads of the call's own to split the work over: 0 = every core,
+  // 1 = the calling thread only; at most max(cores, 64). The results are
+  // bitwise identical for any value.
+  uint32_t thread_count;
+  // Optional progress callback (NULL: none), called on the calling
+  // thread with a never-decreasing share of the work done (0 first, 1
+  // last); returning false cancels (PELAGE_STATUS_CANCELLED).
+  PelageProgressFn progress;
+  // Passed unchanged to `progress`.
+  void *progress_user_data;
+} PelageRun;
+
 // Binding parameters; start from pelage_bind_params_defaults().
 typedef struct PelageBindParams {
   // Fewest guides per strand when that many qualify (>= 1); strands with
@@ -190,15 +219,9 @@ typedef struct PelageBindParams {
   float max_wrap_slope;
   // Parting regions (per-vertex ids or an id texture); kind NONE by default.
   struct PelageRegionMap regions;
-  // Threads pelage_bind splits the strands over: 0 = all cores, 1 = the
-  // calling thread only. The bindings are bitwise identical for any value.
-  uint32_t thread_count;
-  // Optional progress callback (NULL: none), called on the calling
-  // thread with a never-decreasing share of the strands bound; returning
-  // false cancels (PELAGE_STATUS_CANCELLED, nothing written).
-  PelageProgressFn progress;
-  // Passed unchanged to `progress`.
-  void *progress_user_data;
+  // Threads and progress (the share of strands bound); a cancelled call
+  // writes nothing. Defaults: 1 thread, no callback.
+  struct PelageRun run;
 } PelageBindParams;
 
 // A triangle mesh in host memory, borrowed for one call (like an Embree
@@ -330,16 +353,10 @@ typedef struct PelageExpandParams {
   // the fur covers as much: coverage `1 - exp(-n w l / A)` of n strands
   // of width w and length l over an area A depends on n w alone.
   float width_scale;
-  // Threads the call splits the strands over: 0 = all cores, 1 = the
-  // calling thread only; at most max(cores, 64). The output is bitwise
-  // identical for any value.
-  uint32_t thread_count;
-  // Optional progress callback (NULL: none), called on the calling
-  // thread with a never-decreasing share of the strands done; returning
-  // false cancels (PELAGE_STATUS_CANCELLED).
-  PelageProgressFn progress;
-  // Passed unchanged to `progress`.
-  void *progress_user_data;
+  // Threads and progress (the share of strands done). Defaults: 1
+  // thread (a renderer expands its patches on threads of its own), no
+  // callback.
+  struct PelageRun run;
 } PelageExpandParams;
 
 // One frame: the deformed mesh (copied and checked), its vertex tangents
@@ -694,9 +711,6 @@ typedef struct PelageStepParams {
   // Seconds since the last step (1e-5 <= dt <= 1; it may change from
   // step to step).
   float dt;
-  // Threads the step is split over (0: all cores); the bits do not
-  // depend on it.
-  uint32_t thread_count;
   // What the guides collide with (NULL: nothing).
   const struct PelageColliders *colliders;
   // Another simulator's curves (NULL: none): float3 world points
@@ -706,13 +720,10 @@ typedef struct PelageStepParams {
   const void *external_points;
   // Bytes between consecutive external points (>= 12, a multiple of 4).
   size_t external_stride;
-  // Optional progress callback (NULL: none), called on the calling
-  // thread before the step and after each of its phases (the advance,
-  // each link relaxation, the bend and push-out) with the share done;
-  // returning false cancels, and the step is taken back.
-  PelageProgressFn progress;
-  // Passed unchanged to `progress`.
-  void *progress_user_data;
+  // Threads and progress, heard before the step and after each of its
+  // phases (the advance, each link relaxation, the bend and push-out);
+  // a cancelled step is taken back. Defaults: every core, no callback.
+  struct PelageRun run;
 } PelageStepParams;
 
 // What a step reports.
@@ -743,15 +754,11 @@ typedef struct PelageStampParams {
   float black_scale;
   // Triangles with density below this get no roots (bald regions); 0 disables it.
   float bald_below;
-  // Optional (NULL: none). Called on the calling thread with the share of
-  // the work done, from 0 to 1, never decreasing, every few thousand
-  // triangles and after each stage; the last call, with 1, comes before
-  // any root is written. Return false to cancel: pelage_stamp then returns
-  // PELAGE_STATUS_CANCELLED and writes nothing. Like Embree's
-  // RTCProgressMonitorFunction.
-  PelageProgressFn progress;
-  // Passed unchanged to `progress`.
-  void *progress_user_data;
+  // Progress, heard every few thousand triangles and after each stage;
+  // the last report, 1, comes before any root is written, and a
+  // cancelled stamp writes nothing. The stamp runs on the calling
+  // thread: `run.thread_count` is not read.
+  struct PelageRun run;
 } PelageStampParams;
 
 // What a stamping call did.
@@ -843,8 +850,8 @@ enum PelageStatus pelage_bind_size(const struct PelageMeshDesc *rest_mesh, size_
 // per strand; inverse-distance weights that fade to zero as a guide leaves
 // the set. Writes `strand_count` records to `bindings` and, optionally,
 // `info`. Nothing is written on failure. Strands are split over
-// `params->thread_count` threads; the bindings do not depend on it.
-// `params->progress`, when set, hears the share of strands bound and may
+// `params->run.thread_count` threads; the bindings do not depend on it.
+// `params->run.progress`, when set, hears the share of strands bound and may
 // cancel; the bindings are then made in a buffer of the library's and
 // copied at the end, so a cancelled call writes nothing.
 //
@@ -873,7 +880,7 @@ enum PelageStatus pelage_expand_size(const struct PelageExpandParams *params, si
 // Expands render curves for one frame: every strand of `strands`, whose
 // records are checked on every call (a host that keeps a groom across
 // frames makes a `PelageGroom` once and calls `pelage_groom_expand`).
-// Work is split over `params->thread_count` threads; the bits do not
+// Work is split over `params->run.thread_count` threads; the bits do not
 // depend on it. Everything is validated before anything is written.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
@@ -914,33 +921,35 @@ enum PelageStatus pelage_frame_new(const struct PelageMeshDesc *mesh, size_t gui
 // Poses the frame's guides: checks `guides` (guide_count as given to
 // `pelage_frame_new`, roots on the mesh, finite points within 1e9, no
 // zero-length guide) and stores them resampled, in their root frames on
-// the frame's mesh. Split over `thread_count` threads (0: all cores); the
-// bits do not depend on it. May be called again for new guides (a
-// simulation's output). On failure the frame keeps the guides it had.
+// the frame's mesh. Runs as `run` says (progress: the share of guides
+// posed). May be called again for new guides (a simulation's output).
+// When the guides are refused the frame keeps the guides it had; once
+// they are checked, a cancelled call (or a PANIC) leaves the frame
+// without guides until the next successful call.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also guide points beyond
-// 1e9), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC (also when a worker thread cannot start: the
-// frame's guides are then unspecified until the next successful call).
+// 1e9), MISALIGNED, NON_FINITE, OUT_OF_RANGE, CANCELLED, PANIC (also when
+// a worker thread cannot start).
 //
 // Thread safety: writes `frame`.
-enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct PelageGuidesDesc *guides, uint32_t thread_count);
+enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct PelageGuidesDesc *guides, struct PelageRun run);
 
 // Sets the colliders that render strands selected by a push mask
 // (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
 // frame: `colliders` is copied; NULL clears them. Their body, when set, is
-// this frame's mesh, built once here, split over `thread_count` threads
-// (0: all cores; the bits do not depend on it): `pelage_sim_step` on this
-// frame collides with it rather than building its own. A distance
+// this frame's mesh, built once here as `run` says (progress: the body's
+// stages): `pelage_sim_step` on this frame collides with it rather than
+// building its own. A distance
 // callback is kept: it and its user data must stay valid until the
 // colliders are replaced or the frame is freed.
 // On failure the frame keeps the colliders it had.
 //
 // Returns OK, NULL_PARAMETER, NON_FINITE (a collider's value),
 // INVALID_ARGUMENT (a collider, a body of this frame's mesh too large),
-// MISALIGNED, OUT_OF_MEMORY, PANIC.
+// MISALIGNED, CANCELLED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: writes `frame`.
-enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders, uint32_t thread_count);
+enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders, struct PelageRun run);
 
 // Releases a frame. NULL is accepted and does nothing.
 //
@@ -1084,15 +1093,18 @@ enum PelageStatus pelage_guide_cache_size(size_t guide_count, uint32_t points_pe
 // Quantized (`exact` 0: every root-frame coordinate within 2^-15 of the
 // guide's length) or exact float32 (`exact` 1). `out` holds `capacity`
 // bytes (`pelage_guide_cache_size`); the bytes written go to
-// `*written`. On failure `out` is untouched.
+// `*written`. On failure `out` is untouched, except on CANCELLED, when it
+// holds part of a cache. Codes on the calling thread (`run.thread_count`
+// is not read), reporting the share of guide blocks coded to
+// `run.progress`.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts that differ from
 // the guide set's, a frame with no guides, sample count, `exact` other
 // than 0 or 1), NON_FINITE,
-// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, CANCELLED, PANIC.
 //
 // Thread safety: reads the `samples` frames.
-enum PelageStatus pelage_guide_cache_write(const struct PelageGuideSet *guides, const PelageFrame *samples, uint32_t sample_count, uint32_t exact, void *out, size_t capacity, size_t *written);
+enum PelageStatus pelage_guide_cache_write(const struct PelageGuideSet *guides, const PelageFrame *samples, uint32_t sample_count, uint32_t exact, struct PelageRun run, void *out, size_t capacity, size_t *written);
 
 // Checks a guide cache's framing (magic, version, length, CRC), counts and
 // offset table, and writes its header to `*info`.
@@ -1106,21 +1118,23 @@ enum PelageStatus pelage_guide_cache_info(const void *data, size_t data_bytes, s
 // that sample's deformed mesh for the guide set's counts): its posed
 // guides, ready for `pelage_groom_expand`. The cache must have been coded
 // for `guides` (the same groom id). The whole cache is checked before the
-// frame is written; on failure the frame keeps the guides it had.
+// frame is written; on failure the frame keeps the guides it had, except
+// that a call cancelled (or a PANIC) while it poses the guides, in the
+// second half of its progress, leaves the frame without guides until the
+// next successful call.
 //
-// Checks and decodes over `thread_count` threads (0: all cores); the bits
-// do not depend on it.
+// Checks and decodes as `run` says (progress: the share of blocks
+// unpacked, then of guides posed).
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
 // sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA
 // (also a coding its version does not have: a version 1 label on a guide
 // coded from the one before it), VERSION_MISMATCH, MISALIGNED,
-// OUT_OF_MEMORY, PANIC (also when a worker thread cannot
-// start: the frame's guides are then unspecified until the next
-// successful call).
+// CANCELLED, OUT_OF_MEMORY, PANIC (also when a worker thread cannot
+// start).
 //
 // Thread safety: writes `frame`.
-enum PelageStatus pelage_guide_cache_read(const void *data, size_t data_bytes, const struct PelageGuideSet *guides, uint32_t sample, PelageFrame frame, uint32_t thread_count);
+enum PelageStatus pelage_guide_cache_read(const void *data, size_t data_bytes, const struct PelageGuideSet *guides, uint32_t sample, PelageFrame frame, struct PelageRun run);
 
 // A user mask over the body (paper 3.3: the regions where render hairs are
 // pushed out, or re-simulated elsewhere): evaluates `map` on `mesh` at
@@ -1205,8 +1219,8 @@ enum PelageStatus pelage_settle_size(const struct PelageMeshDesc *rest_mesh, siz
 // lose their clump pull, are turned about other axes, then shortened. pelage_expand applies `lift` in the
 // strand's own frame at every frame. `grooms` is updated in place; it is
 // validated with everything else first and left untouched on failure.
-// Work is split over `params->thread_count` threads; the result does not
-// depend on it. `params->progress`, when set, hears the share of strands
+// Work is split over `params->run.thread_count` threads; the result does not
+// depend on it. `params->run.progress`, when set, hears the share of strands
 // done on the calling thread and may cancel.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9,
@@ -1305,22 +1319,22 @@ enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct
 // simulation's points_per_guide points per strand, made for as many
 // guides as the simulation has; `sim` must have stepped since it was
 // created, reset or restored (after a PANIC from pelage_sim_step, reset
-// or restore it first: a half-made step is not refused here). Split over
-// `thread_count` threads (0: all cores); the bits do not depend on it. The
-// guides are checked as they are written: when one is refused, the frame
-// has no guides (expansions from it are refused) until guides are set
-// again; when the frame or the simulation is refused (the counts, no
-// step yet), the frame keeps the guides it had.
+// or restore it first: a half-made step is not refused here). Runs as
+// `run` says (progress: the share of guides posed). The guides are
+// checked as they are written: when one is refused or the call is
+// cancelled, the frame has no guides (expansions from it are refused)
+// until guides are set again; when the frame or the simulation is refused
+// (the counts, no step yet), the frame keeps the guides it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
 // another point or guide count, no step yet; a simulated guide with a
 // point beyond 1e9 or of zero length, on a collapsed root triangle, as
 // pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
-// step), PANIC (also when a worker thread cannot start: the frame then
-// has no guides until guides are set again).
+// step), CANCELLED, PANIC (also when a worker thread cannot start: the
+// frame then has no guides until guides are set again).
 //
 // Thread safety: writes `frame`; reads `sim`.
-enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, uint32_t thread_count);
+enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, struct PelageRun run);
 
 // Writes the posed guides of the last step (world space), or of the step
 // a restored state was saved after: `points_per_guide` float3 per guide,
@@ -1406,7 +1420,7 @@ enum PelageStatus pelage_stamp_size(const struct PelageMeshDesc *mesh, const str
 // `*root_count` is the number written and `info` (optional, may be NULL) is
 // filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
 // of roots needed when the root buffer was the limit; nothing else is written.
-// `params->progress`, when set, reports progress and can cancel the call
+// `params->run.progress`, when set, reports progress and can cancel the call
 // (PELAGE_STATUS_CANCELLED, nothing written).
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
@@ -1416,6 +1430,11 @@ enum PelageStatus pelage_stamp_size(const struct PelageMeshDesc *mesh, const str
 // Thread safety: free.
 enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct PelageStampParams *params, struct PelageArena arena, struct PelageRoot *roots, size_t roots_capacity, size_t *root_count, struct PelageStampInfo *info);
 
+// Every core, no progress callback.
+//
+// Thread safety: free.
+struct PelageRun pelage_run_defaults(void);
+
 // Finds where each posed guide of `frame` first meets `cloth` (a triangle
 // mesh such as a shirt, deformed to this frame; NULL: none) or enters one
 // of `colliders` (NULL: none; the body, when set, is the frame's mesh),
@@ -1423,16 +1442,17 @@ enum PelageStatus pelage_stamp(const struct PelageMeshDesc *mesh, const struct P
 // segment, on the outside. Writes one record per guide that meets
 // something, in guide order, to `records` (capacity `capacity`; the
 // frame's guide count always suffices) and their number to
-// `*record_count`. Split over `thread_count` threads (0: all cores); the
-// records do not depend on it. On failure nothing else is written.
+// `*record_count`. Runs as `run` says (progress: the body's build, when
+// the colliders have it, as the first fifth, then the share of guides
+// walked). On failure nothing else is written.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
 // collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
 // CAPACITY_EXCEEDED (`capacity`; `*record_count` gets the count
-// needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
+// needed), MISALIGNED, CANCELLED, OUT_OF_MEMORY, PANIC.
 //
 // Thread safety: reads `frame`.
-enum PelageStatus pelage_trim_find(PelageFrame frame, const struct PelageMeshDesc *cloth, const struct PelageColliders *colliders, uint32_t thread_count, struct PelageTrimRecord *records, size_t capacity, size_t *record_count);
+enum PelageStatus pelage_trim_find(PelageFrame frame, const struct PelageMeshDesc *cloth, const struct PelageColliders *colliders, struct PelageRun run, struct PelageTrimRecord *records, size_t capacity, size_t *record_count);
 
 // The shot pass, one frame at a time: each of `groom`'s strands' stored
 // lengths in `lengths` (`length_count` = the groom's strand count) becomes
@@ -1460,7 +1480,7 @@ enum PelageStatus pelage_trim_shortest(PelageGroom groom, const struct PelageTri
 
 // The shot pass on the hairs themselves, one frame at a time: each of
 // `groom`'s strands is expanded on `frame` with `params` (its
-// `thread_count` splits the strands; the lengths do not depend on it),
+// `run.thread_count` splits the strands; the lengths do not depend on it),
 // and its stored length in `lengths` (`length_count` = the groom's strand
 // count) becomes the shorter of itself and where the strand's own curve
 // first meets `cloth` (NULL: none) or enters one of `colliders` (NULL:
@@ -1472,8 +1492,9 @@ enum PelageStatus pelage_trim_shortest(PelageGroom groom, const struct PelageTri
 // more pass that changes some, then one that changes none, on the test
 // shot): then no cut hair crosses the cloth on any frame. Store the
 // result with `pelage_trim_lengths_write` as the shot's (or one frame's,
-// to reduce later) lengths. `params->progress`, when set, hears the share
-// of strands done on the calling thread and may cancel. On failure
+// to reduce later) lengths. `params->run.progress`, when set, hears the
+// body's build (when the colliders have it) as the first fifth, then the
+// share of strands done, and may cancel. On failure
 // `lengths` is unchanged.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame

@@ -2,9 +2,9 @@
 
 use crate::buffers::{filled, opt_mut, req, req_mut, slice, slice_mut};
 use crate::status::Failure;
-use crate::threads::{split_over_threads, split_with_progress, Progress};
+use crate::threads::{pelage_run_defaults, split_over_threads, split_with_progress, PelageRun};
 use crate::{PelageArena, PelageRestPose};
-use crate::{PelageMeshDesc, PelageProgressFn, PelageRegionMap, PelageRoot, PelageStatus};
+use crate::{PelageMeshDesc, PelageRegionMap, PelageRoot, PelageStatus};
 use bytemuck::{Pod, Zeroable};
 use pelage_core::interp::bind::{
     self, BindParams, GuideIndex, StrandBinding, MAX_NEIGHBOURS, WEIGHT_SUM_TOLERANCE,
@@ -44,15 +44,9 @@ pub struct PelageBindParams {
     pub max_wrap_slope: f32,
     /// Parting regions (per-vertex ids or an id texture); kind NONE by default.
     pub regions: PelageRegionMap,
-    /// Threads pelage_bind splits the strands over: 0 = all cores, 1 = the
-    /// calling thread only. The bindings are bitwise identical for any value.
-    pub thread_count: u32,
-    /// Optional progress callback (NULL: none), called on the calling
-    /// thread with a never-decreasing share of the strands bound; returning
-    /// false cancels (PELAGE_STATUS_CANCELLED, nothing written).
-    pub progress: PelageProgressFn,
-    /// Passed unchanged to `progress`.
-    pub progress_user_data: *mut std::ffi::c_void,
+    /// Threads and progress (the share of strands bound); a cancelled call
+    /// writes nothing. Defaults: 1 thread, no callback.
+    pub run: PelageRun,
 }
 
 /// Guides and weights of one strand (the flat, Pod binding record; store it
@@ -110,9 +104,10 @@ pub extern "C" fn pelage_bind_params_defaults() -> PelageBindParams {
         search_factor: d.search_factor,
         max_wrap_slope: d.max_wrap_slope,
         regions: PelageRegionMap::none(),
-        thread_count: 1,
-        progress: None,
-        progress_user_data: std::ptr::null_mut(),
+        run: PelageRun {
+            thread_count: 1,
+            ..pelage_run_defaults()
+        },
     }
 }
 
@@ -143,8 +138,8 @@ pub extern "C" fn pelage_bind_size(
 /// per strand; inverse-distance weights that fade to zero as a guide leaves
 /// the set. Writes `strand_count` records to `bindings` and, optionally,
 /// `info`. Nothing is written on failure. Strands are split over
-/// `params->thread_count` threads; the bindings do not depend on it.
-/// `params->progress`, when set, hears the share of strands bound and may
+/// `params->run.thread_count` threads; the bindings do not depend on it.
+/// `params->run.progress`, when set, hears the share of strands bound and may
 /// cancel; the bindings are then made in a buffer of the library's and
 /// copied at the end, so a cancelled call writes nothing.
 ///
@@ -188,7 +183,7 @@ pub extern "C" fn pelage_bind(
         let arena = arena.view("arena")?;
         // with progress the bindings are made aside, and written only when
         // every range is done: their memory is asked for before anything
-        let mut made = match p.progress {
+        let mut made = match p.run.progress {
             Some(_) => filled(strand_count, StrandBinding::default(), "the bindings")?,
             None => Vec::new(),
         };
@@ -196,11 +191,10 @@ pub extern "C" fn pelage_bind(
         // every strand is checked before any range writes
         check_roots(&mesh, strands, "strand roots")?;
         let work = |range: std::ops::Range<usize>, part: &mut [StrandBinding]| index.bind(&mesh, &strands[range], &core, part);
-        let reports = if p.progress.is_none() {
-            split_over_threads(strand_count, p.thread_count, out, 1, work)?
+        let reports = if p.run.progress.is_none() {
+            split_over_threads(strand_count, p.run.thread_count, out, 1, work)?
         } else {
-            let progress = Progress::new(p.progress, p.progress_user_data);
-            let reports = split_with_progress(strand_count, p.thread_count, &mut made, 1, progress, work)?;
+            let reports = split_with_progress(strand_count, p.run.thread_count, &mut made, 1, p.run.progress(), work)?;
             if reports.iter().all(Result::is_ok) {
                 out.copy_from_slice(&made);
             }

@@ -7,7 +7,7 @@
 
 use crate::buffers::grow;
 use crate::status::Failure;
-use crate::threads::{cut_into, run_parts, thread_total};
+use crate::threads::{cut_into, run_parts, thread_total, Progress};
 use pelage_core::surface::body::{Body, BodyParts, BodyPlan, Rim};
 use pelage_core::{Arena, Mesh};
 use std::ops::Range;
@@ -24,15 +24,18 @@ pub(crate) struct BodyMemory {
 
 impl BodyMemory {
     /// The solid of `mesh` in this memory (grown as needed), its grid of
-    /// `density` cells per triangle built over `thread_count` threads.
+    /// `density` cells per triangle built over `thread_count` threads,
+    /// reporting each stage to `progress`.
     pub(crate) fn body<'a>(
         &'a mut self,
         mesh: &Mesh,
         density: f32,
         thread_count: u32,
+        progress: Progress,
     ) -> Result<Body<'a>, Failure> {
+        progress.report(0.0)?;
         let (parts, refs) = self.parts(mesh, density)?;
-        body_grid(parts, thread_count, |bytes| refs.take(bytes))
+        body_grid(parts, thread_count, progress, |bytes| refs.take(bytes))
     }
 
     /// The body of `mesh` built on this thread beside a step's guides,
@@ -94,18 +97,21 @@ impl<'a> RefsMemory<'a> {
 /// grid of `density` cells per triangle in the memory `memory` gives for
 /// the bytes it needs, and its triangle references, once counted, in the
 /// memory `refs_memory` gives; built by layers over `thread_count` threads
-/// (the same bits on any count).
+/// (the same bits on any count), each stage reported to `progress`.
 pub(crate) fn body_in<'a>(
     mesh: &Mesh,
     rim_arena: &mut Vec<u8>,
     density: f32,
     thread_count: u32,
+    progress: Progress,
     memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
     refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
+    progress.report(0.0)?;
     body_grid(
         body_parts(mesh, rim_arena, density, memory)?,
         thread_count,
+        progress,
         refs_memory,
     )
 }
@@ -135,13 +141,18 @@ fn body_parts<'a>(
 }
 
 /// The stages of [`body_in`] split by layers over `thread_count` threads:
-/// the grid's triangles counted, listed, the cells classified.
+/// the grid's triangles counted, listed, the cells classified; the first
+/// quarter of `progress` went to the stages before.
 fn body_grid<'a>(
     parts: BodyParts<'a>,
     thread_count: u32,
+    progress: Progress,
     refs_memory: impl FnOnce(usize) -> Result<&'a mut [u8], Failure>,
 ) -> Result<Body<'a>, Failure> {
-    counted(parts, thread_total(thread_count), true, refs_memory)?.body()
+    progress.report(0.25)?;
+    let counted = counted(parts, thread_total(thread_count), true, refs_memory)?;
+    progress.report(0.5)?;
+    counted.body(progress)
 }
 
 /// A body grid with its triangles counted by layers, and the memory of its
@@ -252,14 +263,17 @@ impl<'a> Counted<'a> {
         Ok(())
     }
 
-    /// The body, its stages not run yet run on the split's threads.
-    fn body(mut self) -> Result<Body<'a>, Failure> {
+    /// The body, its stages not run yet run on the split's threads (the
+    /// last half of `progress`).
+    fn body(mut self, progress: Progress) -> Result<Body<'a>, Failure> {
         if !self.listed {
             self.list(true)?;
         }
+        progress.report(0.75)?;
         if !self.classified {
             self.classify(true)?;
         }
+        progress.report(1.0)?;
         Ok(self.parts.finish())
     }
 }
@@ -277,8 +291,12 @@ impl<'a> Built<'a> {
     /// The body, its stages not run yet run over `thread_count` threads.
     pub(crate) fn body(self, thread_count: u32) -> Result<Body<'a>, Failure> {
         match self {
-            Built::Placed(parts, refs) => body_grid(parts, thread_count, |bytes| refs.take(bytes)),
-            Built::Counted(counted) => counted.body(),
+            Built::Placed(parts, refs) => {
+                body_grid(parts, thread_count, Progress::none(), |bytes| {
+                    refs.take(bytes)
+                })
+            }
+            Built::Counted(counted) => counted.body(Progress::none()),
         }
     }
 }

@@ -4,10 +4,8 @@
 use crate::buffers::{bytes_mut, req, req_mut, slice, slice_mut};
 use crate::handles::object;
 use crate::status::Failure;
-use crate::threads::{split_over_threads, split_with_progress, Progress};
-use crate::{
-    PelageFrame, PelageProgressFn, PelageRoot, PelageStatus, PelageStrandBinding, PelageStrandGroom,
-};
+use crate::threads::{pelage_run_defaults, split_over_threads, split_with_progress, PelageRun};
+use crate::{PelageFrame, PelageRoot, PelageStatus, PelageStrandBinding, PelageStrandGroom};
 use pelage_core::collide::Colliders;
 use pelage_core::interp::expand::ExpandJob;
 use pelage_core::interp::posed::PosedFrame;
@@ -45,16 +43,10 @@ pub struct PelageExpandParams {
     /// the fur covers as much: coverage `1 - exp(-n w l / A)` of n strands
     /// of width w and length l over an area A depends on n w alone.
     pub width_scale: f32,
-    /// Threads the call splits the strands over: 0 = all cores, 1 = the
-    /// calling thread only; at most max(cores, 64). The output is bitwise
-    /// identical for any value.
-    pub thread_count: u32,
-    /// Optional progress callback (NULL: none), called on the calling
-    /// thread with a never-decreasing share of the strands done; returning
-    /// false cancels (PELAGE_STATUS_CANCELLED).
-    pub progress: PelageProgressFn,
-    /// Passed unchanged to `progress`.
-    pub progress_user_data: *mut c_void,
+    /// Threads and progress (the share of strands done). Defaults: 1
+    /// thread (a renderer expands its patches on threads of its own), no
+    /// callback.
+    pub run: PelageRun,
 }
 
 /// Defaults: 16 points per strand, pinned ends, orphan_length 0.1,
@@ -69,9 +61,10 @@ pub extern "C" fn pelage_expand_params_defaults() -> PelageExpandParams {
         end_points: PelageEndPoints::Pinned as u32,
         orphan_length: 0.1,
         width_scale: 1.0,
-        thread_count: 1,
-        progress: None,
-        progress_user_data: std::ptr::null_mut(),
+        run: PelageRun {
+            thread_count: 1,
+            ..pelage_run_defaults()
+        },
     }
 }
 
@@ -168,7 +161,7 @@ pub extern "C" fn pelage_expand_size(
 /// Expands render curves for one frame: every strand of `strands`, whose
 /// records are checked on every call (a host that keeps a groom across
 /// frames makes a `PelageGroom` once and calls `pelage_groom_expand`).
-/// Work is split over `params->thread_count` threads; the bits do not
+/// Work is split over `params->run.thread_count` threads; the bits do not
 /// depend on it. Everything is validated before anything is written.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
@@ -191,7 +184,7 @@ pub extern "C" fn pelage_expand(
         let all = req(strands, "strands")?.view()?;
         let p = req(params, "params")?;
         // every record is checked before any range writes
-        let parts = split_over_threads(all.len(), p.thread_count, &mut [0u8; 0], 0, |range, _| {
+        let parts = split_over_threads(all.len(), p.run.thread_count, &mut [0u8; 0], 0, |range, _| {
             StrandBounds::new(&all.range(range.clone())).map_err(|e| e.shifted(range.start)).map(|b| (range.start, b))
         })?;
         let mut bounds = StrandBounds::default();
@@ -251,13 +244,12 @@ pub(crate) fn run(
     if let Some((mask, colliders)) = edits.push {
         job = job.pushed(mask, colliders)?;
     }
-    let progress = Progress::new(p.progress, p.progress_user_data);
     split_with_progress(
         strand_count,
-        p.thread_count,
+        p.run.thread_count,
         points,
         job.bytes_per_strand(),
-        progress,
+        p.run.progress(),
         |range, bytes| run_range(&job, range, bytes),
     )?;
     counts.fill(per as u32);

@@ -6,7 +6,7 @@ use crate::buffers::{collected, grow, req, req_mut, zeroed};
 use crate::colliders::{HostColliders, HostField};
 use crate::handles::{free, into_handle, object_mut, Handle};
 use crate::status::Failure;
-use crate::threads::{split_in_chunks, split_over_threads};
+use crate::threads::{chunks_with_progress, split_with_progress, PelageRun};
 use crate::{PelageColliders, PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::cache::groom_file::Groom;
@@ -135,17 +135,20 @@ impl Frame {
     }
 
     /// Decodes shutter sample `sample` of `cache` into this frame's guides,
-    /// checked whole first, over `thread_count` threads: unpacked by runs
-    /// of whole blocks into the frame's scratch, then posed by chunks.
+    /// checked whole first, as `run` says: unpacked by runs of whole
+    /// blocks into the frame's scratch (the first half of the progress),
+    /// then posed by chunks. Once checked, a failure leaves the frame
+    /// without guides.
     pub(crate) fn decode_guides(
         &mut self,
         cache: &GuideCache,
         groom: &Groom,
         groom_id: u32,
         sample: usize,
-        thread_count: u32,
+        run: &PelageRun,
     ) -> Result<(), Failure> {
         cache.check(groom, groom_id, sample, &self.posed)?;
+        let progress = run.progress();
         grow(
             &mut self.scratch,
             cache.scratch_words(),
@@ -154,11 +157,12 @@ impl Frame {
         )?;
         let unpacked = &mut self.scratch[..];
         let per_block = BLOCK * cache.words_per_guide();
-        split_over_threads(
+        split_with_progress(
             cache.blocks(),
-            thread_count,
+            run.thread_count,
             unpacked,
             per_block,
+            progress.within(0.0, 0.5),
             |blocks, part| cache.unpack(groom, sample, blocks, part),
         )?
         .into_iter()
@@ -168,11 +172,12 @@ impl Frame {
         let filler = decoding.filler;
         let words = cache.words_per_guide();
         let failed = std::sync::Mutex::new(None);
-        split_in_chunks(
+        chunks_with_progress(
             cache.info().guides,
-            thread_count,
+            run.thread_count,
             &mut *decoding.data,
             filler.floats_per_guide(),
+            progress.within(0.5, 1.0),
             |range, part| {
                 let mine = &unpacked[range.start * words..range.end * words];
                 if let Err(e) = filler.fill(range.start, mine, part) {
@@ -259,28 +264,31 @@ pub extern "C" fn pelage_frame_new(
 /// Poses the frame's guides: checks `guides` (guide_count as given to
 /// `pelage_frame_new`, roots on the mesh, finite points within 1e9, no
 /// zero-length guide) and stores them resampled, in their root frames on
-/// the frame's mesh. Split over `thread_count` threads (0: all cores); the
-/// bits do not depend on it. May be called again for new guides (a
-/// simulation's output). On failure the frame keeps the guides it had.
+/// the frame's mesh. Runs as `run` says (progress: the share of guides
+/// posed). May be called again for new guides (a simulation's output).
+/// When the guides are refused the frame keeps the guides it had; once
+/// they are checked, a cancelled call (or a PANIC) leaves the frame
+/// without guides until the next successful call.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also guide points beyond
-/// 1e9), MISALIGNED, NON_FINITE, OUT_OF_RANGE, PANIC (also when a worker thread cannot start: the
-/// frame's guides are then unspecified until the next successful call).
+/// 1e9), MISALIGNED, NON_FINITE, OUT_OF_RANGE, CANCELLED, PANIC (also when
+/// a worker thread cannot start).
 ///
 /// Thread safety: writes `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_frame_set_guides(
     frame: PelageFrame,
     guides: *const PelageGuidesDesc,
-    thread_count: u32,
+    run: PelageRun,
 ) -> PelageStatus {
     ffi_boundary! {
         let frame = object_mut(frame)?;
         let guides = req(guides, "guides")?.view()?;
-        let posing = frame.posed.posing(&guides)?;
+        let mut posing = frame.posed.posing(&guides)?;
+        posing.unpose();
         let filler = posing.filler;
         let per = filler.floats_per_guide();
-        split_over_threads(guides.len(), thread_count, &mut *posing.data, per, |range, part| {
+        split_with_progress(guides.len(), run.thread_count, &mut *posing.data, per, run.progress(), |range, part| {
             filler.fill(range.start, part)
         })?;
         posing.finish();
@@ -291,23 +299,23 @@ pub extern "C" fn pelage_frame_set_guides(
 /// Sets the colliders that render strands selected by a push mask
 /// (`PelageStrandEdits.push_mask`) are pushed out of when expanded on this
 /// frame: `colliders` is copied; NULL clears them. Their body, when set, is
-/// this frame's mesh, built once here, split over `thread_count` threads
-/// (0: all cores; the bits do not depend on it): `pelage_sim_step` on this
-/// frame collides with it rather than building its own. A distance
+/// this frame's mesh, built once here as `run` says (progress: the body's
+/// stages): `pelage_sim_step` on this frame collides with it rather than
+/// building its own. A distance
 /// callback is kept: it and its user data must stay valid until the
 /// colliders are replaced or the frame is freed.
 /// On failure the frame keeps the colliders it had.
 ///
 /// Returns OK, NULL_PARAMETER, NON_FINITE (a collider's value),
 /// INVALID_ARGUMENT (a collider, a body of this frame's mesh too large),
-/// MISALIGNED, OUT_OF_MEMORY, PANIC.
+/// MISALIGNED, CANCELLED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: writes `frame`.
 #[no_mangle]
 pub extern "C" fn pelage_frame_set_colliders(
     frame: PelageFrame,
     colliders: *const PelageColliders,
-    thread_count: u32,
+    run: PelageRun,
 ) -> PelageStatus {
     ffi_boundary! {
         let frame = object_mut(frame)?;
@@ -328,7 +336,8 @@ pub extern "C" fn pelage_frame_set_colliders(
                 frame.posed.mesh(),
                 &mut Vec::new(),
                 COLLISION_CELLS_PER_TRIANGLE,
-                thread_count,
+                run.thread_count,
+                run.progress(),
                 |bytes| {
                     let buffer = memory.insert(Buffer::new(zeroed(bytes, "the body")?));
                     // SAFETY: the buffer is borrowed once, by the body made

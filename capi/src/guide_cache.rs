@@ -4,6 +4,7 @@
 use crate::buffers::{bytes, bytes_mut, handles, req, req_mut, slice};
 use crate::handles::{object, object_mut};
 use crate::status::Failure;
+use crate::threads::PelageRun;
 use crate::{PelageFrame, PelageRoot, PelageStatus};
 use pelage_core::cache::groom_file::Groom;
 use pelage_core::cache::guide_cache::{self, GuideCache, Mode};
@@ -102,12 +103,15 @@ pub extern "C" fn pelage_guide_cache_size(
 /// Quantized (`exact` 0: every root-frame coordinate within 2^-15 of the
 /// guide's length) or exact float32 (`exact` 1). `out` holds `capacity`
 /// bytes (`pelage_guide_cache_size`); the bytes written go to
-/// `*written`. On failure `out` is untouched.
+/// `*written`. On failure `out` is untouched, except on CANCELLED, when it
+/// holds part of a cache. Codes on the calling thread (`run.thread_count`
+/// is not read), reporting the share of guide blocks coded to
+/// `run.progress`.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (counts that differ from
 /// the guide set's, a frame with no guides, sample count, `exact` other
 /// than 0 or 1), NON_FINITE,
-/// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, PANIC.
+/// OUT_OF_RANGE, CAPACITY_EXCEEDED, MISALIGNED, CANCELLED, PANIC.
 ///
 /// Thread safety: reads the `samples` frames.
 #[no_mangle]
@@ -116,6 +120,7 @@ pub extern "C" fn pelage_guide_cache_write(
     samples: *const PelageFrame,
     sample_count: u32,
     exact: u32,
+    run: PelageRun,
     out: *mut std::ffi::c_void,
     capacity: usize,
     written: *mut usize,
@@ -130,7 +135,9 @@ pub extern "C" fn pelage_guide_cache_write(
             .iter()
             .map(|&h| object(h).map(|f| f.posed()))
             .collect::<Result<Vec<&PosedFrame>, Failure>>()?;
-        *written = guide_cache::encode(&groom, set.groom_id, &frames, mode, bytes_mut(out, capacity, "out")?)?;
+        let progress = run.progress();
+        let mut report = |fraction: f32| progress.report(fraction as f64).is_ok();
+        *written = guide_cache::encode_with_progress(&groom, set.groom_id, &frames, mode, bytes_mut(out, capacity, "out")?, &mut report)?;
         Ok(())
     }
 }
@@ -165,18 +172,20 @@ pub extern "C" fn pelage_guide_cache_info(
 /// that sample's deformed mesh for the guide set's counts): its posed
 /// guides, ready for `pelage_groom_expand`. The cache must have been coded
 /// for `guides` (the same groom id). The whole cache is checked before the
-/// frame is written; on failure the frame keeps the guides it had.
+/// frame is written; on failure the frame keeps the guides it had, except
+/// that a call cancelled (or a PANIC) while it poses the guides, in the
+/// second half of its progress, leaves the frame without guides until the
+/// next successful call.
 ///
-/// Checks and decodes over `thread_count` threads (0: all cores); the bits
-/// do not depend on it.
+/// Checks and decodes as `run` says (progress: the share of blocks
+/// unpacked, then of guides posed).
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another groom, counts,
 /// sample index), OUT_OF_RANGE (a guide root past the mesh), CORRUPT_DATA
 /// (also a coding its version does not have: a version 1 label on a guide
 /// coded from the one before it), VERSION_MISMATCH, MISALIGNED,
-/// OUT_OF_MEMORY, PANIC (also when a worker thread cannot
-/// start: the frame's guides are then unspecified until the next
-/// successful call).
+/// CANCELLED, OUT_OF_MEMORY, PANIC (also when a worker thread cannot
+/// start).
 ///
 /// Thread safety: writes `frame`.
 #[no_mangle]
@@ -186,14 +195,14 @@ pub extern "C" fn pelage_guide_cache_read(
     guides: *const PelageGuideSet,
     sample: u32,
     frame: PelageFrame,
-    thread_count: u32,
+    run: PelageRun,
 ) -> PelageStatus {
     ffi_boundary! {
         let set = req(guides, "guides")?;
         let groom = set.view()?;
         let frame = object_mut(frame)?;
         let cache = GuideCache::parse(bytes(data, data_bytes, "data")?)?;
-        frame.decode_guides(&cache, &groom, set.groom_id, sample as usize, thread_count)?;
+        frame.decode_guides(&cache, &groom, set.groom_id, sample as usize, &run)?;
         Ok(())
     }
 }

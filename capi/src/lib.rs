@@ -28,6 +28,7 @@ mod settle;
 mod sim;
 mod stamp;
 mod threads;
+pub use threads::{pelage_run_defaults, PelageProgressFn, PelageRun};
 mod trim;
 
 pub use bind::{
@@ -73,8 +74,8 @@ pub use sim::{
     PelageSimParams, PelageSimTy, PelageStepInfo, PelageStepParams,
 };
 pub use stamp::{
-    pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_size, PelageProgressFn,
-    PelageStampInfo, PelageStampParams,
+    pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_size, PelageStampInfo,
+    PelageStampParams,
 };
 pub use status::{pelage_last_error, pelage_status_message, PelageStatus};
 pub use trim::{

@@ -100,7 +100,7 @@ pub extern "C" fn pelage_patch_boxes(
         patch::check(frame, &strands, patches)?;
         let mut reach = filled(frame.guide_count(), 0.0f32, "the guides' reach")?;
         patch::guide_reach(frame, &mut reach);
-        split_over_threads(patch_count, host.thread_count, boxes, 6, |range, part| {
+        split_over_threads(patch_count, host.run.thread_count, boxes, 6, |range, part| {
             for (p, out) in patches[range].iter().zip(part.chunks_exact_mut(6)) {
                 let b = patch::patch_box(frame, &reach, &strands, &params, *p);
                 out.copy_from_slice(&[b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z]);

@@ -2,7 +2,7 @@
 
 use crate::buffers::{opt_mut, req, req_mut, slice, slice_mut};
 use crate::expand::core_params;
-use crate::threads::{check_over_threads, split_over_threads, split_with_progress, Progress};
+use crate::threads::{check_over_threads, split_over_threads, split_with_progress};
 use crate::{
     PelageArena, PelageExpandParams, PelageMeshDesc, PelageRestPose, PelageRoot, PelageStatus,
     PelageStrandBinding, PelageStrandGroom,
@@ -66,8 +66,8 @@ pub extern "C" fn pelage_settle_size(
 /// lose their clump pull, are turned about other axes, then shortened. pelage_expand applies `lift` in the
 /// strand's own frame at every frame. `grooms` is updated in place; it is
 /// validated with everything else first and left untouched on failure.
-/// Work is split over `params->thread_count` threads; the result does not
-/// depend on it. `params->progress`, when set, hears the share of strands
+/// Work is split over `params->run.thread_count` threads; the result does not
+/// depend on it. `params->run.progress`, when set, hears the share of strands
 /// done on the calling thread and may cancel.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (also values beyond 1e9,
@@ -102,15 +102,15 @@ pub extern "C" fn pelage_settle(
         let mut rest = PosedFrame::new(mesh, guides.len(), core.points_per_strand, &mut arena)?;
         let posing = rest.posing(&guides)?;
         let filler = posing.filler;
-        split_over_threads(guides.len(), p.thread_count, &mut *posing.data, filler.floats_per_guide(), |range, part| {
+        split_over_threads(guides.len(), p.run.thread_count, &mut *posing.data, filler.floats_per_guide(), |range, part| {
             filler.fill(range.start, part)
         })?;
         posing.finish();
-        check_over_threads(strand_count, p.thread_count, |range| {
+        check_over_threads(strand_count, p.run.thread_count, |range| {
             check_settle(&roots[range.clone()], &bindings[range.clone()], &grooms[range], &rest, &core)
         })?;
-        let progress = Progress::new(p.progress, p.progress_user_data);
-        let reports = split_with_progress(strand_count, p.thread_count, grooms, 1, progress, |range, part| {
+        let progress = p.run.progress();
+        let reports = split_with_progress(strand_count, p.run.thread_count, grooms, 1, progress, |range, part| {
             settle_checked(&body, &roots[range.clone()], &bindings[range], part, &rest, &core)
         })?;
         let mut total = SettleReport::default();

@@ -7,9 +7,10 @@ use crate::frame::Frame;
 use crate::handles::{free, into_handle, object, object_mut, Handle};
 use crate::status::Failure;
 use crate::threads::{
-    beside, split_in_chunks, split_over_threads, split_pairs_in_chunks, thread_total, Progress,
+    beside, pelage_run_defaults, split_in_chunks, split_pairs_in_chunks, split_with_progress,
+    thread_total, PelageRun, Progress,
 };
-use crate::{PelageArena, PelageProgressFn, PelageRestPose};
+use crate::{PelageArena, PelageRestPose};
 use crate::{PelageColliders, PelageFrame, PelageMap, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::collide::COLLISION_CELLS_PER_TRIANGLE;
@@ -238,9 +239,6 @@ pub struct PelageStepParams {
     /// Seconds since the last step (1e-5 <= dt <= 1; it may change from
     /// step to step).
     pub dt: f32,
-    /// Threads the step is split over (0: all cores); the bits do not
-    /// depend on it.
-    pub thread_count: u32,
     /// What the guides collide with (NULL: nothing).
     pub colliders: *const PelageColliders,
     /// Another simulator's curves (NULL: none): float3 world points
@@ -250,13 +248,10 @@ pub struct PelageStepParams {
     pub external_points: *const c_void,
     /// Bytes between consecutive external points (>= 12, a multiple of 4).
     pub external_stride: usize,
-    /// Optional progress callback (NULL: none), called on the calling
-    /// thread before the step and after each of its phases (the advance,
-    /// each link relaxation, the bend and push-out) with the share done;
-    /// returning false cancels, and the step is taken back.
-    pub progress: PelageProgressFn,
-    /// Passed unchanged to `progress`.
-    pub progress_user_data: *mut c_void,
+    /// Threads and progress, heard before the step and after each of its
+    /// phases (the advance, each link relaxation, the bend and push-out);
+    /// a cancelled step is taken back. Defaults: every core, no callback.
+    pub run: PelageRun,
 }
 
 /// Defaults: dt 1/24, all cores, no colliders, no external curves, no
@@ -267,12 +262,10 @@ pub struct PelageStepParams {
 pub extern "C" fn pelage_step_params_defaults() -> PelageStepParams {
     PelageStepParams {
         dt: 1.0 / 24.0,
-        thread_count: 0,
         colliders: std::ptr::null(),
         external_points: std::ptr::null(),
         external_stride: 12,
-        progress: None,
-        progress_user_data: std::ptr::null_mut(),
+        run: pelage_run_defaults(),
     }
 }
 
@@ -334,7 +327,7 @@ pub extern "C" fn pelage_sim_step(
             true => None,
             false => Some(strided::<[f32; 3]>(p.external_points, p.external_stride, sim.sim.len() * sim.sim.points(), "params.external_points")?),
         };
-        let progress = Progress::new(p.progress, p.progress_user_data);
+        let progress = p.run.progress();
         // a NaN from the host's field or a cancel fails the step after it
         // moved the guides: the state before it is kept to put back
         let whole = host.field.is_some() || progress.is_set();
@@ -374,7 +367,7 @@ fn step(
     p: &PelageStepParams,
     progress: &Progress,
 ) -> Result<usize, Failure> {
-    let (dt, thread_count) = (p.dt, p.thread_count);
+    let (dt, thread_count) = (p.dt, p.run.thread_count);
     if host.body && frame.body().is_none() && thread_total(thread_count) > 1 {
         return step_beside_body(sim, frame.posed(), host, external, p, progress);
     }
@@ -393,6 +386,7 @@ fn step(
                 frame.posed().mesh(),
                 COLLISION_CELLS_PER_TRIANGLE,
                 thread_count,
+                Progress::none(),
             )?;
             Some(&built)
         }
@@ -463,7 +457,7 @@ fn step_beside_body(
     p: &PelageStepParams,
     progress: &Progress,
 ) -> Result<usize, Failure> {
-    let (dt, thread_count) = (p.dt, p.thread_count);
+    let (dt, thread_count) = (p.dt, p.run.thread_count);
     let SimBox {
         sim,
         body: memory,
@@ -553,26 +547,26 @@ fn step_beside_body(
 /// simulation's points_per_guide points per strand, made for as many
 /// guides as the simulation has; `sim` must have stepped since it was
 /// created, reset or restored (after a PANIC from pelage_sim_step, reset
-/// or restore it first: a half-made step is not refused here). Split over
-/// `thread_count` threads (0: all cores); the bits do not depend on it. The
-/// guides are checked as they are written: when one is refused, the frame
-/// has no guides (expansions from it are refused) until guides are set
-/// again; when the frame or the simulation is refused (the counts, no
-/// step yet), the frame keeps the guides it had.
+/// or restore it first: a half-made step is not refused here). Runs as
+/// `run` says (progress: the share of guides posed). The guides are
+/// checked as they are written: when one is refused or the call is
+/// cancelled, the frame has no guides (expansions from it are refused)
+/// until guides are set again; when the frame or the simulation is refused
+/// (the counts, no step yet), the frame keeps the guides it had.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
 /// another point or guide count, no step yet; a simulated guide with a
 /// point beyond 1e9 or of zero length, on a collapsed root triangle, as
 /// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
-/// step), PANIC (also when a worker thread cannot start: the frame then
-/// has no guides until guides are set again).
+/// step), CANCELLED, PANIC (also when a worker thread cannot start: the
+/// frame then has no guides until guides are set again).
 ///
 /// Thread safety: writes `frame`; reads `sim`.
 #[no_mangle]
 pub extern "C" fn pelage_frame_set_sim_guides(
     frame: PelageFrame,
     sim: PelageSim,
-    thread_count: u32,
+    run: PelageRun,
 ) -> PelageStatus {
     ffi_boundary! {
         let frame = object_mut(frame)?;
@@ -580,7 +574,7 @@ pub extern "C" fn pelage_frame_set_sim_guides(
         let posing = sim.posing(frame.posed_mut())?;
         let filler = posing.filler;
         let per = filler.floats_per_guide();
-        let faults = split_over_threads(sim.len(), thread_count, &mut *posing.data, per, |range, part| {
+        let faults = split_with_progress(sim.len(), run.thread_count, &mut *posing.data, per, run.progress(), |range, part| {
             filler.fill(range.start, part);
             sim.posed_faults(range)
         })?;

@@ -2,6 +2,7 @@
 
 use crate::buffers::{opt_mut, req, req_mut, slice_mut};
 use crate::status::Failure;
+use crate::threads::{pelage_run_defaults, PelageRun};
 use crate::PelageArena;
 use crate::{PelageMap, PelageMeshDesc, PelageRoot, PelageStatus};
 use pelage_core::{stamp, Arena, Root, StampParams};
@@ -28,21 +29,12 @@ pub struct PelageStampParams {
     pub black_scale: f32,
     /// Triangles with density below this get no roots (bald regions); 0 disables it.
     pub bald_below: f32,
-    /// Optional (NULL: none). Called on the calling thread with the share of
-    /// the work done, from 0 to 1, never decreasing, every few thousand
-    /// triangles and after each stage; the last call, with 1, comes before
-    /// any root is written. Return false to cancel: pelage_stamp then returns
-    /// PELAGE_STATUS_CANCELLED and writes nothing. Like Embree's
-    /// RTCProgressMonitorFunction.
-    pub progress: PelageProgressFn,
-    /// Passed unchanged to `progress`.
-    pub progress_user_data: *mut std::ffi::c_void,
+    /// Progress, heard every few thousand triangles and after each stage;
+    /// the last report, 1, comes before any root is written, and a
+    /// cancelled stamp writes nothing. The stamp runs on the calling
+    /// thread: `run.thread_count` is not read.
+    pub run: PelageRun,
 }
-
-/// A progress callback: `user_data` as given with it, `fraction` the share of
-/// the work done in [0, 1]. Returns true to go on, false to cancel.
-pub type PelageProgressFn =
-    Option<unsafe extern "C" fn(user_data: *mut std::ffi::c_void, fraction: f64) -> bool>;
 
 /// What a stamping call did.
 #[repr(C)]
@@ -83,8 +75,7 @@ pub extern "C" fn pelage_stamp_params_defaults() -> PelageStampParams {
         density: PelageMap::constant(1.0),
         black_scale: d.black_scale,
         bald_below: d.bald_below,
-        progress: None,
-        progress_user_data: std::ptr::null_mut(),
+        run: pelage_run_defaults(),
     }
 }
 
@@ -144,7 +135,7 @@ pub extern "C" fn pelage_stamp_size(
 /// `*root_count` is the number written and `info` (optional, may be NULL) is
 /// filled. On PELAGE_STATUS_CAPACITY_EXCEEDED, `*root_count` holds the number
 /// of roots needed when the root buffer was the limit; nothing else is written.
-/// `params->progress`, when set, reports progress and can cancel the call
+/// `params->run.progress`, when set, reports progress and can cancel the call
 /// (PELAGE_STATUS_CANCELLED, nothing written).
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT, NON_FINITE, OUT_OF_RANGE,
@@ -180,12 +171,8 @@ pub extern "C" fn pelage_stamp(
                 format!("arena too small: {need} bytes needed, {} available", arena.len()),
             ));
         }
-        let mut progress = |fraction: f32| match params.progress {
-            // SAFETY: the caller's callback, called as its contract in the
-            // header states, with the user data it gave
-            Some(f) => unsafe { f(params.progress_user_data, fraction as f64) },
-            None => true,
-        };
+        let run = params.run.progress();
+        let mut progress = |fraction: f32| run.report(fraction as f64).is_ok();
         match stamp::stamp_with_progress(mesh, &p, &mut Arena::new(arena), out, &mut progress) {
             Ok((n, report)) => {
                 *root_count = n;

@@ -81,19 +81,68 @@ pub(crate) fn check_over_threads(
     Ok(results.into_iter().collect::<Result<(), Error>>()?)
 }
 
-/// A host's progress callback and its user data (see `PelageProgressFn`).
+/// A progress callback: `user_data` as given with it, `fraction` the share of
+/// the work done in [0, 1]. Returns true to go on, false to cancel.
+pub type PelageProgressFn =
+    Option<unsafe extern "C" fn(user_data: *mut std::ffi::c_void, fraction: f64) -> bool>;
+
+/// How a long call runs: the threads it splits its work over and the
+/// progress callback that hears from it and may cancel it. A
+/// zero-initialised PelageRun (or `pelage_run_defaults()`) uses every core
+/// and reports nothing.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PelageRun {
+    /// Threads of the call's own to split the work over: 0 = every core,
+    /// 1 = the calling thread only; at most max(cores, 64). The results are
+    /// bitwise identical for any value.
+    pub thread_count: u32,
+    /// Optional progress callback (NULL: none), called on the calling
+    /// thread with a never-decreasing share of the work done (0 first, 1
+    /// last); returning false cancels (PELAGE_STATUS_CANCELLED).
+    pub progress: PelageProgressFn,
+    /// Passed unchanged to `progress`.
+    pub progress_user_data: *mut std::ffi::c_void,
+}
+
+/// Every core, no progress callback.
+///
+/// Thread safety: free.
+#[no_mangle]
+pub extern "C" fn pelage_run_defaults() -> PelageRun {
+    PelageRun {
+        thread_count: 0,
+        progress: None,
+        progress_user_data: std::ptr::null_mut(),
+    }
+}
+
+impl PelageRun {
+    /// This run's progress callback, reporting over the whole call.
+    pub(crate) fn progress(&self) -> Progress {
+        Progress {
+            callback: self.progress,
+            user_data: self.progress_user_data,
+            from: 0.0,
+            span: 1.0,
+        }
+    }
+}
+
+/// A host's progress callback and its user data (see `PelageProgressFn`),
+/// reporting a part of a call as its share `from..from + span` of the whole.
 #[derive(Clone, Copy)]
 pub(crate) struct Progress {
-    callback: crate::PelageProgressFn,
+    callback: PelageProgressFn,
     user_data: *mut std::ffi::c_void,
+    from: f64,
+    span: f64,
 }
 
 impl Progress {
-    pub(crate) fn new(callback: crate::PelageProgressFn, user_data: *mut std::ffi::c_void) -> Self {
-        Progress {
-            callback,
-            user_data,
-        }
+    /// No callback: every report succeeds.
+    pub(crate) fn none() -> Self {
+        pelage_run_defaults().progress()
     }
 
     /// True when the host gave a callback.
@@ -101,14 +150,25 @@ impl Progress {
         self.callback.is_some()
     }
 
+    /// The part `from..to` (shares of this one) of the work: its reports
+    /// of 0..1 reach the host as `from..to` of this one's.
+    pub(crate) fn within(&self, from: f64, to: f64) -> Progress {
+        Progress {
+            from: self.from + self.span * from,
+            span: self.span * (to - from),
+            ..*self
+        }
+    }
+
     /// Reports `fraction` done; CANCELLED when the host returns false.
     pub(crate) fn report(&self, fraction: f64) -> Result<(), Failure> {
         let Some(callback) = self.callback else {
             return Ok(());
         };
+        let share = self.from + self.span * fraction;
         // SAFETY: the host gave this callback and its user data for this
         // call, and calls it on the calling thread only.
-        if unsafe { callback(self.user_data, fraction) } {
+        if unsafe { callback(self.user_data, share) } {
             Ok(())
         } else {
             Err(Failure::from(Error::Cancelled))
@@ -133,13 +193,8 @@ pub(crate) fn split_with_progress<T: Send, R: Send>(
     progress: Progress,
     work: impl Fn(Range<usize>, &mut [T]) -> R + Sync,
 ) -> Result<Vec<R>, Failure> {
-    if progress.callback.is_none() {
-        return split_over_threads(n, thread_count, out, per, work);
-    }
-    progress.report(0.0)?;
-    let rounds = PROGRESS_ROUNDS.min(n.max(1));
-    let mut results = Vec::with_capacity(rounds);
-    for (range, part) in even_parts(n, rounds, out, per) {
+    let mut results = Vec::new();
+    in_rounds(n, out, per, progress, |range, part| {
         let start = range.start;
         results.extend(split_over_threads(
             range.len(),
@@ -148,15 +203,52 @@ pub(crate) fn split_with_progress<T: Send, R: Send>(
             per,
             |sub, p| work(sub.start + start..sub.end + start, p),
         )?);
+        Ok(())
+    })?;
+    Ok(results)
+}
+
+/// [`split_in_chunks`] in rounds, reporting as [`split_with_progress`]
+/// does.
+pub(crate) fn chunks_with_progress<T: Send>(
+    n: usize,
+    thread_count: u32,
+    out: &mut [T],
+    per: usize,
+    progress: Progress,
+    work: impl Fn(Range<usize>, &mut [T]) + Sync,
+) -> Result<(), Failure> {
+    in_rounds(n, out, per, progress, |range, part| {
+        let start = range.start;
+        split_in_chunks(range.len(), thread_count, part, per, |sub, p| {
+            work(sub.start + start..sub.end + start, p)
+        })
+    })
+}
+
+/// Runs `round` on [`PROGRESS_ROUNDS`] contiguous ranges of `0..n` (one
+/// without a callback), each with its part of `out`, reporting the share
+/// done before the first and after each.
+fn in_rounds<T>(
+    n: usize,
+    out: &mut [T],
+    per: usize,
+    progress: Progress,
+    mut round: impl FnMut(Range<usize>, &mut [T]) -> Result<(), Failure>,
+) -> Result<(), Failure> {
+    if !progress.is_set() {
+        return round(0..n, out);
+    }
+    progress.report(0.0)?;
+    let rounds = PROGRESS_ROUNDS.min(n.max(1));
+    for (range, part) in even_parts(n, rounds, out, per) {
+        let end = range.end;
+        round(range, part)?;
         // with nothing to do, the one round finishes all of it
-        let done = if n == 0 {
-            1.0
-        } else {
-            range.end as f64 / n as f64
-        };
+        let done = if n == 0 { 1.0 } else { end as f64 / n as f64 };
         progress.report(done)?;
     }
-    Ok(results)
+    Ok(())
 }
 
 /// Strands (or guides) per chunk of [`split_in_chunks`].

@@ -7,7 +7,7 @@ use crate::colliders::HostColliders;
 use crate::expand::{core_params, PelageExpandParams};
 use crate::handles::object;
 use crate::status::Failure;
-use crate::threads::{split_over_threads, split_with_progress, Progress};
+use crate::threads::{split_with_progress, PelageRun, Progress};
 use crate::{PelageColliders, PelageFrame, PelageGroom, PelageMeshDesc, PelageStatus};
 use pelage_core::cache::trim_file::{self, RecordsInfo};
 use pelage_core::interp::expand::ExpandJob;
@@ -45,13 +45,14 @@ struct ObstacleMemory {
 impl ObstacleMemory {
     /// The cloth (NULL: none) as a grid of its triangles, the host's
     /// colliders, and the body of `mesh` when they ask for it (its grid
-    /// built over `threads` threads).
+    /// built over `threads` threads, its stages reported to `progress`).
     fn build<'a>(
         &'a mut self,
         mesh: &Mesh,
         cloth: *const PelageMeshDesc,
         colliders: *const PelageColliders,
         threads: u32,
+        progress: Progress,
     ) -> Result<(Option<Body<'a>>, HostColliders<'a>, Option<Body<'a>>), Failure> {
         let cloth = match cloth.is_null() {
             true => None,
@@ -68,7 +69,10 @@ impl ObstacleMemory {
         };
         let host = HostColliders::read(colliders)?;
         let body = match host.body {
-            true => Some(self.body.body(mesh, CELLS_PER_TRIANGLE, threads)?),
+            true => Some(
+                self.body
+                    .body(mesh, CELLS_PER_TRIANGLE, threads, progress)?,
+            ),
             false => None,
         };
         Ok((cloth, host, body))
@@ -99,13 +103,14 @@ const _: () = assert!(PELAGE_TRIM_WHOLE == pelage_core::trim::WHOLE);
 /// segment, on the outside. Writes one record per guide that meets
 /// something, in guide order, to `records` (capacity `capacity`; the
 /// frame's guide count always suffices) and their number to
-/// `*record_count`. Split over `thread_count` threads (0: all cores); the
-/// records do not depend on it. On failure nothing else is written.
+/// `*record_count`. Runs as `run` says (progress: the body's build, when
+/// the colliders have it, as the first fifth, then the share of guides
+/// walked). On failure nothing else is written.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (a frame without guides, a
 /// collider, the cloth), NON_FINITE, OUT_OF_RANGE (cloth indices),
 /// CAPACITY_EXCEEDED (`capacity`; `*record_count` gets the count
-/// needed), MISALIGNED, OUT_OF_MEMORY, PANIC.
+/// needed), MISALIGNED, CANCELLED, OUT_OF_MEMORY, PANIC.
 ///
 /// Thread safety: reads `frame`.
 #[no_mangle]
@@ -113,7 +118,7 @@ pub extern "C" fn pelage_trim_find(
     frame: PelageFrame,
     cloth: *const PelageMeshDesc,
     colliders: *const PelageColliders,
-    thread_count: u32,
+    run: PelageRun,
     records: *mut PelageTrimRecord,
     capacity: usize,
     record_count: *mut usize,
@@ -125,11 +130,12 @@ pub extern "C" fn pelage_trim_find(
             return Err(Failure::new(PelageStatus::InvalidArgument, "the frame has no guides (pelage_frame_set_guides)"));
         }
         let mut memory = ObstacleMemory::default();
-        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders, thread_count)?;
+        let progress = run.progress();
+        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders, run.thread_count, progress.within(0.0, 0.2))?;
         let colliders = host.colliders(body.as_ref());
         colliders.check()?;
         let guides = frame.guide_count();
-        let found = split_over_threads(guides, thread_count, &mut [0u8; 0], 0, |range, _| {
+        let found = split_with_progress(guides, run.thread_count, &mut [0u8; 0], 0, progress.within(0.2, 1.0), |range, _| {
             range.filter_map(|g| meet(frame, g, cloth_body.as_ref(), &colliders)).collect::<Vec<_>>()
         })?;
         host.check_field()?;
@@ -204,7 +210,7 @@ pub extern "C" fn pelage_trim_shortest(
 
 /// The shot pass on the hairs themselves, one frame at a time: each of
 /// `groom`'s strands is expanded on `frame` with `params` (its
-/// `thread_count` splits the strands; the lengths do not depend on it),
+/// `run.thread_count` splits the strands; the lengths do not depend on it),
 /// and its stored length in `lengths` (`length_count` = the groom's strand
 /// count) becomes the shorter of itself and where the strand's own curve
 /// first meets `cloth` (NULL: none) or enters one of `colliders` (NULL:
@@ -216,8 +222,9 @@ pub extern "C" fn pelage_trim_shortest(
 /// more pass that changes some, then one that changes none, on the test
 /// shot): then no cut hair crosses the cloth on any frame. Store the
 /// result with `pelage_trim_lengths_write` as the shot's (or one frame's,
-/// to reduce later) lengths. `params->progress`, when set, hears the share
-/// of strands done on the calling thread and may cancel. On failure
+/// to reduce later) lengths. `params->run.progress`, when set, hears the
+/// body's build (when the colliders have it) as the first fifth, then the
+/// share of strands done, and may cancel. On failure
 /// `lengths` is unchanged.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (parameters, a frame
@@ -249,13 +256,13 @@ pub extern "C" fn pelage_trim_shortest_hairs(
         let bytes = n.checked_mul(core.output_points() * 16).ok_or_else(|| Failure::new(PelageStatus::InvalidArgument, "strand count overflows"))?;
         let job = ExpandJob::new(frame, strands, &groom.bounds, &core, bytes, 16)?;
         let mut memory = ObstacleMemory::default();
-        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders, p.thread_count)?;
+        let progress = p.run.progress();
+        let (cloth_body, host, body) = memory.build(frame.mesh(), cloth, colliders, p.run.thread_count, progress.within(0.0, 0.2))?;
         let colliders = host.colliders(body.as_ref());
         colliders.check()?;
         let lengths = slice_mut(lengths, length_count, "lengths")?;
         let mut own = collected(lengths.iter().copied(), lengths.len(), "the lengths")?;
-        let progress = Progress::new(p.progress, p.progress_user_data);
-        split_with_progress(n, p.thread_count, &mut own, 1, progress, |range, part| {
+        split_with_progress(n, p.run.thread_count, &mut own, 1, progress.within(0.2, 1.0), |range, part| {
             shortest_own(&job, range, cloth_body.as_ref(), &colliders, part)
         })?;
         host.check_field()?;

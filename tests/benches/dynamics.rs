@@ -17,7 +17,7 @@ use pelage_tests::animated::{capsules, colliders, pose, ShotSim, FRAMES};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
     bind_vec, combed_guides, curves_desc, frame, groom_handle, guides_desc, mesh_desc, mesh_view,
-    stamp_roots,
+    on_threads, stamp_roots,
 };
 use std::hint::black_box;
 use std::time::Instant;
@@ -136,7 +136,11 @@ fn main() {
                         let colliders = colliders(caps, body != 0);
                         if body == 2 {
                             let t = Instant::now();
-                            let s = pelage_frame_set_colliders(frames[f].0, &colliders, threads);
+                            let s = pelage_frame_set_colliders(
+                                frames[f].0,
+                                &colliders,
+                                on_threads(threads),
+                            );
                             frame_body.push(t.elapsed().as_secs_f64());
                             assert_eq!(s, PelageStatus::Ok);
                         }
@@ -146,7 +150,7 @@ fn main() {
                             frames[f].0,
                             &PelageStepParams {
                                 dt: 1.0 / 24.0,
-                                thread_count: threads,
+                                run: on_threads(threads),
                                 colliders: &colliders,
                                 ..pelage_step_params_defaults()
                             },
@@ -156,7 +160,11 @@ fn main() {
                         assert_eq!(s, PelageStatus::Ok);
                         if body == 2 {
                             // the frame's body freed (96 would not fit)
-                            pelage_frame_set_colliders(frames[f].0, std::ptr::null(), threads);
+                            pelage_frame_set_colliders(
+                                frames[f].0,
+                                std::ptr::null(),
+                                on_threads(threads),
+                            );
                         }
                         e
                     })
@@ -257,7 +265,7 @@ fn full_frame(
     );
     let ep = PelageExpandParams {
         points_per_strand: JOINTS as u32,
-        thread_count: 2,
+        run: on_threads(2),
         ..pelage_expand_params_defaults()
     };
     let mut per = 0;
@@ -276,7 +284,7 @@ fn full_frame(
                 handle.0,
                 &PelageStepParams {
                     dt: 1.0 / 24.0,
-                    thread_count: 2,
+                    run: on_threads(2),
                     colliders: &colliders,
                     ..pelage_step_params_defaults()
                 },
@@ -286,7 +294,7 @@ fn full_frame(
         );
         let stepped = t.elapsed().as_secs_f64();
         assert_eq!(
-            pelage_frame_set_sim_guides(handle.0, sim, 2),
+            pelage_frame_set_sim_guides(handle.0, sim, on_threads(2)),
             PelageStatus::Ok
         );
         let posing = t.elapsed().as_secs_f64();
@@ -307,7 +315,7 @@ fn full_frame(
         );
         let simulated = guides_desc(roots, &posed);
         assert_eq!(
-            pelage_frame_set_guides(handle.0, &simulated, 2),
+            pelage_frame_set_guides(handle.0, &simulated, on_threads(2)),
             PelageStatus::Ok
         );
         read_and_set.push(t.elapsed().as_secs_f64());

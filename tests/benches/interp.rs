@@ -19,7 +19,7 @@ use pelage_core::interp::strands::{StrandBounds, Strands};
 use pelage_core::{Arena, ArenaLayout, Mesh, Root, ScalarMap, Strided};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
-    combed_guides, curves_desc, frame, groom_handle, guides_desc, mesh_desc, mesh_view,
+    combed_guides, curves_desc, frame, groom_handle, guides_desc, mesh_desc, mesh_view, on_threads,
     stamp_roots, ExpandCall, Frame,
 };
 use std::hint::black_box;
@@ -125,7 +125,7 @@ fn main() {
     );
     let handle = groom_handle(&hairs, binds, groom_records);
     for threads in [1u32, 2] {
-        ep.thread_count = threads;
+        ep.run.thread_count = threads;
         let t_floor = time(7, || {
             write_floor(&mut out, threads as usize);
             black_box(&out);
@@ -203,7 +203,7 @@ fn edits(
 ) {
     use pelage_tests::animated::{capsules, colliders};
     let ep = PelageExpandParams {
-        thread_count: 2,
+        run: on_threads(2),
         ..*ep
     };
     let desc = mesh_desc(m);
@@ -246,7 +246,10 @@ fn edits(
     let run = |edits: Option<PelageStrandEdits>, set: bool, out: &mut [[f32; 4]]| {
         let f = frame(&desc, gdesc, CVS as u32, 2).unwrap();
         if set {
-            assert_eq!(pelage_frame_set_colliders(f.0, &col, 1), PelageStatus::Ok);
+            assert_eq!(
+                pelage_frame_set_colliders(f.0, &col, on_threads(1)),
+                PelageStatus::Ok
+            );
         }
         let curves = curves_desc(out, None);
         let e = edits.as_ref().map_or(std::ptr::null(), |e| e as *const _);

@@ -107,6 +107,45 @@ static int untouched(const void *p, size_t n) {
 }
 #define FILL(p, n) memset((p), CANARY, (n))
 
+/* A PelageRun of `threads` threads and no progress callback. */
+static PelageRun threads_run(uint32_t threads) {
+  PelageRun run = pelage_run_defaults();
+  run.thread_count = threads;
+  return run;
+}
+
+/* A progress callback that records its calls and cancels at call `cancel_at`
+ * (never when it is 0). */
+typedef struct Progress {
+  int calls, cancel_at, decreased, outside, off_thread;
+  double first, last;
+  pthread_t thread; /* the calling thread */
+} Progress;
+
+static Progress progress_new(int cancel_at) {
+  Progress p;
+  memset(&p, 0, sizeof p);
+  p.cancel_at = cancel_at, p.first = -1.0, p.last = -1.0, p.thread = pthread_self();
+  return p;
+}
+
+static bool on_progress(void *user_data, double fraction) {
+  Progress *p = user_data;
+  if (p->calls == 0) p->first = fraction;
+  p->decreased |= p->calls > 0 && fraction < p->last;
+  p->outside |= !(fraction >= 0.0 && fraction <= 1.0);
+  p->off_thread |= !pthread_equal(p->thread, pthread_self());
+  p->last = fraction;
+  p->calls++;
+  return p->calls != p->cancel_at;
+}
+
+/* A callback that never cancelled heard a never-decreasing share in [0, 1], ending at 1, on the
+ * calling thread. */
+static int progress_rose(const Progress *p) {
+  return p->calls >= 2 && !p->decreased && !p->outside && !p->off_thread && p->last == 1.0;
+}
+
 /* --- Test meshes ------------------------------------------------------------ */
 
 /* A UV sphere with a duplicated seam column and pole rows of repeated points,
@@ -297,7 +336,7 @@ static void test_defaults(void) {
   CHECK(d.density.kind == PELAGE_MAP_KIND_CONSTANT && d.density.constant == 1.0f);
   CHECK(d.black_scale == 0.5f);
   CHECK(d.bald_below == 1.0f / 512.0f);
-  CHECK(d.progress == NULL && d.progress_user_data == NULL);
+  CHECK(d.run.progress == NULL && d.run.progress_user_data == NULL);
 }
 
 /* The reference stamp on the sphere, and the success-path invariants. */
@@ -942,7 +981,7 @@ static PelageFrame make_frame(const PelageMeshDesc *mesh, const PelageGuidesDesc
   PelageFrame frame = NULL;
   EXPECT(PELAGE_STATUS_OK, pelage_frame_new(mesh, guides->guide_count, points, &frame));
   REQUIRE(frame != NULL);
-  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(frame, guides, threads));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(frame, guides, threads_run(threads)));
   return frame;
 }
 
@@ -975,8 +1014,8 @@ static void test_interp_defaults(void) {
   const PelageBindParams b = pelage_bind_params_defaults();
   CHECK(b.min_neighbours == 3 && b.max_neighbours == 6 && b.seed == 0);
   CHECK(b.min_normal_dot == 0.25f && b.search_factor == 2.5f && b.max_wrap_slope == 0.3f);
-  CHECK(b.regions.kind == PELAGE_REGION_KIND_NONE && b.regions.data == NULL && b.thread_count == 1);
-  CHECK(b.progress == NULL && b.progress_user_data == NULL);
+  CHECK(b.regions.kind == PELAGE_REGION_KIND_NONE && b.regions.data == NULL && b.run.thread_count == 1);
+  CHECK(b.run.progress == NULL && b.run.progress_user_data == NULL);
   const PelageGroomMaps m = pelage_groom_maps_defaults();
   const PelageMap *all[7] = {&m.length, &m.root_width, &m.tip_width, &m.bend, &m.kink_amplitude, &m.kink_frequency,
                              &m.clump};
@@ -986,8 +1025,8 @@ static void test_interp_defaults(void) {
   CHECK(m.clump.constant == 0.0f && m.seed == 0);
   const PelageExpandParams e = pelage_expand_params_defaults();
   CHECK(e.points_per_strand == 16 && e.end_points == PELAGE_END_POINTS_PINNED);
-  CHECK(e.orphan_length == 0.1f && e.thread_count == 1);
-  CHECK(e.progress == NULL && e.progress_user_data == NULL);
+  CHECK(e.orphan_length == 0.1f && e.run.thread_count == 1);
+  CHECK(e.run.progress == NULL && e.run.progress_user_data == NULL);
 }
 
 /* Guides, strands, bind, groom, frame and expand on the sphere; the success-path invariants. */
@@ -1061,7 +1100,7 @@ static void test_interp_success(void) {
     PelageBindParams bp = g_in.bind_params;
     const unsigned threads[3] = {0, 2, 7};
     for (int t = 0; t < 3; ++t) {
-      bp.thread_count = threads[t];
+      bp.run.thread_count = threads[t];
       FILL(g_in.bind_out, g_in.strand_count * sizeof *g_in.bind_out);
       EXPECT(PELAGE_STATUS_OK, pelage_bind(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.strand_count, &bp, (PelageArena){g_in.bind_arena, g_in.bind_arena_bytes}, g_in.bind_out, g_in.strand_count, NULL));
       CHECK(memcmp(g_in.bind_out, g_in.bindings, g_in.strand_count * sizeof *g_in.bind_out) == 0);
@@ -1114,7 +1153,7 @@ static void test_interp_success(void) {
   EXPECT(PELAGE_STATUS_OK, pelage_frame_new(&g_in.mesh, g_in.guide_count, g_in.expand_params.points_per_strand,
                                             &g_in.frame));
   REQUIRE(g_in.frame != NULL);
-  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(g_in.frame, &g_in.guides, 1));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(g_in.frame, &g_in.guides, threads_run(1)));
   FILL(g_in.points, n * per * 16), FILL(g_in.counts_out, n * 4), FILL(g_in.ids_out, n * 4);
   EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
                                    g_in.points, 16, n * per, g_in.counts_out, g_in.ids_out));
@@ -1156,7 +1195,7 @@ static void test_interp_success(void) {
     PelageExpandParams p = g_in.expand_params;
     const unsigned threads[3] = {0, 2, 7};
     for (int t = 0; t < 3; ++t) {
-      p.thread_count = threads[t];
+      p.run.thread_count = threads[t];
       CHECK(gives_reference(g_in.frame, &p));
       PelageFrame f = make_frame(&g_in.mesh, &g_in.guides, g_in.expand_params.points_per_strand, threads[t]);
       SAME_AS_REFERENCE(f);
@@ -1285,17 +1324,17 @@ static void test_frame(void) {
   memcpy(more_points, g_in.guide_points, points * sizeof *more_points);
   memcpy(more_points[points], g_in.guide_points[0], GCVS * sizeof *more_points);
   more.roots = more_roots, more.guide_count += 1, more.points = more_points, more.point_count += GCVS;
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &fewer, 1));
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &more, 2));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &fewer, threads_run(1)));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &more, threads_run(2)));
   FAILS(PELAGE_STATUS_INVALID_ARGUMENT, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
                                                g_in.points_out, 16, POINTS_CAPACITY));
   /* posed: the reference bits */
-  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, 1));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, threads_run(1)));
   SAME_AS_REFERENCE(f);
   /* a guide count other than the frame's now leaves it with the guides it had */
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &fewer, 1));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &fewer, threads_run(1)));
   SAME_AS_REFERENCE(f);
-  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &more, 0));
+  FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_guides(f, &more, threads_run(0)));
   SAME_AS_REFERENCE(f);
   /* new guides (a simulation's next frame) replace the old ones: longer guides, longer curves; posing
    * the old ones again gives the old bits */
@@ -1312,7 +1351,7 @@ static void test_frame(void) {
     }
     PelageGuidesDesc next = g_in.guides;
     next.points = longer;
-    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &next, 2));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &next, threads_run(2)));
     FILL(g_in.points_out, points_out_bytes());
     EXPECT(PELAGE_STATUS_OK, EXPAND(f, g_in.strands, g_in.bindings, g_in.grooms, n, &g_in.expand_params,
                                     g_in.points_out, 16, POINTS_CAPACITY));
@@ -1332,7 +1371,7 @@ static void test_frame(void) {
            chord_new / (double)n);
     CHECK(chord_new > 1.3 * chord_ref && chord_new < 1.7 * chord_ref);
     CHECK(memcmp(c, g_in.points, 16) == 0); /* the roots do not move */
-    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, 0));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, threads_run(0)));
     SAME_AS_REFERENCE(f);
     free(longer);
   }
@@ -1376,7 +1415,7 @@ static void test_frame(void) {
     for (size_t v = 0; v < copy.nv; ++v) copy.p[v][0] = NAN, copy.n[v][1] = INFINITY, copy.uv[v][0] = NAN;
     memset(copy.t, 0xff, copy.nt * sizeof *copy.t);
     sphere_free(&copy); /* read after this, ASan and Valgrind object */
-    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, 1));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(f, &g_in.guides, threads_run(1)));
     SAME_AS_REFERENCE(f);
     pelage_frame_free(f);
   }
@@ -1509,12 +1548,12 @@ static void test_interp_null_pointers(void) {
     mesh = g_in.mesh, mesh.indices = NULL;
     FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_new(&mesh, g_in.guide_count, 16, &out));
     CHECK(out == canary);
-    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(NULL, &g_in.guides, 1));
-    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, NULL, 1));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(NULL, &g_in.guides, threads_run(1)));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, NULL, threads_run(1)));
     guides = g_in.guides, guides.roots = NULL;
-    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, &guides, 1));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, &guides, threads_run(1)));
     guides = g_in.guides, guides.points = NULL;
-    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, &guides, 2));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_guides(g_in.frame, &guides, threads_run(2)));
     SAME_AS_REFERENCE(g_in.frame);
     pelage_frame_free(NULL);
   }
@@ -1607,7 +1646,7 @@ static void test_interp_capacity(void) {
   do {                                                                                                              \
     FAILS(want, BIND(&g_in.mesh, guides_ptr, g_in.strands, g_in.strand_count, &g_in.bind_params, g_in.bind_arena, \
                      g_in.bind_arena_bytes, g_in.bind_out, g_in.strand_count));                                     \
-    FAILS(want, pelage_frame_set_guides(g_in.frame, guides_ptr, 2));                                               \
+    FAILS(want, pelage_frame_set_guides(g_in.frame, guides_ptr, threads_run(2)));                                               \
     SAME_AS_REFERENCE(g_in.frame);                                                                                  \
   } while (0)
 
@@ -1673,7 +1712,7 @@ static void test_interp_bad_input(void) {
                        POINTS_CAPACITY));
     {
       PelageExpandParams threads = g_in.expand_params;
-      threads.thread_count = 3; /* checked over threads: the same verdict */
+      threads.run.thread_count = 3; /* checked over threads: the same verdict */
       FAILS(want, EXPAND(g_in.frame, strands, g_in.bindings, g_in.grooms, n, &threads, g_in.points_out, 16,
                          POINTS_CAPACITY));
     }
@@ -2008,7 +2047,7 @@ static void test_hostile(void) {
     const PelageStatus want[5] = {PELAGE_STATUS_INVALID_ARGUMENT, PELAGE_STATUS_INVALID_ARGUMENT,
                                   PELAGE_STATUS_INVALID_ARGUMENT, PELAGE_STATUS_NON_FINITE, PELAGE_STATUS_NON_FINITE};
     PelageExpandParams threads = g_in.expand_params;
-    threads.thread_count = 3;
+    threads.run.thread_count = 3;
     for (int i = 0; i < 5; ++i) {
       memcpy(b, g_in.bindings, n * sizeof *b);
       b[bound].weights[0] = weights[i];
@@ -2161,7 +2200,7 @@ static void test_groom_handle(void) {
   const unsigned threads[3] = {1, 2, 7};
   for (int t = 0; t < 3; ++t) {
     PelageExpandParams p = g_in.expand_params;
-    p.thread_count = threads[t];
+    p.run.thread_count = threads[t];
     FILL(g_in.points_out, points_out_bytes());
     EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, g_in.frame, 0, n, &p, g_in.points_out, n * per));
     CHECK(memcmp(g_in.points_out, g_in.points, n * per * 16) == 0);
@@ -2370,7 +2409,7 @@ static void test_files(void) {
   EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_size(g, pts, 1, 0, &cache_bytes));
   unsigned char *cache = malloc(cache_bytes);
   REQUIRE(cache);
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 1, cache, cache_bytes, &written));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 1, threads_run(1), cache, cache_bytes, &written));
   PelageGuideCacheInfo cinfo;
   EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_info(cache, written, &cinfo));
   CHECK(cinfo.guide_count == g && cinfo.sample_count == 1 && cinfo.exact == 1 && cinfo.groom_id == info.id);
@@ -2379,23 +2418,53 @@ static void test_files(void) {
   REQUIRE(decoded != NULL);
   PelageGuideSet other = set;
   other.groom_id ^= 1;
-  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &other, 0, decoded, 1));
-  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &set, 1, decoded, 1));
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &other, 0, decoded, threads_run(1)));
+  EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_guide_cache_read(cache, written, &set, 1, decoded, threads_run(1)));
   cache[written - 1] ^= 0x40;
-  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_guide_cache_read(cache, written, &set, 0, decoded, 1));
+  EXPECT(PELAGE_STATUS_CORRUPT_DATA, pelage_guide_cache_read(cache, written, &set, 0, decoded, threads_run(1)));
   cache[written - 1] ^= 0x40;
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_read(cache, written, NULL, 0, decoded, 1));
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded, 1));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_read(cache, written, NULL, 0, decoded, threads_run(1)));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded, threads_run(1)));
   SAME_AS_REFERENCE(decoded);
   /* any thread count, the same bits */
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded, 3));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, written, &set, 0, decoded, threads_run(3)));
   SAME_AS_REFERENCE(decoded);
   /* quantized: smaller, and within the bound */
   size_t quantized = 0;
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 0, cache, cache_bytes, &quantized));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 0, threads_run(1), cache, cache_bytes, &quantized));
   CHECK(quantized < written / 2);
-  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, quantized, &set, 0, decoded, 1));
-  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_write(&set, NULL, 1, 0, cache, cache_bytes, &quantized));
+  EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, quantized, &set, 0, decoded, threads_run(1)));
+  EXPECT(PELAGE_STATUS_NULL_PARAMETER, pelage_guide_cache_write(&set, NULL, 1, 0, threads_run(1), cache, cache_bytes, &quantized));
+  {
+    /* encode and decode hear their progress, and a false return cancels them */
+    unsigned char *again = malloc(cache_bytes);
+    REQUIRE(again);
+    Progress seen = progress_new(0), stop = progress_new(1);
+    PelageRun heard = threads_run(2);
+    heard.progress = on_progress, heard.progress_user_data = &seen;
+    size_t same = 0;
+    EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_write(&set, &g_in.frame, 1, 0, heard, again, cache_bytes, &same));
+    CHECK(same == quantized && memcmp(again, cache, same) == 0 && progress_rose(&seen));
+    heard.progress_user_data = &stop;
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_guide_cache_write(&set, &g_in.frame, 1, 0, heard, again, cache_bytes, &same));
+    CHECK(stop.calls == 1);
+    seen = progress_new(0), heard.progress_user_data = &seen;
+    EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, quantized, &set, 0, decoded, heard));
+    CHECK(progress_rose(&seen));
+    const int calls = seen.calls;
+    /* cancelled while unpacking: the frame keeps its guides */
+    stop = progress_new(1), heard.progress_user_data = &stop;
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_guide_cache_read(cache, quantized, &set, 0, decoded, heard));
+    EXPECT(PELAGE_STATUS_OK, expand_(decoded, roots, bindings, grooms, n, &g_in.expand_params, g_in.points_out, 16,
+                                     POINTS_CAPACITY, NULL, NULL));
+    /* cancelled while posing: the frame has no guides until the next read */
+    stop = progress_new(calls), heard.progress_user_data = &stop;
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_guide_cache_read(cache, quantized, &set, 0, decoded, heard));
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, expand_(decoded, roots, bindings, grooms, n, &g_in.expand_params,
+                                                   g_in.points_out, 16, POINTS_CAPACITY, NULL, NULL));
+    EXPECT(PELAGE_STATUS_OK, pelage_guide_cache_read(cache, quantized, &set, 0, decoded, threads_run(1)));
+    free(again);
+  }
 
   /* patch boxes hold every point of their strands */
   float *boxes = malloc(patch_count * 6 * sizeof *boxes);
@@ -2440,38 +2509,6 @@ static void *worker(void *arg) {
   return NULL;
 }
 
-/* A progress callback that records its calls and cancels at call `cancel_at`
- * (never when it is 0). */
-typedef struct Progress {
-  int calls, cancel_at, decreased, outside, off_thread;
-  double first, last;
-  pthread_t thread; /* the calling thread */
-} Progress;
-
-static Progress progress_new(int cancel_at) {
-  Progress p;
-  memset(&p, 0, sizeof p);
-  p.cancel_at = cancel_at, p.first = -1.0, p.last = -1.0, p.thread = pthread_self();
-  return p;
-}
-
-static bool on_progress(void *user_data, double fraction) {
-  Progress *p = user_data;
-  if (p->calls == 0) p->first = fraction;
-  p->decreased |= p->calls > 0 && fraction < p->last;
-  p->outside |= !(fraction >= 0.0 && fraction <= 1.0);
-  p->off_thread |= !pthread_equal(p->thread, pthread_self());
-  p->last = fraction;
-  p->calls++;
-  return p->calls != p->cancel_at;
-}
-
-/* A callback that never cancelled heard a never-decreasing share in [0, 1], ending at 1, on the
- * calling thread. */
-static int progress_rose(const Progress *p) {
-  return p->calls >= 2 && !p->decreased && !p->outside && !p->off_thread && p->last == 1.0;
-}
-
 /* Strands of `grooms` with a control point after the root deeper than 0.98
  * inside the unit sphere (the mesh lies between radius ~0.99 and 1). */
 static size_t strands_inside(const PelageStrandGroom *grooms) {
@@ -2513,7 +2550,7 @@ static void test_trim_and_edits(void) {
   uint16_t *lengths = malloc(n * sizeof *lengths), *lengths_back = malloc((n + 1) * sizeof *lengths);
   REQUIRE(rec && back && lengths && lengths_back);
   size_t count = 0;
-  EXPECT(PELAGE_STATUS_OK, pelage_trim_find(g_in.frame, NULL, &col, 2, rec, g, &count));
+  EXPECT(PELAGE_STATUS_OK, pelage_trim_find(g_in.frame, NULL, &col, threads_run(2), rec, g, &count));
   CHECK(count > 0 && count < g);
   int sane = 1;
   for (size_t i = 0; i < count; ++i)
@@ -2522,20 +2559,34 @@ static void test_trim_and_edits(void) {
   {
     size_t one = 0;
     PelageTrimRecord first[1];
-    EXPECT(PELAGE_STATUS_OK, pelage_trim_find(g_in.frame, NULL, &col, 1, rec, g, &one));
+    EXPECT(PELAGE_STATUS_OK, pelage_trim_find(g_in.frame, NULL, &col, threads_run(1), rec, g, &one));
     CHECK(one == count);
     FILL(first, sizeof first);
-    EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_trim_find(g_in.frame, NULL, &col, 1, first, 1, &one));
+    EXPECT(PELAGE_STATUS_CAPACITY_EXCEEDED, pelage_trim_find(g_in.frame, NULL, &col, threads_run(1), first, 1, &one));
     CHECK(one == count && untouched(first, sizeof first)); /* the count needed, no record */
   }
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_trim_find(NULL, NULL, &col, 1, rec, g, &count));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_trim_find(g_in.frame, NULL, &col, 1, rec, g, NULL));
+  {
+    /* trim_find hears its progress; cancelled, it writes nothing */
+    Progress seen = progress_new(0), stop = progress_new(2);
+    PelageRun heard = threads_run(2);
+    heard.progress = on_progress, heard.progress_user_data = &seen;
+    size_t again = 0;
+    FILL(back, g * sizeof *back);
+    EXPECT(PELAGE_STATUS_OK, pelage_trim_find(g_in.frame, NULL, &col, heard, back, g, &again));
+    CHECK(again == count && memcmp(back, rec, count * sizeof *rec) == 0 && progress_rose(&seen));
+    heard.progress_user_data = &stop;
+    FILL(back, g * sizeof *back), FILL(&again, sizeof again);
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_trim_find(g_in.frame, NULL, &col, heard, back, g, &again));
+    CHECK(stop.calls == 2 && untouched(back, g * sizeof *back) && untouched(&again, sizeof again));
+  }
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_trim_find(NULL, NULL, &col, threads_run(1), rec, g, &count));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_trim_find(g_in.frame, NULL, &col, threads_run(1), rec, g, NULL));
   {
     PelageSphere bad = {{0.0f, 0.0f, 0.0f}, -1.0f};
     PelageColliders c = col;
     c.spheres = &bad, c.sphere_count = 1;
     FILL(back, g * sizeof *back);
-    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_trim_find(g_in.frame, NULL, &c, 1, back, g, &count));
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_trim_find(g_in.frame, NULL, &c, threads_run(1), back, g, &count));
     CHECK(untouched(back, g * sizeof *back));
   }
 
@@ -2636,12 +2687,34 @@ static void test_trim_and_edits(void) {
     PelageSphere bad = {{0.0f, 0.0f, NAN}, 1.0f};
     PelageColliders b = col;
     b.spheres = &bad, b.sphere_count = 1;
-    EXPECT(PELAGE_STATUS_NON_FINITE, pelage_frame_set_colliders(g_in.frame, &b, 1));
+    EXPECT(PELAGE_STATUS_NON_FINITE, pelage_frame_set_colliders(g_in.frame, &b, threads_run(1)));
   }
-  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, &col, 0));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, &col, threads_run(0)));
   EXPECT(PELAGE_STATUS_OK, pelage_groom_expand_edited(groom, g_in.frame, 0, n, &edits, &g_in.expand_params, &c));
-  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, NULL, 1));
-  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_colliders(NULL, &col, 1));
+  EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, NULL, threads_run(1)));
+  FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_colliders(NULL, &col, threads_run(1)));
+  {
+    /* the body's build and the posing hear their progress and can be cancelled */
+    PelageColliders with_body = col;
+    with_body.body = 1;
+    Progress seen = progress_new(0), stop = progress_new(2);
+    PelageRun heard = threads_run(2);
+    heard.progress = on_progress, heard.progress_user_data = &seen;
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, &with_body, heard));
+    CHECK(progress_rose(&seen) && seen.calls >= 5);
+    heard.progress_user_data = &stop;
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_frame_set_colliders(g_in.frame, &with_body, heard));
+    CHECK(stop.calls == 2);
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, NULL, threads_run(1)));
+    seen = progress_new(0), heard.progress_user_data = &seen;
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(g_in.frame, &g_in.guides, heard));
+    CHECK(progress_rose(&seen));
+    stop = progress_new(seen.calls), heard.progress_user_data = &stop;
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_frame_set_guides(g_in.frame, &g_in.guides, heard));
+    FAILS(PELAGE_STATUS_INVALID_ARGUMENT, pelage_groom_expand(groom, g_in.frame, 0, n, &g_in.expand_params, &c));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(g_in.frame, &g_in.guides, threads_run(1)));
+    EXPECT(PELAGE_STATUS_OK, pelage_groom_expand(groom, g_in.frame, 0, n, &g_in.expand_params, &c));
+  }
 
   /* LOD counts need patches sorted by rank; masks need a finite threshold */
   {
@@ -2691,7 +2764,7 @@ static void test_settle(void) {
   CHECK(strands_inside(settled) == 0);
   /* the same grooms on any thread count */
   for (uint32_t threads = 0; threads < 4; threads += 3) {
-    ep.thread_count = threads;
+    ep.run.thread_count = threads;
     memcpy(work, tilted, n * sizeof *work);
     EXPECT(PELAGE_STATUS_OK, pelage_settle(&(PelageRestPose){&g_in.mesh, &g_in.guides}, g_in.strands, g_in.bindings, work, n, &ep, (PelageArena){arena, bytes}, &again));
     CHECK(memcmp(work, settled, n * sizeof *work) == 0 && memcmp(&info, &again, sizeof info) == 0);
@@ -2728,14 +2801,14 @@ static void test_settle(void) {
   tilted[5].lift[1] = NAN;
   SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
   /* split over threads, the error still names the element in the whole array */
-  ep.thread_count = 3;
+  ep.run.thread_count = 3;
   tilted[5].lift[1] = 0.0f, tilted[n - 2].kink_phase[0] = INFINITY;
   SETTLE_FAILS(PELAGE_STATUS_NON_FINITE, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
   char want[64];
   snprintf(want, sizeof want, "grooms at element %zu", n - 2);
   CHECK(strstr(pelage_last_error(), want) != NULL);
   tilted[n - 2] = g_in.grooms[n - 2], tilted[n - 2].lift[0] = 2.0f;
-  ep.thread_count = 1;
+  ep.run.thread_count = 1;
   tilted[5].lift[1] = 3.0f; /* |lift| = sqrt(13) > pi */
   SETTLE_FAILS(PELAGE_STATUS_INVALID_ARGUMENT, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
   tilted[5].lift[1] = 0.0f;
@@ -2757,9 +2830,9 @@ static void test_settle(void) {
       memcpy(b, g_in.bindings, n * sizeof *b);
       b[bound].weights[0] = weights[i];
       SETTLE_FAILS(status[i], SETTLE(&g_in.mesh, &g_in.guides, b, &ep));
-      ep.thread_count = 3;
+      ep.run.thread_count = 3;
       SETTLE_FAILS(status[i], SETTLE(&g_in.mesh, &g_in.guides, b, &ep));
-      ep.thread_count = 1;
+      ep.run.thread_count = 1;
     }
     free(b);
     tilted[n / 3].bend = 1e30f;
@@ -2793,8 +2866,8 @@ static void test_settle(void) {
   {
     for (uint32_t threads = 1; threads < 4; threads += 2) {
       Progress seen = progress_new(0);
-      ep.thread_count = threads;
-      ep.progress = on_progress, ep.progress_user_data = &seen;
+      ep.run.thread_count = threads;
+      ep.run.progress = on_progress, ep.run.progress_user_data = &seen;
       memcpy(work, tilted, n * sizeof *work);
       FILL(&again, sizeof again);
       EXPECT(PELAGE_STATUS_OK, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
@@ -2805,7 +2878,7 @@ static void test_settle(void) {
         const int stops[3] = {1, seen.calls / 2, seen.calls};
         for (int i = 0; i < 3; ++i) {
           Progress stop = progress_new(stops[i]);
-          ep.progress_user_data = &stop;
+          ep.run.progress_user_data = &stop;
           memcpy(work, tilted, n * sizeof *work);
           FILL(&out_info, sizeof out_info);
           EXPECT(PELAGE_STATUS_CANCELLED, SETTLE(&g_in.mesh, &g_in.guides, g_in.bindings, &ep));
@@ -2871,7 +2944,7 @@ static void test_interp_progress(void) {
   for (int t = 0; t < 2; ++t) {
     PelageBindParams bp = g_in.bind_params;
     Progress seen = progress_new(0);
-    bp.thread_count = threads[t], bp.progress = on_progress, bp.progress_user_data = &seen;
+    bp.run.thread_count = threads[t], bp.run.progress = on_progress, bp.run.progress_user_data = &seen;
     fill_outputs();
     EXPECT(PELAGE_STATUS_OK, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
                                   g_in.bind_arena_bytes, g_in.bind_out, n));
@@ -2886,7 +2959,7 @@ static void test_interp_progress(void) {
     for (int i = 0; i < 3; ++i) {
       PelageBindParams bp = g_in.bind_params;
       Progress stop = progress_new(stops[i]);
-      bp.progress = on_progress, bp.progress_user_data = &stop;
+      bp.run.progress = on_progress, bp.run.progress_user_data = &stop;
       FAILS(PELAGE_STATUS_CANCELLED, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
                                           g_in.bind_arena_bytes, g_in.bind_out, n));
       CHECK(stop.calls == stops[i]);
@@ -2897,7 +2970,7 @@ static void test_interp_progress(void) {
   {
     PelageBindParams bp = g_in.bind_params;
     Progress stop = progress_new(1);
-    bp.progress = on_progress, bp.progress_user_data = &stop;
+    bp.run.progress = on_progress, bp.run.progress_user_data = &stop;
     FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED, BIND(&g_in.mesh, &g_in.guides, g_in.strands, n, &bp, g_in.bind_arena,
                                                 g_in.bind_arena_bytes, g_in.bind_out, n - 1));
     CHECK(stop.calls == 0);
@@ -2915,7 +2988,7 @@ static void test_interp_progress(void) {
     for (int t = 0; t < 2; ++t) {
       PelageExpandParams ep = g_in.expand_params;
       Progress seen = progress_new(0);
-      ep.thread_count = threads[t], ep.progress = on_progress, ep.progress_user_data = &seen;
+      ep.run.thread_count = threads[t], ep.run.progress = on_progress, ep.run.progress_user_data = &seen;
       FILL(g_in.points_out, points_out_bytes()), FILL(g_in.counts_out, n * 4), FILL(g_in.ids_out, n * 4);
       EXPECT(PELAGE_STATUS_OK, via_groom ? GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out, n * per)
                                          : EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep,
@@ -2930,7 +3003,7 @@ static void test_interp_progress(void) {
     for (int i = 0; i < 3; ++i) {
       PelageExpandParams ep = g_in.expand_params;
       Progress stop = progress_new(stops[i]);
-      ep.progress = on_progress, ep.progress_user_data = &stop;
+      ep.run.progress = on_progress, ep.run.progress_user_data = &stop;
       /* the curves are unspecified after a cancel: only the status and the calls are checked */
       EXPECT(PELAGE_STATUS_CANCELLED, via_groom ? GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out, n * per)
                                                 : EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n,
@@ -2942,7 +3015,7 @@ static void test_interp_progress(void) {
     {
       PelageExpandParams ep = g_in.expand_params;
       Progress stop = progress_new(1);
-      ep.progress = on_progress, ep.progress_user_data = &stop;
+      ep.run.progress = on_progress, ep.run.progress_user_data = &stop;
       FAILS(PELAGE_STATUS_CAPACITY_EXCEEDED,
             via_groom ? GROOM_EXPAND(groom, g_in.frame, 0, n, &ep, g_in.points_out, n * per - 1)
                       : EXPAND(g_in.frame, g_in.strands, g_in.bindings, g_in.grooms, n, &ep, g_in.points_out, 16,
@@ -2954,7 +3027,7 @@ static void test_interp_progress(void) {
   {
     PelageExpandParams ep = g_in.expand_params;
     Progress seen = progress_new(0);
-    ep.progress = on_progress, ep.progress_user_data = &seen;
+    ep.run.progress = on_progress, ep.run.progress_user_data = &seen;
     FILL(g_in.points_out, points_out_bytes());
     EXPECT(PELAGE_STATUS_OK, GROOM_EXPAND(groom, g_in.frame, n / 4, n / 2, &ep, g_in.points_out, (n / 2) * per));
     CHECK(memcmp(g_in.points_out, g_in.points + 4 * per * (n / 4), (n / 2) * per * 16) == 0);
@@ -2964,7 +3037,7 @@ static void test_interp_progress(void) {
   {
     PelageExpandParams ep = g_in.expand_params;
     Progress seen = progress_new(0);
-    ep.progress = on_progress, ep.progress_user_data = &seen;
+    ep.run.progress = on_progress, ep.run.progress_user_data = &seen;
     EXPECT(PELAGE_STATUS_OK, expand_(g_in.frame, NULL, NULL, NULL, 0, &ep, NULL, 16, 0, NULL, NULL));
     CHECK(!seen.decreased && !seen.outside && !seen.off_thread);
     CHECK(seen.calls >= 1 && seen.last == 1.0);
@@ -2994,8 +3067,8 @@ static void test_progress(void) {
   const PelageMeshDesc mesh = sphere_desc(&g_sphere);
   PelageStampParams p = g_params;
   Progress seen = progress_new(0);
-  p.progress = on_progress;
-  p.progress_user_data = &seen;
+  p.run.progress = on_progress;
+  p.run.progress_user_data = &seen;
   PelageRoot *roots = malloc(g_capacity * sizeof *roots);
   REQUIRE(roots);
   size_t count = 0;
@@ -3007,7 +3080,7 @@ static void test_progress(void) {
   for (int i = 0; i < 3; i++) {
     const int at = stops[i];
     Progress stop = progress_new(at);
-    p.progress_user_data = &stop;
+    p.run.progress_user_data = &stop;
     PelageStampInfo info;
     FILL(roots, g_capacity * sizeof *roots), FILL(&count, sizeof count), FILL(&info, sizeof info);
     EXPECT(PELAGE_STATUS_CANCELLED, pelage_stamp(&mesh, &p, (PelageArena){g_arena, g_arena_bytes}, roots, g_capacity, &count, &info));

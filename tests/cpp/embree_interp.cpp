@@ -221,7 +221,7 @@ Fur grow(const creature::Mesh& mesh, const PelageGuidesDesc& guides, const std::
   Fur f;
   creature::Stopwatch clock;
   PelageBindParams bind_params = pelage_bind_params_defaults();
-  bind_params.thread_count = 0;
+  bind_params.run.thread_count = 0;
   f.bindings = creature::bind(mesh, guides, roots.data(), roots.size(), bind_params, &f.info);
   f.bind_s = clock.seconds();
   clock = {};
@@ -328,7 +328,7 @@ int main(int argc, char** argv) try {
   ep.points_per_strand = 16;
   ep.end_points = PELAGE_END_POINTS_PINNED;
   ep.orphan_length = kGuideLength;
-  ep.thread_count = 0;
+  ep.run.thread_count = 0;
   creature::Expander expander(ep);
   const size_t per = expander.points_per_curve();
   Fur fur = grow(mesh, guides, roots, maps, expander, true);

@@ -141,7 +141,7 @@ void expand(Level& level, const creature::Groom& groom, const creature::Frame& f
   level.curves = offset.back();
   level.points.resize(4 * per * level.curves);
   params.width_scale = level.width_scale;
-  params.thread_count = 1;  // a patch on the calling thread
+  params.run.thread_count = 1;  // a patch on the calling thread
   tbb::parallel_for(size_t(0), patches.size(), [&](size_t i) {
     const size_t count = level.counts[i];
     if (count == 0) return;
@@ -230,7 +230,7 @@ int main(int argc, char** argv) try {
 
   clock = {};
   PelageBindParams bp = pelage_bind_params_defaults();
-  bp.thread_count = 0;
+  bp.run.thread_count = 0;
   PelageBindInfo bind_info{};
   const std::vector<PelageStrandBinding> bindings = creature::bind(mesh, guides, roots.data(), n, bp, &bind_info);
   PelageGroomMaps maps = pelage_groom_maps_defaults();
@@ -243,7 +243,7 @@ int main(int argc, char** argv) try {
   ep.points_per_strand = kCvs;
   ep.end_points = PELAGE_END_POINTS_PINNED;
   ep.orphan_length = kGuideLength;
-  ep.thread_count = 0;
+  ep.run.thread_count = 0;
   const PelageSettleInfo settled = creature::settle(mesh, guides, roots.data(), bindings.data(), grooms.data(), n, ep);
   const creature::Groom groom(roots.data(), bindings.data(), grooms.data(), n);
   const creature::Frame frame(mesh, guides, ep);  // pelage_frame_new + pelage_frame_set_guides, at rest

@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
     creature::check(pelage_sim_size(&desc, roots.size(), &params, &bytes), "pelage_sim_size");
     PelageFrame frame = nullptr;
     creature::check(pelage_frame_new(&desc, roots.size(), kJoints, &frame), "pelage_frame_new");
-    creature::check(pelage_frame_set_guides(frame, &guides, 0), "pelage_frame_set_guides");
+    creature::check(pelage_frame_set_guides(frame, &guides, PelageRun{0, nullptr, nullptr}), "pelage_frame_set_guides");
     PelageColliders colliders{};
     colliders.distance = distances;
     colliders.distance_user_data = grid.get();
@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
       for (int step = 0; step < 3; ++step) {
         PelageStepParams step_params = pelage_step_params_defaults();
         step_params.colliders = &colliders;
-        step_params.thread_count = threads;
+        step_params.run.thread_count = threads;
         creature::check(pelage_sim_step(sim, frame, &step_params, nullptr), "pelage_sim_step");
         creature::check(pelage_sim_read(sim, posed.data(), 12, posed.size() / 3), "pelage_sim_read");
         const size_t left = crossing(posed);

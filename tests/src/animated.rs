@@ -213,7 +213,7 @@ impl ShotSim {
     /// Steps the simulation by one frame of the shot (2 threads) to `body`,
     /// colliding with `colliders`, and reads the posed guides back.
     pub fn step(&self, body: &CreatureMesh, colliders: &pelage::PelageColliders) -> Vec<[f32; 3]> {
-        use crate::measure::{frame, guides_desc, mesh_desc};
+        use crate::measure::{frame, guides_desc, mesh_desc, on_threads};
         use pelage::*;
         let rest = guides_desc(&self.roots, &self.points);
         let neutral = frame(&mesh_desc(body), &rest, self.joints as u32, 2).unwrap();
@@ -222,7 +222,7 @@ impl ShotSim {
             neutral.0,
             &PelageStepParams {
                 dt: 1.0 / FPS,
-                thread_count: 2,
+                run: on_threads(2),
                 colliders,
                 ..pelage_step_params_defaults()
             },

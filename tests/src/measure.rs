@@ -220,7 +220,7 @@ pub fn groomed(
     let g = guides_desc(&guide_roots, &guide_points);
     let c_strands = bytemuck::cast_slice::<Root, PelageRoot>(&strands);
     let params = PelageBindParams {
-        thread_count: threads,
+        run: on_threads(threads),
         ..pelage_bind_params_defaults()
     };
     let mut bytes = 0usize;
@@ -348,6 +348,14 @@ impl Drop for Frame {
     }
 }
 
+/// A run of `threads` threads with no progress callback.
+pub fn on_threads(threads: u32) -> pelage::PelageRun {
+    pelage::PelageRun {
+        thread_count: threads,
+        ..pelage::pelage_run_defaults()
+    }
+}
+
 /// A frame of `mesh` posed with `guides` for `points` points per strand,
 /// or the first failing status.
 pub fn frame(
@@ -362,7 +370,7 @@ pub fn frame(
         return Err(s);
     }
     let frame = Frame(handle);
-    match pelage::pelage_frame_set_guides(frame.0, guides, threads) {
+    match pelage::pelage_frame_set_guides(frame.0, guides, on_threads(threads)) {
         pelage::PelageStatus::Ok => Ok(frame),
         s => Err(s),
     }
@@ -432,7 +440,12 @@ impl ExpandCall<'_> {
     /// counts; the first failing status otherwise.
     pub fn run(&self, out: &mut [[f32; 4]], counts: Option<&mut [u32]>) -> pelage::PelageStatus {
         let p = self.params;
-        let frame = match frame(self.mesh, self.guides, p.points_per_strand, p.thread_count) {
+        let frame = match frame(
+            self.mesh,
+            self.guides,
+            p.points_per_strand,
+            p.run.thread_count,
+        ) {
             Ok(f) => f,
             Err(s) => return s,
         };

@@ -12,7 +12,7 @@ use pelage_core::{Arena, Root};
 use pelage_tests::animated::{capsules, colliders, pose, segment_distance, FRAMES, TELEPORT_FRAME};
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
-    combed_guides, frame, guides_desc, mesh_desc, mesh_view, stamp_roots, Frame,
+    combed_guides, frame, guides_desc, mesh_desc, mesh_view, on_threads, stamp_roots, Frame,
 };
 use std::ptr::null_mut;
 
@@ -110,7 +110,7 @@ fn step(
         frame,
         &PelageStepParams {
             dt: 1.0 / 24.0,
-            thread_count: threads,
+            run: on_threads(threads),
             colliders,
             ..pelage_step_params_defaults()
         },
@@ -137,7 +137,7 @@ fn run(
         let caps = capsules(&shot.rest, &shot.roots, f);
         let colliders = colliders(&caps, true);
         if frame_body {
-            let s = pelage_frame_set_colliders(handle.0, &colliders, threads);
+            let s = pelage_frame_set_colliders(handle.0, &colliders, on_threads(threads));
             assert_eq!(s, PelageStatus::Ok, "frame {f}");
         }
         let s = step(sim, handle.0, &colliders, threads);
@@ -344,11 +344,10 @@ fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
             handle.0,
             &PelageStepParams {
                 dt: 1.0 / 24.0,
-                thread_count: 2,
+                run: on_threads(2),
                 colliders: std::ptr::null(),
                 external_points: points.as_ptr().cast(),
                 external_stride: 12,
-                ..pelage_step_params_defaults()
             },
             std::ptr::null_mut(),
         )
@@ -409,7 +408,8 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
         assert_eq!(s, PelageStatus::Ok);
         out
     };
-    let status = |frame: &Frame, threads| pelage_frame_set_sim_guides(frame.0, sim.sim, threads);
+    let status =
+        |frame: &Frame, threads| pelage_frame_set_sim_guides(frame.0, sim.sim, on_threads(threads));
     let first = frame(&mesh_desc(&shot.rest), &guides, JOINTS as u32, 1).unwrap();
     // no posed guides before the first step: refused, the frame unchanged
     let before = grown(&first);
@@ -424,7 +424,7 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
             read.0,
             &PelageStepParams {
                 dt: 1.0 / 24.0,
-                thread_count: 2,
+                run: on_threads(2),
                 colliders: &colliders(&caps, true),
                 ..pelage_step_params_defaults()
             },
@@ -434,7 +434,7 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
         let posed = sim.read(shot.roots.len());
         let simulated = guides_desc(&shot.roots, &posed);
         assert_eq!(
-            pelage_frame_set_guides(read.0, &simulated, 1),
+            pelage_frame_set_guides(read.0, &simulated, on_threads(1)),
             PelageStatus::Ok
         );
         let want = grown(&read);
@@ -448,11 +448,11 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
     let coarse = frame(&mesh_desc(&shot.rest), &guides, JOINTS as u32 - 1, 1).unwrap();
     assert_eq!(status(&coarse, 1), PelageStatus::InvalidArgument);
     assert_eq!(
-        pelage_frame_set_sim_guides(first.0, null_mut(), 1),
+        pelage_frame_set_sim_guides(first.0, null_mut(), on_threads(1)),
         PelageStatus::NullParameter
     );
     assert_eq!(
-        pelage_frame_set_sim_guides(null_mut(), sim.sim, 1),
+        pelage_frame_set_sim_guides(null_mut(), sim.sim, on_threads(1)),
         PelageStatus::NullParameter
     );
     assert_eq!(pelage_sim_reset(sim.sim), PelageStatus::Ok);
@@ -496,7 +496,7 @@ fn a_step_that_cannot_build_its_body_changes_nothing() {
         refused(&sim, threads);
         let posing = handle_of(&shot, 0);
         assert_eq!(
-            pelage_frame_set_sim_guides(posing.0, sim.sim, threads),
+            pelage_frame_set_sim_guides(posing.0, sim.sim, on_threads(threads)),
             PelageStatus::InvalidArgument,
             "a simulation whose only step was refused has no guides"
         );
@@ -579,7 +579,7 @@ fn a_nan_from_the_distance_callback_fails_the_call_and_changes_nothing() {
         posed.0,
         std::ptr::null(),
         &nan,
-        2,
+        on_threads(2),
         records.as_mut_ptr(),
         records.len(),
         &mut count,
@@ -609,7 +609,7 @@ fn non_finite_simulation_inputs_are_non_finite() {
     let far = colliders(&far_capsule, false);
     assert_eq!(step(&sim, frame.0, &far, 2), PelageStatus::InvalidArgument);
     assert_eq!(
-        pelage_frame_set_colliders(frame.0, &bad, 1),
+        pelage_frame_set_colliders(frame.0, &bad, on_threads(1)),
         PelageStatus::NonFinite
     );
     let mut records = vec![PelageTrimRecord::default(); n];
@@ -618,7 +618,7 @@ fn non_finite_simulation_inputs_are_non_finite() {
         frame.0,
         std::ptr::null(),
         &bad,
-        1,
+        on_threads(1),
         records.as_mut_ptr(),
         n,
         &mut count,
@@ -635,7 +635,7 @@ fn non_finite_simulation_inputs_are_non_finite() {
             frame.0,
             &PelageStepParams {
                 dt,
-                thread_count: 1,
+                run: on_threads(1),
                 colliders: &none,
                 ..pelage_step_params_defaults()
             },
@@ -693,7 +693,7 @@ fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
         let sim = SimHandle::new(&shot, &params);
         let mut info = PelageStepInfo { groomed_guides: 7 };
         let mut step = PelageStepParams {
-            thread_count: threads,
+            run: on_threads(threads),
             colliders: &all_inside,
             ..pelage_step_params_defaults()
         };
@@ -715,8 +715,8 @@ fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
             fractions: vec![],
             stop: usize::MAX,
         };
-        step.progress = Some(hear);
-        step.progress_user_data = (&mut heard as *mut Heard).cast();
+        step.run.progress = Some(hear);
+        step.run.progress_user_data = (&mut heard as *mut Heard).cast();
         let moved = handle_of(&shot, 2);
         let listened = SimHandle::new(&shot, &params);
         run(&shot, &listened, 0..1, threads, false, |_, _, _, _| {});
@@ -734,7 +734,7 @@ fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
             fractions: vec![],
             stop: 2,
         };
-        step.progress_user_data = (&mut heard as *mut Heard).cast();
+        step.run.progress_user_data = (&mut heard as *mut Heard).cast();
         assert_eq!(
             pelage_sim_step(sim.sim, moved.0, &step, std::ptr::null_mut()),
             PelageStatus::Cancelled

@@ -13,7 +13,7 @@
 use pelage::*;
 use pelage_core::Root;
 use pelage_tests::creature::{default_creature, CreatureMesh};
-use pelage_tests::measure::{groomed, guides_desc, mesh_desc, ExpandCall, Groomed};
+use pelage_tests::measure::{groomed, guides_desc, mesh_desc, on_threads, ExpandCall, Groomed};
 
 const CVS: usize = 12;
 
@@ -43,7 +43,7 @@ fn expand(
     grooms: &[PelageStrandGroom],
 ) -> Vec<[f32; 4]> {
     let params = PelageExpandParams {
-        thread_count: 2,
+        run: on_threads(2),
         ..pelage_expand_params_defaults()
     };
     let mut per = 0usize;
@@ -72,7 +72,7 @@ fn every_stage_gives_the_recorded_bits() {
     let mut g = groomed(&m, (13_030, CVS, 0.08), 100_000, &maps, 2);
     let groom_hash = hash(&g.grooms);
     let params = PelageExpandParams {
-        thread_count: 2,
+        run: on_threads(2),
         ..pelage_expand_params_defaults()
     };
     let settle = g.settle(&m, &params);

@@ -11,7 +11,8 @@
 use pelage::*;
 use pelage_tests::creature::{creature, CreatureMesh};
 use pelage_tests::measure::{
-    curves_desc, frame, groom_handle, groomed, guides_desc, mesh_desc, strands_desc, Frame, Groomed,
+    curves_desc, frame, groom_handle, groomed, guides_desc, mesh_desc, on_threads, strands_desc,
+    Frame, Groomed,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::ffi::CStr;
@@ -565,6 +566,7 @@ fn guide_cache_flags_and_versions_take_only_what_is_documented() {
             &sample.0,
             1,
             exact,
+            on_threads(1),
             cache.as_mut_ptr().cast(),
             cache.len(),
             &mut written,
@@ -581,7 +583,14 @@ fn guide_cache_flags_and_versions_take_only_what_is_documented() {
     expect(s, PelageStatus::Ok, &[]);
     let decoded = frame(&d, &guides_desc(&g.guide_roots, &g.guide_points), pts, 1).unwrap();
     let read = |bytes: &[u8]| {
-        pelage_guide_cache_read(bytes.as_ptr().cast(), bytes.len(), &set, 0, decoded.0, 1)
+        pelage_guide_cache_read(
+            bytes.as_ptr().cast(),
+            bytes.len(),
+            &set,
+            0,
+            decoded.0,
+            on_threads(1),
+        )
     };
     expect(read(&cache[..written]), PelageStatus::Ok, &[]);
     let v1 = relabelled(&cache[..written], 1);
@@ -603,7 +612,14 @@ fn guide_cache_flags_and_versions_take_only_what_is_documented() {
     let rest_decoded = frame(&mesh_desc(&m), &g.guides(), pts, 1).unwrap();
     let v1 = relabelled(&cache[..written], 1);
     expect(
-        pelage_guide_cache_read(v1.as_ptr().cast(), v1.len(), &set, 0, rest_decoded.0, 1),
+        pelage_guide_cache_read(
+            v1.as_ptr().cast(),
+            v1.len(),
+            &set,
+            0,
+            rest_decoded.0,
+            on_threads(1),
+        ),
         PelageStatus::Ok,
         &[],
     );
@@ -885,6 +901,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
             &rest.0,
             1,
             0,
+            on_threads(1),
             cache.as_mut_ptr().cast(),
             size,
             &mut written,
@@ -906,6 +923,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
                 &rest.0,
                 1,
                 0,
+                on_threads(1),
                 cache.as_mut_ptr().cast(),
                 size,
                 &mut unused,
@@ -920,7 +938,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
                 &set(&guide_points),
                 0,
                 rest.0,
-                1,
+                on_threads(1),
             ),
             want,
             &["guide rest points"],
@@ -970,7 +988,7 @@ fn any_non_finite_input_is_non_finite_in_every_object() {
             posed.0,
             &mesh_desc(&cloth),
             null(),
-            1,
+            on_threads(1),
             records.as_mut_ptr(),
             records.len(),
             &mut count,

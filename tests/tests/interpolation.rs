@@ -172,7 +172,7 @@ fn guides_with_their_own_point_counts_through_offsets() {
     let g = groom(&m, 600, 20_000, &styled());
     let mut params = pelage_expand_params_defaults();
     params.points_per_strand = CVS as u32;
-    params.thread_count = 2;
+    params.run.thread_count = 2;
     let fixed = expand(&m, &g, &params);
     let mut points = vec![];
     let mut offsets = vec![0u32];
@@ -239,10 +239,10 @@ fn identical_bits_for_1_2_and_7_threads_and_chunks() {
     let m = default_creature();
     let g = groom(&m, 2000, 30_000, &styled());
     let mut params = pelage_expand_params_defaults();
-    params.thread_count = 1;
+    params.run.thread_count = 1;
     let one = expand(&m, &g, &params);
     for threads in [2, 7] {
-        params.thread_count = threads;
+        params.run.thread_count = threads;
         assert!(expand(&m, &g, &params) == one, "{threads} threads");
     }
     assert!(one

@@ -13,7 +13,7 @@ use pelage_core::Arena;
 use pelage_tests::animated::{capsules, colliders, pose, segment_distance};
 use pelage_tests::creature::default_creature;
 use pelage_tests::measure::{
-    curves_desc, frame, groomed, guides_desc, mesh_desc, mesh_view, strands_desc,
+    curves_desc, frame, groomed, guides_desc, mesh_desc, mesh_view, on_threads, strands_desc,
 };
 use std::ptr::null_mut;
 
@@ -91,7 +91,7 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
     let params = |threads| PelageExpandParams {
         points_per_strand: JOINTS as u32,
         end_points: PelageEndPoints::Raw as u32,
-        thread_count: threads,
+        run: on_threads(threads),
         ..pelage_expand_params_defaults()
     };
     let edits = PelageStrandEdits {
@@ -113,7 +113,7 @@ fn masked_hairs_are_pushed_out_of_the_colliders_every_frame() {
         )
         .unwrap();
         ok(
-            pelage_frame_set_colliders(handle.0, &col, 2),
+            pelage_frame_set_colliders(handle.0, &col, on_threads(2)),
             "pelage_frame_set_colliders",
         );
         let expand = |edits: Option<&PelageStrandEdits>, threads| {

@@ -15,7 +15,9 @@ use pelage_core::surface::body::Body;
 use pelage_core::Arena;
 use pelage_tests::creature::default_creature;
 use pelage_tests::head::head_with_parts;
-use pelage_tests::measure::{groomed, mesh_desc, mesh_view, stamp_roots, stamp_vec, ExpandCall};
+use pelage_tests::measure::{
+    groomed, mesh_desc, mesh_view, on_threads, stamp_roots, stamp_vec, ExpandCall,
+};
 use pelage_tests::quality::{empty_space, neighbours, prefix, Skin};
 
 const CVS: usize = 12;
@@ -150,7 +152,7 @@ fn settle_leaves_no_point_inside_an_open_head_with_shells() {
     maps.bend.constant = 0.2;
     let mut g = groomed(&m, (3_000, CVS, 0.12), 40_000, &maps, 2);
     let params = PelageExpandParams {
-        thread_count: 2,
+        run: on_threads(2),
         ..pelage_expand_params_defaults()
     };
     let settle = g.settle(&m, &params);

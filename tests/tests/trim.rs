@@ -14,7 +14,7 @@ use pelage_core::Arena;
 use pelage_tests::animated::{capsules, colliders, pose, segment_distance};
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
-    curves_desc, frame, groomed, guides_desc, mesh_desc, mesh_view, strands_desc,
+    curves_desc, frame, groomed, guides_desc, mesh_desc, mesh_view, on_threads, strands_desc,
 };
 use std::collections::HashMap;
 use std::ptr::null_mut;
@@ -80,7 +80,7 @@ fn find(
             frame,
             cloth,
             col,
-            threads,
+            on_threads(threads),
             records.as_mut_ptr(),
             records.len(),
             &mut count,
@@ -179,7 +179,7 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
     let params = PelageExpandParams {
         points_per_strand: JOINTS as u32,
         end_points: PelageEndPoints::Raw as u32,
-        thread_count: 2,
+        run: on_threads(2),
         ..pelage_expand_params_defaults()
     };
     let per = JOINTS;
@@ -295,7 +295,10 @@ fn a_shirt_trims_the_fur_the_same_on_every_frame_of_a_shot() {
     let shapes = capsules(&rest, &fur.guide_roots, 0);
     let caps = colliders(&shapes, false);
     let cancelled = PelageExpandParams {
-        progress: Some(halfway),
+        run: PelageRun {
+            progress: Some(halfway),
+            ..params.run
+        },
         ..params
     };
     let whole = vec![PELAGE_TRIM_WHOLE; n];

@@ -325,6 +325,23 @@ pub fn encode(
     mode: Mode,
     out: &mut [u8],
 ) -> Result<usize, Error> {
+    encode_with_progress(groom, groom_id, samples, mode, out, &mut |_| true)
+}
+
+/// Blocks coded between two progress reports.
+const BLOCKS_PER_REPORT: usize = 64;
+
+/// [`encode`], calling `progress` with the share of blocks coded (0
+/// first, 1 last, every 64 blocks); a false return
+/// stops with [`Error::Cancelled`], `out` then holding part of a cache.
+pub fn encode_with_progress(
+    groom: &Groom,
+    groom_id: u32,
+    samples: &[&PosedFrame],
+    mode: Mode,
+    out: &mut [u8],
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<usize, Error> {
     groom.check()?;
     check_samples(groom, samples)?;
     let (g, n) = (groom.guide_roots.len(), groom.points);
@@ -343,6 +360,11 @@ pub fn encode(
         u64::from(groom_id),
         BLOCK as u64,
     ];
+    if !progress(0.0) {
+        return Err(Error::Cancelled);
+    }
+    let blocks = samples.len() * g.div_ceil(BLOCK);
+    let mut cancelled = false;
     let written = container::write(out, &MAGIC, VERSION, &fields, |w| {
         // the offset table, filled in as the stream is written
         let table = w.position();
@@ -356,6 +378,13 @@ pub fn encode(
         for frame in samples {
             for i in 0..g {
                 if i % BLOCK == 0 {
+                    let block = (entry - table) / 4;
+                    if block % BLOCKS_PER_REPORT == 0 && block > 0 {
+                        cancelled = !progress(block as f32 / blocks as f32);
+                        if cancelled {
+                            return;
+                        }
+                    }
                     w.patch_u32(entry, (w.position() - stream) as u32);
                     entry += 4;
                     before = None;
@@ -377,6 +406,9 @@ pub fn encode(
         }
         w.patch_u32(entry, (w.position() - stream) as u32);
     });
+    if cancelled || !progress(1.0) {
+        return Err(Error::Cancelled);
+    }
     Ok(written)
 }
 
@@ -534,6 +566,8 @@ impl<'a> GuideCache<'a> {
     /// [`GuideCache::unpack`]).
     pub fn decoding<'r>(&'r self, groom: &'r Groom<'r>, frame: &'r mut PosedFrame) -> Decoding<'r> {
         let (mesh, tangents, data, posed) = frame.slots();
+        // half-filled guides are no guides: posed again by finish
+        *posed = false;
         Decoding {
             filler: CacheFiller {
                 cache: self,

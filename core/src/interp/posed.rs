@@ -288,7 +288,7 @@ impl<S> Posing<'_, S> {
 
     /// Marks the frame without guides until it is finished: for guides
     /// checked while they fill it.
-    pub(crate) fn unpose(&mut self) {
+    pub fn unpose(&mut self) {
         *self.posed = false;
     }
 
