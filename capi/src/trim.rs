@@ -13,7 +13,7 @@ use pelage_core::cache::trim_file::{self, RecordsInfo};
 use pelage_core::interp::expand::ExpandJob;
 use pelage_core::surface::body::{Body, CELLS_PER_TRIANGLE};
 use pelage_core::trim::length::{guide_lengths, shortest, shortest_own};
-use pelage_core::trim::meet::meet;
+use pelage_core::trim::meet::meet_guides;
 use pelage_core::trim::TrimRecord;
 use pelage_core::{Arena, Mesh};
 
@@ -136,7 +136,9 @@ pub extern "C" fn pelage_trim_find(
         colliders.check()?;
         let guides = frame.guide_count();
         let found = split_with_progress(guides, run.thread_count, &mut [0u8; 0], 0, progress.within(0.2, 1.0), |range, _| {
-            range.filter_map(|g| meet(frame, g, cloth_body.as_ref(), &colliders)).collect::<Vec<_>>()
+            let mut found = Vec::new();
+            meet_guides(frame, range, cloth_body.as_ref(), &colliders, |r| found.push(r));
+            found
         })?;
         host.check_field()?;
         let total: usize = found.iter().map(Vec::len).sum();

@@ -236,7 +236,7 @@ impl<'c, 'r> Near<'c, 'r> {
     }
 
     /// True when `p` is inside a sphere, a capsule, a half-space or the body.
-    fn in_shape(&self, p: Vec3) -> bool {
+    pub(crate) fn in_shape(&self, p: Vec3) -> bool {
         let all = self.all;
         self.shapes(0, &self.spheres, all.spheres.len()).any(|i| {
             let s = &all.spheres[i];
@@ -311,17 +311,11 @@ impl<'c, 'r> Near<'c, 'r> {
     /// inside, enters the colliders: the largest tried parameter outside,
     /// to 1/4096 of the segment.
     pub(crate) fn entry(&self, a: Vec3, b: Vec3) -> f32 {
-        const BISECTIONS: u32 = 12;
-        let (mut out, mut inside) = (0.0f32, 1.0f32);
-        for _ in 0..BISECTIONS {
-            let mid = 0.5 * (out + inside);
-            if self.inside(a.lerp(b, mid)) {
-                inside = mid;
-            } else {
-                out = mid;
-            }
+        let mut entry = Entry::new();
+        for _ in 0..Entry::BISECTIONS {
+            entry.narrow(self.inside(entry.next(a, b)));
         }
-        out
+        entry.out
     }
 
     /// True when no point of `points` is inside a collider; `hint` as
@@ -330,6 +324,66 @@ impl<'c, 'r> Near<'c, 'r> {
     fn clear(&self, points: &[Vec3], hint: &mut usize, field: Option<bool>) -> bool {
         none_inside(points.len(), hint, |j| self.in_shape(points[j]))
             && field.unwrap_or_else(|| self.field_clear(points))
+    }
+}
+
+/// The bisection of [`Near::entry`], a step at a time, for a caller that
+/// asks a host field about many segments' next points at once.
+#[derive(Clone, Copy)]
+pub(crate) struct Entry {
+    /// The largest parameter found outside.
+    pub(crate) out: f32,
+    /// The smallest found inside.
+    inside: f32,
+}
+
+impl Entry {
+    /// Steps: to 1/4096 of the segment.
+    pub(crate) const BISECTIONS: u32 = 12;
+
+    pub(crate) fn new() -> Self {
+        Entry {
+            out: 0.0,
+            inside: 1.0,
+        }
+    }
+
+    /// The point of `a`-`b` the next step tries.
+    pub(crate) fn next(&self, a: Vec3, b: Vec3) -> Vec3 {
+        a.lerp(b, 0.5 * (self.out + self.inside))
+    }
+
+    /// Takes the verdict on [`next`](Self::next)'s point.
+    pub(crate) fn narrow(&mut self, inside: bool) {
+        let mid = 0.5 * (self.out + self.inside);
+        if inside {
+            self.inside = mid;
+        } else {
+            self.out = mid;
+        }
+    }
+}
+
+/// Marks in `inside` the points of `points` that the host field of
+/// `colliders` puts inside (a NaN distance counts as inside: never
+/// trusted as clear), asking it once; leaves `inside` as it is without a
+/// field.
+pub(crate) fn field_inside(
+    colliders: &Colliders,
+    points: &[[f32; 3]],
+    d: &mut [f32],
+    inside: &mut [bool],
+) {
+    let Some(field) = colliders.field else {
+        return;
+    };
+    if points.is_empty() {
+        return;
+    }
+    let d = &mut d[..points.len()];
+    field.distances(points, d);
+    for (i, &x) in inside.iter_mut().zip(d.iter()) {
+        *i |= x.is_nan() || x < 0.0;
     }
 }
 

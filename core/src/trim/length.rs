@@ -17,6 +17,7 @@
 //! shot, so a trimmed hair does not grow back and forth as the cloth moves.
 
 use crate::collide::Colliders;
+use crate::collide::FIELD_BATCH;
 use crate::curve::{cut, WHOLE};
 use crate::interp::bind::StrandBinding;
 use crate::interp::expand::ExpandJob;
@@ -24,8 +25,8 @@ use crate::interp::groom::StrandGroom;
 use crate::interp::strand::{EndPoints, MAX_STRAND_POINTS};
 use crate::interp::strands::Strands;
 use crate::surface::body::Body;
-use crate::trim::meet::first_meet;
 use crate::trim::meet::TrimRecord;
+use crate::trim::meet::{first_meet, first_meets};
 use crate::Error;
 use core::ops::Range;
 use glam::Vec3;
@@ -109,8 +110,9 @@ pub fn shortest(strands: &Strands, guides: &[f32], lengths: &mut [u16]) {
     }
 }
 
-/// Strands expanded at a time by [`shortest_own`].
-const OWN_BATCH: usize = 8;
+/// Strands expanded at a time by [`shortest_own`]: a host field hears
+/// about as many at once.
+const OWN_BATCH: usize = FIELD_BATCH;
 
 /// The shot pass on the hairs themselves, one frame at a time: each strand
 /// of `range` of `job` (whose output stride is 16) is expanded, and its
@@ -143,15 +145,19 @@ pub fn shortest_own(
         let end = (start + OWN_BATCH).min(range.end);
         let curves = &mut buffer[..(end - start) * per];
         job.run(start..end, bytemuck::cast_slice_mut(curves));
+        let point = |k: usize, j: usize| {
+            let p = curves[k * per + first + j];
+            Vec3::new(p[0], p[1], p[2])
+        };
+        let mut owns = [WHOLE; OWN_BATCH];
+        first_meets(end - start, n, point, cloth, colliders, |k, (_, t)| {
+            // a step short of the meet, so rounding cannot put the tip on it
+            owns[k] = ((t * WHOLE as f32) as u16).saturating_sub(1);
+        });
         for (k, curve) in curves.chunks(per).enumerate() {
             let points = &curve[first..first + n];
-            let at = |j: usize| Vec3::new(points[j][0], points[j][1], points[j][2]);
             let l = &mut lengths[start - range.start + k];
-            // a step short of the meet, so rounding cannot put the tip on it
-            let own = first_meet(n, at, cloth, colliders).map_or(WHOLE, |(_, t)| {
-                ((t * WHOLE as f32) as u16).saturating_sub(1)
-            });
-            let shorter = (*l).min(own);
+            let shorter = (*l).min(owns[k]);
             if shorter < WHOLE {
                 *l = clear_cut(points, shorter, cloth, colliders);
             }

@@ -1,6 +1,6 @@
 //! Where each posed guide first meets the cloth or a collider.
 
-use crate::collide::{Colliders, Near};
+use crate::collide::{field_inside, Colliders, Entry, Near, FIELD_BATCH, MAX_POINTS};
 use crate::interp::posed::PosedFrame;
 use crate::surface::body::Body;
 use crate::Error;
@@ -80,6 +80,141 @@ pub fn meet(
     })
 }
 
+/// [`meet`] for each guide of `guides`, in guide order, to `found`: the
+/// same records, with a host field asked about [`FIELD_BATCH`] guides at
+/// once (every point past their roots in one call, then one call per
+/// bisection step for all their entries) rather than point by point.
+pub fn meet_guides(
+    frame: &PosedFrame,
+    guides: core::ops::Range<usize>,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+    mut found: impl FnMut(TrimRecord),
+) {
+    let first = guides.start;
+    first_meets(
+        guides.len(),
+        frame.points(),
+        |i, j| frame.world_point(first + i, j),
+        cloth,
+        colliders,
+        |i, (cv, length)| {
+            found(TrimRecord {
+                guide: (first + i) as u32,
+                cv: cv as u32,
+                length,
+            })
+        },
+    );
+}
+
+/// [`first_meet`] for `count` polylines of `n` points (at most
+/// [`MAX_POINTS`]), polyline `i`'s point `j` at `at(i, j)`: `found(i,
+/// meet)` for each that meets something, in order, with the same results,
+/// a host field asked as [`meet_guides`] says.
+pub(crate) fn first_meets(
+    count: usize,
+    n: usize,
+    at: impl Fn(usize, usize) -> Vec3,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+    mut found: impl FnMut(usize, (usize, f32)),
+) {
+    let mut start = 0;
+    while start < count {
+        let k = (count - start).min(FIELD_BATCH);
+        let batch = |i: usize, j: usize| at(start + i, j);
+        first_meets_batch(k, n, batch, cloth, colliders, |i, m| found(start + i, m));
+        start += k;
+    }
+}
+
+/// A segment whose end is inside a collider, being bisected.
+struct Entering<'c, 'r> {
+    polyline: usize,
+    /// The segment's end point's index.
+    j: usize,
+    near: Near<'c, 'r>,
+    /// Where the cloth meets the segment, if it does.
+    cloth: Option<f32>,
+    entry: Entry,
+}
+
+/// [`first_meets`] for at most [`FIELD_BATCH`] polylines.
+fn first_meets_batch(
+    k: usize,
+    n: usize,
+    at: impl Fn(usize, usize) -> Vec3,
+    cloth: Option<&Body>,
+    colliders: &Colliders,
+    mut found: impl FnMut(usize, (usize, f32)),
+) {
+    let n = n.min(MAX_POINTS);
+    let per = n.saturating_sub(1);
+    let mut xyz = [[0.0f32; 3]; FIELD_BATCH * MAX_POINTS];
+    let mut d = [0.0f32; FIELD_BATCH * MAX_POINTS];
+    let mut in_field = [false; FIELD_BATCH * MAX_POINTS];
+    if colliders.field.is_some() {
+        for i in 0..k {
+            for j in 1..n {
+                xyz[i * per + j - 1] = at(i, j).to_array();
+            }
+        }
+        field_inside(colliders, &xyz[..k * per], &mut d, &mut in_field);
+    }
+    let mut meets: [Option<(usize, f32)>; FIELD_BATCH] = [None; FIELD_BATCH];
+    let mut entering: [Option<Entering>; FIELD_BATCH] = [const { None }; FIELD_BATCH];
+    let mut pending = 0;
+    for i in 0..k {
+        let reach: f32 = (1..n).map(|j| at(i, j).distance(at(i, j - 1))).sum();
+        let near = Near::new(colliders, at(i, 0), reach);
+        let colliding = !near.is_empty();
+        for j in 1..n {
+            let (a, b) = (at(i, j - 1), at(i, j));
+            let t = cloth.and_then(|c| c.first_meet(a, b));
+            if colliding && (in_field[i * per + j - 1] || near.in_shape(b)) {
+                entering[pending] = Some(Entering {
+                    polyline: i,
+                    j,
+                    near,
+                    cloth: t,
+                    entry: Entry::new(),
+                });
+                pending += 1;
+                break;
+            }
+            if let Some(t) = t {
+                meets[i] = Some((j, t));
+                break;
+            }
+        }
+    }
+    let entering = &mut entering[..pending];
+    for _ in 0..Entry::BISECTIONS {
+        let tried = |e: &Entering| e.entry.next(at(e.polyline, e.j - 1), at(e.polyline, e.j));
+        if colliders.field.is_some() {
+            for (x, e) in xyz.iter_mut().zip(entering.iter().flatten()) {
+                *x = tried(e).to_array();
+            }
+            in_field[..pending].fill(false);
+            field_inside(colliders, &xyz[..pending], &mut d, &mut in_field);
+        }
+        for (e, &field) in entering.iter_mut().flatten().zip(&in_field) {
+            let inside = field || e.near.in_shape(tried(e));
+            e.entry.narrow(inside);
+        }
+    }
+    for e in entering.iter().flatten() {
+        let entry = e.entry.out;
+        meets[e.polyline] = Some((e.j, e.cloth.map_or(entry, |t| t.min(entry))));
+    }
+    for (i, m) in meets.iter().enumerate().take(k) {
+        if let Some((j, t)) = *m {
+            found(i, (j, ((j - 1) as f32 + t) / (n - 1) as f32));
+        }
+    }
+}
+
 /// Where the polyline of the `n` points `at(0)` (the root) .. `at(n - 1)`
 /// first meets `cloth` or enters one of `colliders` (see [`meet`]): the
 /// first point past the meet, and the curve parameter there.
@@ -121,7 +256,26 @@ mod tests {
     use crate::trim::WHOLE;
     use crate::Strided;
 
+    use crate::collide::{Entry, SignedDistance, FIELD_BATCH};
+    use core::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+
     const POINTS: usize = 8;
+
+    /// A ball field (centre (0.5, 0.5, 0.2), radius 0.12) that counts its
+    /// calls.
+    #[derive(Default)]
+    struct CountedBall {
+        calls: AtomicUsize,
+    }
+
+    impl SignedDistance for CountedBall {
+        fn distances(&self, points: &[[f32; 3]], out: &mut [f32]) {
+            self.calls.fetch_add(1, Relaxed);
+            for (p, d) in points.iter().zip(out) {
+                *d = Vec3::from(*p).distance(Vec3::new(0.5, 0.5, 0.2)) - 0.12;
+            }
+        }
+    }
     const CLOTH: f32 = 0.1;
 
     /// A flat cloth at height `CLOTH` over the unit square and beyond.
@@ -203,6 +357,46 @@ mod tests {
             ..Colliders::default()
         };
         assert!(find(None, &colliders).is_empty());
+
+        // a host field asked about whole batches gives the same records,
+        // however the guides are split, in a call per batch and per step
+        let ball = CountedBall::default();
+        let spheres = [Sphere {
+            centre: [0.2, 0.3, 0.25],
+            radius: 0.1,
+        }];
+        let with_field = Colliders {
+            spheres: &spheres,
+            planes: &above,
+            field: Some(&ball),
+            ..Colliders::default()
+        };
+        for cloth in [None, Some(&body)] {
+            let one_by_one = find(cloth, &with_field);
+            ball.calls.store(0, Relaxed);
+            let (mut batched, mut split) = (Vec::new(), Vec::new());
+            meet_guides(&frame, 0..g, cloth, &with_field, |r| batched.push(r));
+            let calls = ball.calls.load(Relaxed);
+            meet_guides(&frame, 0..7, cloth, &with_field, |r| split.push(r));
+            meet_guides(&frame, 7..g, cloth, &with_field, |r| split.push(r));
+            assert_eq!(batched, one_by_one);
+            assert_eq!(split, one_by_one);
+            let batches = g.div_ceil(FIELD_BATCH);
+            assert!(
+                calls <= batches * (1 + Entry::BISECTIONS as usize),
+                "{calls} calls"
+            );
+        }
+        let ball_only = Colliders {
+            field: Some(&ball),
+            ..Colliders::default()
+        };
+        let entered = find(None, &ball_only);
+        assert!(
+            !entered.is_empty() && entered.len() < g,
+            "{} of {g}",
+            entered.len()
+        );
 
         // render hairs cut by the shot pass end at the cloth, not before
         let hairs = roots(skin.mesh(), 600, 9);
