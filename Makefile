@@ -65,6 +65,9 @@ deps: deps-test
 
 rust-lint:
 	python3 tests/import_circles.py core/src capi/src
+	@long=$$(find core/src capi/src -name '*.rs' ! -name tests.rs -exec wc -l {} + | \
+	  awk '$$2 != "total" && $$1 > 1000'); [ -z "$$long" ] || \
+	  { echo "production files over 1000 lines (move tests to a tests.rs):"; echo "$$long"; exit 1; }
 	cargo fmt --all -- --check
 	cargo clippy --locked --workspace --all-targets --release -- -D warnings
 	cargo check --locked -p pelage-core --target $(EMBEDDED_TARGET)
