@@ -70,8 +70,11 @@ pub struct PelageSimParams {
     pub link_iterations: u32,
     /// Share of its links' mean correction a tip takes per relaxation (0..1).
     pub link_stiffness: f32,
-    /// A root that moves more than this many times its guide's length in
-    /// one step has teleported: its swing is carried along rigidly (> 0).
+    /// A step whose roots move, on average, more than this many times the
+    /// extent of the roots (the diagonal of their bounding box) is a cut:
+    /// each guide's swing is carried along rigidly with its root frame and
+    /// the body starts from rest in its new place (> 0; default 1, which
+    /// no spin about an axis through the body reaches).
     pub teleport: f32,
     /// Where another simulator takes over (0..1 per guide at its root): the
     /// share of the host's curves (pelage_sim_step's `external_points`) in
@@ -83,7 +86,7 @@ pub struct PelageSimParams {
 /// Defaults: 16 joints and points, frequency 1.5 Hz, amplitude 1, decay
 /// 3/s, IK tolerance 1e-2 (of the guide length) with 8 sweeps, stiffness 0 at the root and 0.9
 /// at the tip, no links (radius 0; 4 links, 2 relaxations, stiffness 0.5
-/// once a radius is set), teleport at 20 guide lengths.
+/// once a radius is set), teleport at 1 (the roots' extent).
 ///
 /// Thread safety: free.
 #[no_mangle]

@@ -233,8 +233,23 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
             moved_most = moved_most.max(
                 (p[JOINTS - 1] - p[0]).distance(neutral_tip - Vec3::from(shot.points[g * JOINTS])),
             );
+            // a point counts as in the body when the body says so there and
+            // a hair's breadth (1e-4) to either side along each axis: the
+            // body's answer can flip under such a nudge at points well
+            // outside it (0.006 from the skin at x = 100 after the cut),
+            // a fault of the inside test itself (issue 48), not of the
+            // guides
+            let nudges = [
+                Vec3::ZERO,
+                Vec3::X,
+                -Vec3::X,
+                Vec3::Y,
+                -Vec3::Y,
+                Vec3::Z,
+                -Vec3::Z,
+            ];
             let hit = p[1..].iter().any(|&q| {
-                body.contains(q)
+                nudges.iter().all(|&d| body.contains(q + d * 1e-4))
                     || caps
                         .iter()
                         .any(|c| segment_distance(q, c.a.into(), c.b.into()) < c.radius)

@@ -275,6 +275,17 @@ impl Chains {
                 self.joints[i + 1] = self.joints[i + 1].unless(active, moved);
             }
         }
+        // the sweeps stop within the tolerance, so a target that drifts
+        // under it would leave the tip behind, then snap to it once the
+        // drift crosses the tolerance: the chain turns rigidly about its
+        // root until its tip points at the target, which the tip then
+        // follows continuously down to rest
+        let root = self.joints[0];
+        let aim = partial_arc(self.joints[n - 1].sub(root), target.sub(root), 1.0);
+        for k in 1..n {
+            let turned = root.add(aim.rotate(self.joints[k].sub(root)));
+            self.joints[k] = self.joints[k].unless(self.live, turned);
+        }
         let mut before = self.joints[0];
         for i in 0..n - 1 {
             let segment = self.joints[i + 1].sub(before);

@@ -27,10 +27,13 @@ pub struct SimParams<'m> {
     pub ik: IkParams,
     /// Tip links.
     pub links: LinkParams,
-    /// A root that moves more than this many times its guide's length in
-    /// one step has teleported (a cut, a reset of the animation): its tip
-    /// state is carried rigidly with its root frame, without a whip
-    /// (> 0).
+    /// A step whose roots move, on average, farther than this many times
+    /// the extent of the roots (the diagonal of their bounding box) is a
+    /// cut (a new shot, a reset of the animation): every guide's swing is
+    /// carried rigidly with its root frame, without a whip, and the body
+    /// starts from rest in its new place (> 0). A rigid spin about an axis
+    /// through the body moves the roots less than its extent per step, so
+    /// the default, 1, never takes one for a cut.
     pub teleport: f32,
     /// Where another simulator takes over (paper 3.3: regions re-simulated
     /// in Maya nHair from the cached data), per guide at its root, 0..=1:
@@ -51,7 +54,7 @@ impl Default for SimParams<'_> {
             decay: ScalarMap::Constant(spring.decay),
             ik: IkParams::default(),
             links: LinkParams::default(),
-            teleport: 20.0,
+            teleport: 1.0,
             external: ScalarMap::Constant(0.0),
         }
     }

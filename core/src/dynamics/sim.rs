@@ -460,6 +460,7 @@ impl<'a> Sim<'a> {
     ) -> Result<Step<'s>, Error> {
         self.check_step(frame, colliders, external, dt)?;
         let block = Self::block_floats(&self.params);
+        let cut = self.is_cut(frame);
         self.stepped = true;
         Ok(Step {
             context: StepContext {
@@ -474,10 +475,34 @@ impl<'a> Sim<'a> {
                 external,
                 dt,
                 block,
+                cut,
             },
             blocks: &mut *self.blocks,
             snapshot: &mut *self.snapshot,
         })
+    }
+
+    /// True when `frame` is a cut from the last step: its roots moved, on
+    /// average, farther than `teleport` times the extent of the roots (the
+    /// diagonal of their box). A measure of the body as a whole: a fast
+    /// spin or run moves some roots far and others little, and stays
+    /// below the body's own size per step. Summed in one order on one
+    /// thread, so any split of the step sees the same answer.
+    fn is_cut(&self, frame: &PosedFrame) -> bool {
+        let mesh = frame.mesh();
+        let block = Self::block_floats(&self.params);
+        let (mut moved, mut lo, mut hi) = (0.0f64, Vec3::MAX, Vec3::MIN);
+        for (r, b) in self.roots.iter().zip(self.blocks.chunks_exact(block)) {
+            let last = state(b);
+            if last.started == 0.0 {
+                return false;
+            }
+            let p = mesh.point(r.face as usize, r.u, r.v);
+            moved += f64::from(p.distance(Vec3::from(last.frame[0])));
+            (lo, hi) = (lo.min(p), hi.max(p));
+        }
+        let mean = moved / self.roots.len().max(1) as f64;
+        mean > f64::from(self.params.teleport) * f64::from((hi - lo).length())
     }
 
     /// One step of `dt` seconds on `frame` (the step's deformed mesh) with

@@ -41,6 +41,8 @@ pub struct StepContext<'s> {
     pub(super) external: Option<Strided<'s, [f32; 3]>>,
     pub(super) dt: f32,
     pub(super) block: usize,
+    /// The step is a cut ([`SimParams::teleport`]).
+    pub(super) cut: bool,
 }
 
 impl StepContext<'_> {
@@ -80,16 +82,17 @@ impl StepContext<'_> {
                 Vec3::ZERO,
             );
             if state.started != 0.0 {
-                let last = state.root_frame();
-                if frame.origin.distance(last.origin) > self.params.teleport * c.reach {
-                    // a cut: the swing rides along with the root frame
+                if self.cut {
+                    // the swing rides along with the root frame; the body
+                    // starts from rest in its new place (no velocity of the
+                    // last shot carried into this one's next step)
+                    let last = state.root_frame();
                     let carry = |w: Vec3| {
                         let l = Vec3::new(w.dot(last.t), w.dot(last.b), w.dot(last.n));
                         frame.t * l.x + frame.b * l.y + frame.n * l.z
                     };
                     y = carry(y);
                     v = carry(v);
-                    velocity = carry(Vec3::from(state.tip_velocity));
                 } else {
                     velocity = (tip - Vec3::from(state.tip)) / self.dt;
                     // the tip keeps its velocity; the neutral tip's changed

@@ -1017,3 +1017,107 @@ fn a_host_field_is_asked_for_a_batch_of_guides_at_a_time() {
         .count();
     assert_eq!(inside, 0);
 }
+
+/// After a shake, each tip settles as its spring target does: the tip
+/// points where the target points, seen from the root, on every step down
+/// to rest. The IK's sweeps stop within a tolerance of the length, and a
+/// target that drifted under it used to leave the tip at rest at once (the
+/// last 1% of the swing gone in one step).
+#[test]
+fn motion_fades_to_rest_without_a_snap() {
+    let s = Scene::new(60);
+    let mut buf = vec![];
+    let mut sim = s.sim(&params(), &mut buf);
+    let dt = 1.0 / 24.0;
+    for k in 0..6 {
+        let shift = Vec3::new(0.08 * (k % 2) as f32, 0.0, 0.0);
+        step(
+            &mut sim,
+            &moved(&s.rest, Quat::IDENTITY, shift),
+            &Colliders::default(),
+            dt,
+        );
+    }
+    let tip = JOINTS - 1;
+    // the tip's and the target's angles from the rest tip, about the root
+    let angles = |sim: &Sim, g: usize| -> (f32, f32) {
+        let at = (g * JOINTS + tip) * 3;
+        let rest = Vec3::new(sim.rest[at], sim.rest[at + 1], sim.rest[at + 2]);
+        let root = sim.posed_local(g, 0);
+        let target = sim.root_frame(g).to_local(sim.target(g));
+        let angle = |p: Vec3| (p - root).angle_between(rest - root);
+        (angle(sim.posed_local(g, tip)), angle(target))
+    };
+    let (mut worst, mut swing, mut end) = (0.0f32, 0.0f32, 0.0f32);
+    for f in 0..144 {
+        step(&mut sim, &s.rest, &Colliders::default(), dt);
+        for g in 0..sim.len() {
+            let (tip, target) = angles(&sim, g);
+            worst = worst.max((tip - target).abs());
+            swing = swing.max(target);
+            if f == 143 {
+                end = end.max(tip);
+            }
+        }
+    }
+    assert!(swing > 0.05, "the shake must swing the tips: {swing} rad");
+    assert!(
+        worst < 1e-3,
+        "a tip strays {worst} rad from its target's bearing"
+    );
+    assert!(end < 1e-3, "still {end} rad from rest after 6 s");
+}
+
+/// A fast spin is motion, not a cut: at 10 turns a second on 24 frames a
+/// second, every step is what it is with cuts never detected.
+#[test]
+fn a_fast_spin_is_never_a_cut() {
+    let s = Scene::new(60);
+    let never = SimParams {
+        teleport: 1e9,
+        ..params()
+    };
+    let (mut buf_a, mut buf_b) = (vec![], vec![]);
+    let mut spun = s.sim(&params(), &mut buf_a);
+    let mut reference = s.sim(&never, &mut buf_b);
+    let turn = core::f32::consts::TAU * 10.0 / 24.0;
+    for k in 0..24 {
+        let pose = moved(&s.rest, Quat::from_rotation_y(turn * k as f32), Vec3::ZERO);
+        step(&mut spun, &pose, &Colliders::default(), 1.0 / 24.0);
+        step(&mut reference, &pose, &Colliders::default(), 1.0 / 24.0);
+        assert!(
+            posed(&spun) == posed(&reference),
+            "step {k} taken for a cut"
+        );
+    }
+}
+
+/// A cut from a running shot to a still one starts the body from rest:
+/// guides that ran long enough to settle arrive settled, with no whip
+/// from the last shot's speed (the cut carried that speed into the still
+/// shot, which then kicked every tip).
+#[test]
+fn a_cut_from_a_run_to_a_still_shot_adds_no_whip() {
+    let s = Scene::new(60);
+    let mut buf = vec![];
+    let mut sim = s.sim(&params(), &mut buf);
+    let dt = 1.0 / 24.0;
+    let mut run = s.rest.clone();
+    for k in 0..240 {
+        run = moved(&s.rest, Quat::IDENTITY, Vec3::new(0.1 * k as f32, 0.0, 0.0));
+        step(&mut sim, &run, &Colliders::default(), dt);
+    }
+    let settled = neutral_distance(&sim, &run);
+    let far = moved(
+        &s.rest,
+        Quat::from_rotation_x(0.7),
+        Vec3::new(0.0, 100.0, 0.0),
+    );
+    let mut most = 0.0f32;
+    for _ in 0..12 {
+        step(&mut sim, &far, &Colliders::default(), dt);
+        most = most.max(neutral_distance(&sim, &far));
+    }
+    assert!(settled < 1e-4, "the run must settle first: {settled}");
+    assert!(most < 1e-3, "{most} from rest after the cut");
+}
