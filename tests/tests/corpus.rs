@@ -1,0 +1,831 @@
+//! The corpus of production-like meshes (issue 48, ask 1) has what it
+//! promises, and the stamp, through the C API, puts valid roots on every
+//! representative mesh.
+//!
+//! What the issue reports broken (spacing at creases, bald skin that can
+//! be seen, answers that move far from the origin) is not asserted here:
+//! `baseline` (ignored; run it with `cargo test --release -p pelage-tests
+//! --test corpus -- --ignored --nocapture`) prints those figures per mesh,
+//! so the work on the issue starts from measured numbers.
+
+use std::collections::HashMap;
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use glam::{DVec3, Vec3};
+use pelage::{PelageRoot, PelageStampInfo, PelageStatus};
+use pelage_core::surface::body::Body;
+use pelage_core::{Arena, Root};
+use pelage_tests::corpus::{self, topology, CorpusMesh, Shape};
+use pelage_tests::measure::r_hex;
+use pelage_tests::quality::{empty_space, neighbours, Skin};
+
+/// Every mesh: the representative subset, then the whole corpus.
+fn all() -> &'static [CorpusMesh] {
+    static ALL: OnceLock<Vec<CorpusMesh>> = OnceLock::new();
+    ALL.get_or_init(|| {
+        let mut all = corpus::representative();
+        all.extend(corpus::corpus());
+        all
+    })
+}
+
+/// One mesh per recipe at the origin (the topology is promised there: far
+/// from the origin, rounding may put two vertices of a fine mesh in one
+/// place, see `baseline`).
+fn at_origin() -> &'static [CorpusMesh] {
+    static MESHES: OnceLock<Vec<CorpusMesh>> = OnceLock::new();
+    MESHES.get_or_init(|| {
+        let mut out: Vec<CorpusMesh> = Vec::new();
+        for e in all() {
+            let recipe = e.recipe.at_origin();
+            if !out.iter().any(|o| o.recipe == recipe) {
+                out.push(if e.recipe.is_placed() {
+                    e.at_origin()
+                } else {
+                    e.clone()
+                });
+            }
+        }
+        out
+    })
+}
+
+fn point(e: &CorpusMesh, i: u32) -> DVec3 {
+    DVec3::from(e.mesh.positions[i as usize].map(f64::from))
+}
+
+fn is_corpus_head(e: &CorpusMesh) -> bool {
+    matches!(e.recipe.shape, Shape::Head(_))
+}
+
+#[test]
+fn numbers_and_indices_are_valid() {
+    for e in all() {
+        let (m, name) = (&e.mesh, &e.name);
+        let nv = m.vertex_count();
+        println!(
+            "{name}: {nv} vertices, {} triangles, UVs {}",
+            m.triangle_count(),
+            e.has_uvs()
+        );
+        assert!(
+            m.positions.iter().flatten().all(|x| x.is_finite()),
+            "{name}: a position is not finite"
+        );
+        assert!(
+            m.triangles.iter().flatten().all(|&i| (i as usize) < nv),
+            "{name}: an index is out of range"
+        );
+        assert!(
+            m.uvs.is_empty() || m.uvs.len() == nv,
+            "{name}: {} UVs for {nv} vertices",
+            m.uvs.len()
+        );
+        assert_eq!(e.has_uvs(), e.recipe.uvs, "{name}: UVs");
+        assert!(
+            m.uvs.iter().flatten().all(|x| (0.0..=1.0).contains(x)),
+            "{name}: a UV is outside the unit square"
+        );
+        assert_eq!(
+            m.normals.len(),
+            if e.recipe.normals { nv } else { 0 },
+            "{name}: normal count"
+        );
+        for n in &m.normals {
+            let l = Vec3::from(*n).length();
+            assert!((l - 1.0).abs() < 1e-5, "{name}: normal length {l}");
+        }
+        let mut used = vec![false; nv];
+        m.triangles
+            .iter()
+            .flatten()
+            .for_each(|&i| used[i as usize] = true);
+        assert!(used.iter().all(|&u| u), "{name}: an unused vertex");
+        // the parts cover the faces in order
+        let mut end = 0;
+        for p in &e.parts {
+            assert_eq!(p.faces.start, end, "{name}: part {} starts late", p.name);
+            assert!(!p.faces.is_empty(), "{name}: part {} is empty", p.name);
+            end = p.faces.end;
+        }
+        assert_eq!(end, m.triangle_count(), "{name}: the parts miss faces");
+    }
+}
+
+/// Each corpus head is open at the neck, the eyes and the mouth, and the
+/// eye and mouth rims are far from planar (a flat cap over them misses
+/// skin); the fin's two free edges form the one open chain.
+#[test]
+fn open_meshes_have_their_boundary_loops() {
+    for e in at_origin() {
+        let b = topology::boundary(&e.mesh);
+        let planarity: Vec<f64> = b
+            .loops
+            .iter()
+            .map(|l| topology::non_planarity(&topology::loop_points(&e.mesh, l)))
+            .collect();
+        println!(
+            "{}: loops of {:?} edges, non-planarity {planarity:.3?}, {} chains",
+            e.name,
+            b.loops.iter().map(Vec::len).collect::<Vec<_>>(),
+            b.chains
+        );
+        assert_eq!(
+            (b.loops.len(), b.chains, b.pinched),
+            (e.expect.boundary_loops, e.expect.open_chains, 0),
+            "{}: (boundary loops, open chains, pinched pieces)",
+            e.name
+        );
+        if is_corpus_head(e) {
+            // the neck is a circle; the eyes and the mouth are not flat
+            let bent = planarity.iter().filter(|&&p| p > 0.05).count();
+            assert_eq!(
+                bent, 3,
+                "{}: eye and mouth rims with non-planarity > 0.05: {planarity:?}",
+                e.name
+            );
+        }
+    }
+}
+
+/// The eyeballs, teeth and ears are separate shells, and each cuts
+/// through the head shell.
+#[test]
+fn separate_shells_cut_through_the_head() {
+    for e in at_origin() {
+        let (shells, count) = topology::shells(&e.mesh);
+        assert_eq!(count, e.expect.shells, "{}: shells", e.name);
+        for p in &e.parts {
+            let s = shells[p.faces.start];
+            assert!(
+                shells[p.faces.clone()].iter().all(|&x| x == s),
+                "{}: part {} spans shells",
+                e.name,
+                p.name
+            );
+        }
+        if e.parts.len() > 1 {
+            let head = e.parts[0].faces.clone();
+            for p in &e.parts[1..] {
+                assert_ne!(shells[p.faces.start], shells[0], "{}: {}", e.name, p.name);
+                assert!(
+                    topology::parts_intersect(&e.mesh, p.faces.clone(), head.clone()),
+                    "{}: part {} at {:?} does not cut the head shell",
+                    e.name,
+                    p.name,
+                    p.faces
+                );
+            }
+        }
+    }
+}
+
+/// The brow's step meets the skin at 90 degrees: the head shell has edges
+/// whose faces' normals have a dot product within 0.1 of 0 (none on the
+/// closed references).
+#[test]
+fn the_brow_is_a_90_degree_crease() {
+    for e in at_origin() {
+        let head = &e.parts[0].faces;
+        let square: Vec<f64> = topology::creases(&e.mesh, 0.1)
+            .into_iter()
+            .filter(|c| head.contains(&(c.0 as usize)) && head.contains(&(c.1 as usize)))
+            .filter(|c| c.2 >= -0.1)
+            .map(|c| c.2)
+            .collect();
+        println!(
+            "{}: {} head edges at 90 degrees (dot {:.3} .. {:.3})",
+            e.name,
+            square.len(),
+            square.first().unwrap_or(&0.0),
+            square.last().unwrap_or(&0.0)
+        );
+        if e.expect.crease {
+            // both edges of the step, over most of the brow's meridians
+            assert!(
+                square.len() >= 40,
+                "{}: {} edges at 90 degrees",
+                e.name,
+                square.len()
+            );
+        } else {
+            assert!(square.is_empty(), "{}: {square:?}", e.name);
+        }
+    }
+    for e in &corpus::representative() {
+        let c = e.closed_reference();
+        assert!(topology::creases(&c.mesh, 0.5).is_empty(), "{}", c.name);
+    }
+}
+
+#[test]
+fn the_fin_makes_one_non_manifold_edge() {
+    for e in at_origin() {
+        let edges = topology::non_manifold_edges(&e.mesh);
+        assert_eq!(
+            edges.len(),
+            e.expect.non_manifold_edges,
+            "{}: non-manifold edges {edges:?}",
+            e.name
+        );
+        let faces = topology::edge_faces(&e.mesh);
+        for edge in edges {
+            assert_eq!(faces[&edge].len(), 3, "{}: faces on {edge:?}", e.name);
+        }
+    }
+}
+
+/// The brow's collapsed ends leave zero-area triangles that pelage calls
+/// degenerate, and slivers beside them; the pole fans and the zipped
+/// meridians leave more slivers.
+#[test]
+fn zero_area_triangles_and_slivers_exist() {
+    for e in at_origin() {
+        let zero = topology::zero_area_faces(&e.mesh);
+        let degenerate = topology::degenerate_faces(&e.mesh);
+        let worst = (0..e.mesh.triangle_count())
+            .filter(|f| degenerate.binary_search(f).is_err())
+            .map(|f| topology::aspect(&e.mesh, f))
+            .fold(0.0, f64::max);
+        println!(
+            "{}: {} zero-area, {} degenerate, worst aspect of the others {worst:.0}",
+            e.name,
+            zero.len(),
+            degenerate.len()
+        );
+        assert!(
+            zero.len() >= e.expect.zero_area_faces,
+            "{}: zero-area faces {zero:?}",
+            e.name
+        );
+        assert!(
+            zero.iter().all(|f| degenerate.binary_search(f).is_ok()),
+            "{}: a zero-area face pelage does not call degenerate",
+            e.name
+        );
+        if is_corpus_head(e) {
+            assert_eq!(zero.len(), 4, "{}: zero-area faces {zero:?}", e.name);
+            assert!(worst > 100.0, "{}: worst aspect {worst}", e.name);
+        }
+    }
+}
+
+/// The ears are thinner than r_hex of 10K roots on the whole mesh: the two
+/// sides of a thin part closer than the hair spacing.
+#[test]
+fn the_ears_are_thinner_than_the_hair_spacing() {
+    for e in at_origin() {
+        let Some((name, thin)) = e.expect.thin else {
+            continue;
+        };
+        let spacing = r_hex(topology::area(&e.mesh), 10_000) as f64;
+        for faces in e.part_faces(name) {
+            let t = topology::thickness(&topology::part_points(&e.mesh, faces.clone()));
+            println!(
+                "{}: {name} {faces:?} {t:.5} thick, r_hex {spacing:.5}",
+                e.name
+            );
+            assert!(t <= thin * 1.001, "{}: {name} is {t} thick", e.name);
+            assert!(t < 0.5 * spacing, "{}: {name} {t}, r_hex {spacing}", e.name);
+        }
+    }
+}
+
+/// A mesh without UVs gives the C API a NULL UV pointer; its faces are
+/// those of the same mesh with UVs.
+#[test]
+fn meshes_without_uvs_pass_null_uvs() {
+    for e in all() {
+        let d = e.desc();
+        assert_eq!(d.uvs.is_null(), !e.has_uvs(), "{}", e.name);
+        assert_eq!(d.normals.is_null(), !e.recipe.normals, "{}", e.name);
+        assert_eq!(e.view().uvs.is_some(), e.has_uvs(), "{}", e.name);
+        if !e.has_uvs() {
+            let with = CorpusMesh::new(
+                "with",
+                "",
+                corpus::Recipe {
+                    uvs: true,
+                    ..e.recipe
+                },
+            );
+            assert_eq!(with.mesh.positions, e.mesh.positions, "{}", e.name);
+            assert_eq!(with.mesh.triangles, e.mesh.triangles, "{}", e.name);
+        }
+        let mesh = e.view();
+        let report = mesh.validate().expect("a valid mesh");
+        assert!(
+            report.degenerate_triangles >= e.expect.zero_area_faces,
+            "{}: {report:?}",
+            e.name
+        );
+    }
+}
+
+/// Each placed mesh is its mesh at the origin rotated and moved: the same
+/// triangles and UVs, and every point where the rigid motion takes it, to
+/// within one float32 rounding of the result.
+#[test]
+fn placed_meshes_are_the_same_mesh_moved() {
+    let mut placed = 0;
+    for e in all().iter().filter(|e| e.recipe.is_placed()) {
+        placed += 1;
+        let base = e.at_origin();
+        let (m, b) = (&e.mesh, &base.mesh);
+        assert_eq!(m.triangles, b.triangles, "{}", e.name);
+        assert_eq!(m.uvs, b.uvs, "{}", e.name);
+        let r = e.recipe;
+        let mut worst = 0.0f64;
+        for (p, q) in m.positions.iter().zip(&b.positions) {
+            let moved = r.rotation * DVec3::from(q.map(f64::from)) + r.offset;
+            let p = DVec3::from(p.map(f64::from));
+            // half an ulp per coordinate, of the largest coordinate
+            let ulp = f64::from(f32::EPSILON) * p.abs().max_element();
+            let err = (p - moved).abs().max_element() / ulp;
+            worst = worst.max(err);
+        }
+        println!("{}: worst rounding {worst:.3} ulp", e.name);
+        assert!(
+            worst <= 0.5 + 1e-9,
+            "{}: a point is {worst} ulp off",
+            e.name
+        );
+        for (n, k) in m.normals.iter().zip(&b.normals) {
+            let turned = r.rotation * DVec3::from(k.map(f64::from));
+            let n = DVec3::from(n.map(f64::from));
+            assert!(n.distance(turned) < 1e-6, "{}: normal {n} {turned}", e.name);
+        }
+        // as far from the origin as promised
+        let (lo, hi) = m.bounds();
+        let (lo, hi) = (Vec3::from(lo).as_dvec3(), Vec3::from(hi).as_dvec3());
+        let (d, want) = (((lo + hi) / 2.0).length(), r.offset.length());
+        assert!((d - want).abs() < (hi - lo).length(), "{}: {d}", e.name);
+    }
+    assert!(placed >= 8, "{placed} placed meshes");
+}
+
+/// Each mesh's closed reference is one closed, outward shell (at the
+/// origin: far away, rounding may weld its pole's vertices) with its size,
+/// triangle count, UVs and placement.
+#[test]
+fn closed_references_are_closed_single_shells_like_their_mesh() {
+    for e in all() {
+        let c = e.closed_reference();
+        if !c.recipe.is_placed() {
+            let b = topology::boundary(&c.mesh);
+            let (_, shells) = topology::shells(&c.mesh);
+            assert_eq!(
+                (b.loops.len(), b.chains, b.pinched, shells),
+                (0, 0, 0, 1),
+                "{}: boundary and shells",
+                c.name
+            );
+            assert!(
+                topology::non_manifold_edges(&c.mesh).is_empty(),
+                "{}",
+                c.name
+            );
+            assert!(topology::degenerate_faces(&c.mesh).is_empty(), "{}", c.name);
+        }
+        let (n, k) = (
+            e.mesh.triangle_count() as f64,
+            c.mesh.triangle_count() as f64,
+        );
+        assert!(
+            (k / n - 1.0).abs() < 0.05,
+            "{}: {k} triangles for {n}",
+            c.name
+        );
+        assert_eq!(c.has_uvs(), e.has_uvs(), "{}", c.name);
+        assert_eq!(c.mesh.normals.is_empty(), e.mesh.normals.is_empty());
+        let size = |m: &pelage_tests::creature::CreatureMesh| {
+            let (lo, hi) = m.bounds();
+            let (lo, hi) = (Vec3::from(lo).as_dvec3(), Vec3::from(hi).as_dvec3());
+            ((lo + hi) / 2.0, (hi - lo).length())
+        };
+        let ((ce, de), (cc, dc)) = (size(&e.mesh), size(&c.mesh));
+        assert!(
+            (dc / de - 1.0).abs() < 0.3,
+            "{}: size {dc} for {de}",
+            c.name
+        );
+        assert!(
+            ce.distance(cc) < 0.25 * de,
+            "{}: centre {cc} for {ce}",
+            c.name
+        );
+        // outward: positive volume, measured about the centre
+        let volume: f64 = c
+            .mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, d] = t.map(|i| point(&c, i) - cc);
+                a.dot(b.cross(d)) / 6.0
+            })
+            .sum();
+        assert!(volume > 0.02 * dc.powi(3), "{}: volume {volume}", c.name);
+    }
+}
+
+#[test]
+fn the_corpus_is_deterministic() {
+    for (a, b) in corpus::representative().iter().zip(&all()[..4]) {
+        assert_eq!(a.mesh, b.mesh, "{}", a.name);
+        assert_eq!(a.parts, b.parts, "{}", a.name);
+    }
+}
+
+/// Roots the stamp wrote through the C API, its report and the time of
+/// the `pelage_stamp` call.
+fn stamp(e: &CorpusMesh, target: u32, seed: u64) -> (Vec<Root>, PelageStampInfo, Duration) {
+    let desc = e.desc();
+    let params = pelage::PelageStampParams {
+        target_count: target,
+        seed,
+        ..pelage::pelage_stamp_params_defaults()
+    };
+    let (mut bytes, mut max) = (0usize, 0usize);
+    let s = pelage::pelage_stamp_size(&desc, &params, &mut bytes, &mut max);
+    assert_eq!(s, PelageStatus::Ok, "{}: pelage_stamp_size", e.name);
+    let mut arena = vec![0u8; bytes];
+    let mut roots = vec![PelageRoot::default(); max];
+    let (mut count, mut info) = (0usize, PelageStampInfo::default());
+    let t0 = Instant::now();
+    let s = pelage::pelage_stamp(
+        &desc,
+        &params,
+        pelage::PelageArena {
+            memory: arena.as_mut_ptr().cast(),
+            bytes,
+        },
+        roots.as_mut_ptr(),
+        roots.len(),
+        &mut count,
+        &mut info,
+    );
+    let time = t0.elapsed();
+    assert_eq!(s, PelageStatus::Ok, "{}: pelage_stamp", e.name);
+    roots.truncate(count);
+    (
+        bytemuck::cast_slice::<PelageRoot, Root>(&roots).to_vec(),
+        info,
+        time,
+    )
+}
+
+const TARGET: u32 = 20_000;
+
+/// On every representative mesh the stamp writes about the target count of
+/// roots, each on a triangle that is not degenerate with valid barycentric
+/// coordinates (so on the surface), finite, with ids and ranks that are
+/// permutations, the same bits on a second call, and the same roots with
+/// and without UVs.
+#[test]
+fn the_stamp_puts_roots_on_every_representative_mesh() {
+    let mut by_faces: HashMap<Vec<[u32; 3]>, Vec<Root>> = HashMap::new();
+    for e in &corpus::representative() {
+        let (roots, info, time) = stamp(e, TARGET, 1);
+        println!("{}: {} roots in {time:.2?}, {info:?}", e.name, roots.len());
+        let n = roots.len();
+        assert!(
+            n.abs_diff(TARGET as usize) * 100 <= TARGET as usize,
+            "{}: {n} roots for {TARGET}",
+            e.name
+        );
+        assert!(
+            info.degenerate_triangles as usize >= e.expect.zero_area_faces,
+            "{}: {info:?}",
+            e.name
+        );
+        let mesh = e.view();
+        let (mut ids, mut ranks) = (vec![false; n], vec![false; n]);
+        for r in &roots {
+            let f = r.face as usize;
+            assert!(f < e.mesh.triangle_count(), "{}: {r:?}", e.name);
+            assert!(
+                !mesh.is_degenerate(f),
+                "{}: a root on a degenerate face",
+                e.name
+            );
+            assert!(
+                r.u.is_finite() && r.v.is_finite() && r.u >= 0.0 && r.v >= 0.0,
+                "{}: {r:?}",
+                e.name
+            );
+            assert!(r.u + r.v <= 1.0 + 1e-6, "{}: {r:?}", e.name);
+            assert!(mesh.point(f, r.u, r.v).is_finite(), "{}: {r:?}", e.name);
+            assert!(
+                (r.id as usize) < n && !std::mem::replace(&mut ids[r.id as usize], true),
+                "{}: id {}",
+                e.name,
+                r.id
+            );
+            assert!(
+                (r.rank as usize) < n && !std::mem::replace(&mut ranks[r.rank as usize], true),
+                "{}: rank {}",
+                e.name,
+                r.rank
+            );
+        }
+        // fur on the head shell and on the ears, which stand out of it
+        for part in ["head", "ear"] {
+            for faces in e.part_faces(part) {
+                let on = roots.iter().filter(|r| faces.contains(&(r.face as usize)));
+                assert!(on.count() > 0, "{}: no root on {part} {faces:?}", e.name);
+            }
+        }
+        let (again, _, _) = stamp(e, TARGET, 1);
+        assert!(again == roots, "{}: a second stamp differs", e.name);
+        // UVs do not move a root (the same faces, no density map)
+        if !e.recipe.is_placed() {
+            if let Some(other) = by_faces.insert(e.mesh.triangles.clone(), roots.clone()) {
+                assert!(other == roots, "{}: roots depend on UVs", e.name);
+            }
+        }
+    }
+}
+
+/// Root pairs closer than `limit` (a distance) that face the same open
+/// air: each root lies in front of the other's face (not behind its
+/// tangent plane), so neither is hidden from the other by the skin. Returns
+/// the pairs' distances, and those of the pairs across a crease (faces'
+/// normals' dot product at most 0.1), which the stamp's same-side rule
+/// does not space.
+fn same_air_pairs(mesh: &pelage_core::Mesh, roots: &[Root], limit: f32) -> (Vec<f32>, Vec<f32>) {
+    let pts: Vec<(Vec3, Vec3)> = roots
+        .iter()
+        .map(|r| {
+            let f = r.face as usize;
+            (mesh.point(f, r.u, r.v), mesh.face_normal(f))
+        })
+        .collect();
+    let cell = |p: Vec3| (p / limit).floor().as_ivec3();
+    let mut grid: HashMap<glam::IVec3, Vec<usize>> = HashMap::new();
+    for (i, p) in pts.iter().enumerate() {
+        grid.entry(cell(p.0)).or_default().push(i);
+    }
+    let (mut all, mut crease) = (Vec::new(), Vec::new());
+    for (i, &(p, n)) in pts.iter().enumerate() {
+        let c = cell(p);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(near) = grid.get(&(c + glam::IVec3::new(dx, dy, dz))) else {
+                        continue;
+                    };
+                    for &j in near.iter().filter(|&&j| j > i) {
+                        let (q, m) = pts[j];
+                        let d = p.distance(q);
+                        if d < limit && (q - p).dot(n) >= 0.0 && (p - q).dot(m) >= 0.0 {
+                            all.push(d);
+                            if n.dot(m) <= 0.1 {
+                                crease.push(d);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (all, crease)
+}
+
+fn median(mut v: Vec<Duration>) -> Duration {
+    v.sort();
+    v[v.len() / 2]
+}
+
+/// One mesh's baseline figures (see [`baseline`]).
+#[derive(Clone, Debug, Default)]
+struct Row {
+    name: String,
+    triangles: usize,
+    roots: usize,
+    stamp_ms: f64,
+    closed_ms: f64,
+    radius: f32,
+    nn_min: f32,
+    nn_mean: f32,
+    air_half: usize,
+    air_07: usize,
+    air_min: f32,
+    crease_07: usize,
+    crease_min: f32,
+    empty_p999: f32,
+    empty_max: f32,
+    per_part: Vec<usize>,
+    /// For a placed mesh: roots with no root of the origin stamp within
+    /// 0.01 r_hex, and the largest distance to the nearest one (r_hex).
+    moved: Option<(usize, f32)>,
+    /// Distinct vertex positions that rounding merged.
+    welded: usize,
+}
+
+impl Row {
+    fn print(&self) {
+        let moved = self
+            .moved
+            .map_or("- | -".to_string(), |(n, d)| format!("{n} | {d:.3}"));
+        println!(
+            "| {} | {} | {} | {:.1} | {:.1} | {:.2} | {:.3} | {:.3} | {:.3} | {} | {} | {:.3} | {} | {:.3} | {:.3} | {:.3} | {:?} | {moved} | {} |",
+            self.name,
+            self.triangles,
+            self.roots,
+            self.stamp_ms,
+            self.closed_ms,
+            self.stamp_ms / self.closed_ms,
+            self.radius,
+            self.nn_min,
+            self.nn_mean,
+            self.air_half,
+            self.air_07,
+            self.air_min,
+            self.crease_07,
+            self.crease_min,
+            self.empty_p999,
+            self.empty_max,
+            self.per_part,
+            self.welded,
+        );
+    }
+}
+
+/// The baseline row of `e`. The roots are stamped on `e`, where it is;
+/// every distance is measured on its twin at the origin (the same faces
+/// and barycentric coordinates, in f32 at the origin), so a placed mesh's
+/// figures are not blurred by the rounding of the measure itself.
+fn baseline_row(e: &CorpusMesh) -> Row {
+    let time = |e: &CorpusMesh| median((0..3).map(|_| stamp(e, TARGET, 1).2).collect());
+    let (roots, info, _) = stamp(e, TARGET, 1);
+    let origin = e.at_origin();
+    let mesh = origin.view();
+    let shells = origin.shells();
+    let mut memory = vec![0u8; Body::required_bytes(&mesh).expect("body size")];
+    let body = Body::new(&mesh, &mut Arena::new(&mut memory)).expect("body");
+    let skin = Skin::unburied(mesh, &shells, |_| true, &body);
+    let rh = skin.r_hex(roots.len());
+    let nn = neighbours(&skin, &roots, 0.0);
+    let (air, crease) = same_air_pairs(&mesh, &roots, 0.7 * rh);
+    let below = |v: &[f32], k: f32| v.iter().filter(|&&d| d < k * rh).count();
+    let min = |v: &[f32]| v.iter().fold(f32::INFINITY, |a, &b| a.min(b)) / rh;
+    let es = empty_space(&skin, &roots, 16, 7);
+    let per_part = ["head", "eye", "tooth", "ear"]
+        .iter()
+        .map(|p| {
+            let parts = e.part_faces(p);
+            roots
+                .iter()
+                .filter(|r| parts.iter().any(|f| f.contains(&(r.face as usize))))
+                .count()
+        })
+        .collect();
+    let moved = e.recipe.is_placed().then(|| {
+        let (base, _, _) = stamp(&origin, TARGET, 1);
+        let far: Vec<Vec3> = roots
+            .iter()
+            .map(|r| mesh.point(r.face as usize, r.u, r.v))
+            .collect();
+        let near: Vec<Vec3> = base
+            .iter()
+            .map(|r| mesh.point(r.face as usize, r.u, r.v))
+            .collect();
+        let d = nearest_distances(&far, &near, rh);
+        let moved = d.iter().filter(|&&x| x > 0.01).count();
+        (moved, d.iter().fold(0.0f32, |a, &b| a.max(b)))
+    });
+    let welded = {
+        let distinct = |w: Vec<u32>| {
+            w.iter()
+                .enumerate()
+                .filter(|&(i, &k)| i == k as usize)
+                .count()
+        };
+        distinct(topology::welded(&origin.mesh)) - distinct(topology::welded(&e.mesh))
+    };
+    Row {
+        name: e.name.clone(),
+        triangles: e.mesh.triangle_count(),
+        roots: roots.len(),
+        stamp_ms: time(e).as_secs_f64() * 1e3,
+        closed_ms: time(&e.closed_reference()).as_secs_f64() * 1e3,
+        radius: info.radius / rh,
+        nn_min: nn.min,
+        nn_mean: nn.mean,
+        air_half: below(&air, 0.5),
+        air_07: air.len(),
+        air_min: min(&air),
+        crease_07: crease.len(),
+        crease_min: min(&crease),
+        empty_p999: es.p999,
+        empty_max: es.max,
+        per_part,
+        moved,
+        welded,
+    }
+}
+
+/// For each point of `a`, the distance to the nearest point of `b`, in
+/// units of `unit` (searched within 4 units; farther counts as 4).
+fn nearest_distances(a: &[Vec3], b: &[Vec3], unit: f32) -> Vec<f32> {
+    let cell = |p: Vec3| (p / unit).floor().as_ivec3();
+    let mut grid: HashMap<glam::IVec3, Vec<usize>> = HashMap::new();
+    for (i, p) in b.iter().enumerate() {
+        grid.entry(cell(*p)).or_default().push(i);
+    }
+    a.iter()
+        .map(|p| {
+            let c = cell(*p);
+            let mut best = 4.0 * unit;
+            for dx in -4..=4 {
+                for dy in -4..=4 {
+                    for dz in -4..=4 {
+                        if let Some(near) = grid.get(&(c + glam::IVec3::new(dx, dy, dz))) {
+                            for &j in near {
+                                best = best.min(p.distance(b[j]));
+                            }
+                        }
+                    }
+                }
+            }
+            best / unit
+        })
+        .collect()
+}
+
+/// The figures the issue reports broken, at 20K roots, one row per
+/// representative mesh (every corpus mesh with `PELAGE_CORPUS=full`), each
+/// placed mesh preceded by its twin at the origin, then the worst of each
+/// column:
+/// - the stamp's time (median of 3), the closed reference's, their ratio;
+/// - the stamp's radius, and the nearest same-side neighbours' minimum and
+///   mean, in units of r_hex;
+/// - root pairs that face the same air (each in front of the other's
+///   face) closer than 0.5 and than 0.7 r_hex, and the closest, in r_hex;
+///   then those across a crease (normals' dot at most 0.1) closer than 0.7
+///   and the closest;
+/// - empty space over the skin the stamp's rule calls unburied (the body
+///   with capped holes): 99.9th percentile and maximum, in r_hex;
+/// - roots on the head shell, eyes, teeth and ears;
+/// - for a placed mesh: roots with no root of its twin's stamp within 0.01
+///   r_hex, and the largest distance to the nearest (4 stands for 4 or
+///   more); distinct vertex positions that rounding merged.
+#[test]
+#[ignore = "prints the corpus baseline; slow"]
+fn baseline() {
+    let list = match std::env::var("PELAGE_CORPUS").as_deref() {
+        Ok("full") => corpus::corpus(),
+        _ => corpus::representative(),
+    };
+    let mut meshes: Vec<CorpusMesh> = Vec::new();
+    for e in list {
+        let twin = e.recipe.at_origin();
+        if e.recipe.is_placed() && !meshes.iter().any(|m| m.recipe == twin) {
+            meshes.push(e.at_origin());
+        }
+        meshes.push(e);
+    }
+    println!(
+        "| mesh | tris | roots | stamp ms | closed ms | ratio | radius | NN min | NN mean \
+         | same air <0.5 | <0.7 | min | across creases <0.7 | min | empty p99.9 | max \
+         | roots head/eye/tooth/ear | moved vs origin | max | welded |"
+    );
+    println!("|{}", "---|".repeat(20));
+    let rows: Vec<Row> = meshes.iter().map(baseline_row).collect();
+    let mut worst = Row {
+        name: "worst".into(),
+        radius: f32::INFINITY,
+        nn_min: f32::INFINITY,
+        nn_mean: f32::INFINITY,
+        air_min: f32::INFINITY,
+        crease_min: f32::INFINITY,
+        closed_ms: f64::INFINITY,
+        ..Row::default()
+    };
+    for r in &rows {
+        r.print();
+        worst.triangles = worst.triangles.max(r.triangles);
+        worst.roots = worst.roots.max(r.roots);
+        if r.stamp_ms / r.closed_ms > worst.stamp_ms / worst.closed_ms {
+            (worst.stamp_ms, worst.closed_ms) = (r.stamp_ms, r.closed_ms);
+        }
+        worst.radius = worst.radius.min(r.radius);
+        worst.nn_min = worst.nn_min.min(r.nn_min);
+        worst.nn_mean = worst.nn_mean.min(r.nn_mean);
+        worst.air_half = worst.air_half.max(r.air_half);
+        worst.air_07 = worst.air_07.max(r.air_07);
+        worst.air_min = worst.air_min.min(r.air_min);
+        worst.crease_07 = worst.crease_07.max(r.crease_07);
+        worst.crease_min = worst.crease_min.min(r.crease_min);
+        worst.empty_p999 = worst.empty_p999.max(r.empty_p999);
+        worst.empty_max = worst.empty_max.max(r.empty_max);
+        worst.welded = worst.welded.max(r.welded);
+        if let Some((n, d)) = r.moved {
+            let (wn, wd) = worst.moved.unwrap_or((0, 0.0));
+            worst.moved = Some((wn.max(n), wd.max(d)));
+        }
+    }
+    // the worst row's times are those of the worst ratio
+    worst.print();
+}
