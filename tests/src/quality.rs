@@ -422,7 +422,10 @@ pub fn empty_space(skin: &Skin, roots: &[Root], samples_per_root: usize, seed: u
 /// Whether the skin at `(u, v)` on `face` is buried: the point `scale /
 /// 1000` outside it is inside `body` with its holes capped.
 fn buried(body: &Body, mesh: &Mesh, face: usize, u: f32, v: f32, scale: f32) -> bool {
-    let p = mesh.point(face, u, v) + mesh.face_normal(face) * (1e-3 * scale);
+    let at = mesh.point(face, u, v);
+    // as the stamp lifts: never by less than 16 float steps of the point
+    let room = at.abs().max_element() * 16.0 * f32::EPSILON;
+    let p = at + mesh.face_normal(face) * (1e-3 * scale).max(room);
     body.capped_winding(p) >= 1
 }
 

@@ -31,6 +31,16 @@ use crate::{Error, Mesh};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+/// `p` lifted `lift` along `n`, and never by less than 16 float32 steps of
+/// its largest coordinate: far from the origin a thousandth of the disk
+/// radius rounds away (a metre head at 1e3, roots 2 mm apart, against a
+/// float spacing of 6e-5) and leaves the point on the skin, where the
+/// winding number's answer is noise and whole patches were called buried.
+fn lifted(p: Vec3, n: Vec3, lift: f32) -> Vec3 {
+    let room = p.abs().max_element() * 16.0 * f32::EPSILON;
+    p + n * lift.max(room)
+}
+
 /// Per-face bit: the face comes within its reach of another shell.
 const NEAR_OTHER: u8 = 1;
 /// Per-face bit: the face comes within its reach of a hole's cap.
@@ -146,7 +156,7 @@ impl<'a> Shells<'a> {
                     // near, the lift changes the answer only at a crease
                     let lift = BURY_LIFT * reach(f) / REACH_MARGIN;
                     let [a, b, c] = mesh.corners(f);
-                    let p = (a + b + c) / 3.0 + mesh.face_normal(f) * lift;
+                    let p = lifted((a + b + c) / 3.0, mesh.face_normal(f), lift);
                     decided[patch] = (body.capped_winding(p) >= 1) as u8 * BURIED;
                 }
                 near[f] = decided[patch];
@@ -167,7 +177,7 @@ impl<'a> Shells<'a> {
             for v in corners {
                 let state = &mut decided[v as usize];
                 if *state == UNDECIDED {
-                    let p = Vec3::from(mesh.positions.get(v as usize)) + normal * lift;
+                    let p = lifted(Vec3::from(mesh.positions.get(v as usize)), normal, lift);
                     *state = (body.capped_winding(p) >= 1) as u8;
                 }
                 seen |= 1 << *state;
@@ -210,7 +220,7 @@ impl<'a> Shells<'a> {
     pub(super) fn buried(&self, p: Vec3, n: Vec3, lift: f32) -> bool {
         self.body
             .as_ref()
-            .is_some_and(|b| b.capped_winding(p + n * lift) >= 1)
+            .is_some_and(|b| b.capped_winding(lifted(p, n, lift)) >= 1)
     }
 
     /// Whether all of face `f` (with roots) is buried (`Some`), or `None`
