@@ -376,6 +376,51 @@ impl CorpusMesh {
         mesh_view(&self.mesh)
     }
 
+    /// Roots the stamp writes through the C API for `target` roots and
+    /// `seed` (default parameters otherwise), its report and the time of
+    /// the `pelage_stamp` call.
+    pub fn stamp(
+        &self,
+        target: u32,
+        seed: u64,
+    ) -> (
+        Vec<pelage_core::Root>,
+        pelage::PelageStampInfo,
+        std::time::Duration,
+    ) {
+        use pelage::{PelageRoot, PelageStatus};
+        let desc = self.desc();
+        let params = pelage::PelageStampParams {
+            target_count: target,
+            seed,
+            ..pelage::pelage_stamp_params_defaults()
+        };
+        let (mut bytes, mut max) = (0usize, 0usize);
+        let s = pelage::pelage_stamp_size(&desc, &params, &mut bytes, &mut max);
+        assert_eq!(s, PelageStatus::Ok, "{}: pelage_stamp_size", self.name);
+        let mut arena = vec![0u8; bytes];
+        let mut roots = vec![PelageRoot::default(); max];
+        let (mut count, mut info) = (0usize, pelage::PelageStampInfo::default());
+        let t0 = std::time::Instant::now();
+        let s = pelage::pelage_stamp(
+            &desc,
+            &params,
+            pelage::PelageArena {
+                memory: arena.as_mut_ptr().cast(),
+                bytes,
+            },
+            roots.as_mut_ptr(),
+            roots.len(),
+            &mut count,
+            &mut info,
+        );
+        let time = t0.elapsed();
+        assert_eq!(s, PelageStatus::Ok, "{}: pelage_stamp", self.name);
+        roots.truncate(count);
+        let roots = bytemuck::cast_slice::<PelageRoot, pelage_core::Root>(&roots).to_vec();
+        (roots, info, time)
+    }
+
     /// The shell of every face (connected components, numbered in face
     /// order: the head shell is 0).
     pub fn shells(&self) -> Vec<u32> {

@@ -464,3 +464,53 @@ impl ExpandCall<'_> {
         pelage::pelage_expand(frame.0, &strands, self.params, &curves)
     }
 }
+
+/// A simulation handle with its memory, freed on drop.
+pub struct SimHandle {
+    pub sim: pelage::PelageSim,
+    _memory: Vec<u8>,
+}
+
+impl SimHandle {
+    /// The simulation of the rest pose `mesh` and `guides` with `params`.
+    pub fn new(
+        mesh: &pelage::PelageMeshDesc,
+        guides: &pelage::PelageGuidesDesc,
+        params: &pelage::PelageSimParams,
+    ) -> SimHandle {
+        use pelage::PelageStatus;
+        let mut bytes = 0;
+        let s = pelage::pelage_sim_size(mesh, guides.guide_count, params, &mut bytes);
+        assert_eq!(s, PelageStatus::Ok, "pelage_sim_size");
+        let mut memory = vec![0u8; bytes];
+        let mut sim = std::ptr::null_mut();
+        let s = pelage::pelage_sim_new(
+            &pelage::PelageRestPose { mesh, guides },
+            params,
+            pelage::PelageArena {
+                memory: memory.as_mut_ptr().cast(),
+                bytes,
+            },
+            &mut sim,
+        );
+        assert_eq!(s, PelageStatus::Ok, "pelage_sim_new");
+        SimHandle {
+            sim,
+            _memory: memory,
+        }
+    }
+
+    /// The posed guides of the last step: `guides` of `points` points.
+    pub fn read(&self, guides: usize, points: usize) -> Vec<[f32; 3]> {
+        let mut out = vec![[0.0f32; 3]; guides * points];
+        let s = pelage::pelage_sim_read(self.sim, out.as_mut_ptr().cast(), 12, out.len());
+        assert_eq!(s, pelage::PelageStatus::Ok, "pelage_sim_read");
+        out
+    }
+}
+
+impl Drop for SimHandle {
+    fn drop(&mut self) {
+        pelage::pelage_sim_free(self.sim);
+    }
+}

@@ -619,6 +619,24 @@ pub fn dart_throwing(skin: &Skin, n: usize, seed: u64) -> Darts {
     Darts { roots, radius }
 }
 
+/// The generalized winding number of `mesh` at `p` (the sum of its
+/// triangles' signed solid angles over 4 pi, in f64 about `p`): 1 inside a
+/// closed, outward-wound shell, 0 outside, and between across a hole. The
+/// inside rule pelage's body evaluates (above 1/2 is inside), computed
+/// here the slow, exact way as an oracle.
+pub fn winding_number(mesh: &Mesh, p: Vec3) -> f64 {
+    let p = p.as_dvec3();
+    let mut total = 0.0;
+    for f in 0..mesh.triangle_count() {
+        let [a, b, c] = mesh.corners(f).map(|q| q.as_dvec3() - p);
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let numerator = a.dot(b.cross(c));
+        let denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+        total += 2.0 * numerator.atan2(denominator);
+    }
+    total / (4.0 * std::f64::consts::PI)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,10 +10,10 @@
 
 use std::collections::HashMap;
 use std::sync::OnceLock;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use glam::{DVec3, Vec3};
-use pelage::{PelageRoot, PelageStampInfo, PelageStatus};
+
 use pelage_core::surface::body::Body;
 use pelage_core::{Arena, Root};
 use pelage_tests::corpus::{self, topology, CorpusMesh, Shape};
@@ -437,44 +437,6 @@ fn the_corpus_is_deterministic() {
     }
 }
 
-/// Roots the stamp wrote through the C API, its report and the time of
-/// the `pelage_stamp` call.
-fn stamp(e: &CorpusMesh, target: u32, seed: u64) -> (Vec<Root>, PelageStampInfo, Duration) {
-    let desc = e.desc();
-    let params = pelage::PelageStampParams {
-        target_count: target,
-        seed,
-        ..pelage::pelage_stamp_params_defaults()
-    };
-    let (mut bytes, mut max) = (0usize, 0usize);
-    let s = pelage::pelage_stamp_size(&desc, &params, &mut bytes, &mut max);
-    assert_eq!(s, PelageStatus::Ok, "{}: pelage_stamp_size", e.name);
-    let mut arena = vec![0u8; bytes];
-    let mut roots = vec![PelageRoot::default(); max];
-    let (mut count, mut info) = (0usize, PelageStampInfo::default());
-    let t0 = Instant::now();
-    let s = pelage::pelage_stamp(
-        &desc,
-        &params,
-        pelage::PelageArena {
-            memory: arena.as_mut_ptr().cast(),
-            bytes,
-        },
-        roots.as_mut_ptr(),
-        roots.len(),
-        &mut count,
-        &mut info,
-    );
-    let time = t0.elapsed();
-    assert_eq!(s, PelageStatus::Ok, "{}: pelage_stamp", e.name);
-    roots.truncate(count);
-    (
-        bytemuck::cast_slice::<PelageRoot, Root>(&roots).to_vec(),
-        info,
-        time,
-    )
-}
-
 const TARGET: u32 = 20_000;
 
 /// On every representative mesh the stamp writes about the target count of
@@ -486,7 +448,7 @@ const TARGET: u32 = 20_000;
 fn the_stamp_puts_roots_on_every_representative_mesh() {
     let mut by_faces: HashMap<Vec<[u32; 3]>, Vec<Root>> = HashMap::new();
     for e in &corpus::representative() {
-        let (roots, info, time) = stamp(e, TARGET, 1);
+        let (roots, info, time) = e.stamp(TARGET, 1);
         println!("{}: {} roots in {time:.2?}, {info:?}", e.name, roots.len());
         let n = roots.len();
         assert!(
@@ -536,7 +498,7 @@ fn the_stamp_puts_roots_on_every_representative_mesh() {
                 assert!(on.count() > 0, "{}: no root on {part} {faces:?}", e.name);
             }
         }
-        let (again, _, _) = stamp(e, TARGET, 1);
+        let (again, _, _) = e.stamp(TARGET, 1);
         assert!(again == roots, "{}: a second stamp differs", e.name);
         // UVs do not move a root (the same faces, no density map)
         if !e.recipe.is_placed() {
@@ -576,8 +538,8 @@ fn far_from_the_origin_the_fur_covers_as_at_the_origin() {
                 .count();
             (es.p999, es.max, on_head)
         };
-        let (far, _, _) = stamp(e, TARGET, 1);
-        let (near, _, _) = stamp(&origin, TARGET, 1);
+        let (far, _, _) = e.stamp(TARGET, 1);
+        let (near, _, _) = origin.stamp(TARGET, 1);
         let (far_p999, far_max, far_head) = cover(&far);
         let (p999, max, head) = cover(&near);
         println!(
@@ -713,8 +675,8 @@ impl Row {
 /// and barycentric coordinates, in f32 at the origin), so a placed mesh's
 /// figures are not blurred by the rounding of the measure itself.
 fn baseline_row(e: &CorpusMesh) -> Row {
-    let time = |e: &CorpusMesh| median((0..3).map(|_| stamp(e, TARGET, 1).2).collect());
-    let (roots, info, _) = stamp(e, TARGET, 1);
+    let time = |e: &CorpusMesh| median((0..3).map(|_| e.stamp(TARGET, 1).2).collect());
+    let (roots, info, _) = e.stamp(TARGET, 1);
     let origin = e.at_origin();
     let mesh = origin.view();
     let shells = origin.shells();
@@ -738,7 +700,7 @@ fn baseline_row(e: &CorpusMesh) -> Row {
         })
         .collect();
     let moved = e.recipe.is_placed().then(|| {
-        let (base, _, _) = stamp(&origin, TARGET, 1);
+        let (base, _, _) = origin.stamp(TARGET, 1);
         let far: Vec<Vec3> = roots
             .iter()
             .map(|r| mesh.point(r.face as usize, r.u, r.v))

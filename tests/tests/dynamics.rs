@@ -13,6 +13,7 @@ use pelage_tests::animated::{capsules, colliders, pose, segment_distance, FRAMES
 use pelage_tests::creature::{default_creature, CreatureMesh};
 use pelage_tests::measure::{
     combed_guides, frame, guides_desc, mesh_desc, mesh_view, on_threads, stamp_roots, Frame,
+    SimHandle,
 };
 use std::ptr::null_mut;
 
@@ -48,54 +49,13 @@ impl Shot {
     }
 }
 
-/// A simulation handle with its memory, freed on drop.
-struct SimHandle {
-    sim: PelageSim,
-    _memory: Vec<u8>,
-}
-
-impl SimHandle {
-    fn new(shot: &Shot, params: &PelageSimParams) -> SimHandle {
-        let desc = mesh_desc(&shot.rest);
-        let guides = guides_desc(&shot.roots, &shot.points);
-        let mut bytes = 0;
-        assert_eq!(
-            pelage_sim_size(&desc, shot.roots.len(), params, &mut bytes),
-            PelageStatus::Ok
-        );
-        let mut memory = vec![0u8; bytes];
-        let mut sim = null_mut();
-        let s = pelage_sim_new(
-            &PelageRestPose {
-                mesh: &desc,
-                guides: &guides,
-            },
-            params,
-            PelageArena {
-                memory: memory.as_mut_ptr().cast(),
-                bytes,
-            },
-            &mut sim,
-        );
-        assert_eq!(s, PelageStatus::Ok);
-        SimHandle {
-            sim,
-            _memory: memory,
-        }
-    }
-
-    fn read(&self, n: usize) -> Vec<[f32; 3]> {
-        let mut out = vec![[0.0f32; 3]; n * JOINTS];
-        let s = pelage_sim_read(self.sim, out.as_mut_ptr().cast(), 12, out.len());
-        assert_eq!(s, PelageStatus::Ok);
-        out
-    }
-}
-
-impl Drop for SimHandle {
-    fn drop(&mut self) {
-        pelage_sim_free(self.sim);
-    }
+/// The simulation of `shot`'s rest pose with `params`.
+fn sim_of(shot: &Shot, params: &PelageSimParams) -> SimHandle {
+    SimHandle::new(
+        &mesh_desc(&shot.rest),
+        &guides_desc(&shot.roots, &shot.points),
+        params,
+    )
 }
 
 /// One step of 1/24 s of `sim` on `frame` with `colliders`.
@@ -142,7 +102,7 @@ fn run(
         }
         let s = step(sim, handle.0, &colliders, threads);
         assert_eq!(s, PelageStatus::Ok, "frame {f}");
-        each(f, &mesh, &sim.read(shot.roots.len()), &caps);
+        each(f, &mesh, &sim.read(shot.roots.len(), JOINTS), &caps);
     }
 }
 
@@ -170,7 +130,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
         })
         .count();
     assert!(in_the_way >= 8, "only {in_the_way} guides meet a capsule");
-    let sim = SimHandle::new(&shot, &params);
+    let sim = sim_of(&shot, &params);
     let mut shot_bits = vec![];
     let mut saved = vec![];
     let mut worst_inside = 0;
@@ -276,7 +236,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
     );
 
     // one thread, colliding with the body each frame built: the same bits
-    let single = SimHandle::new(&shot, &params);
+    let single = sim_of(&shot, &params);
     run(&shot, &single, 0..FRAMES, 1, true, |f, _, posed, _| {
         assert!(
             posed == shot_bits[f as usize].as_slice(),
@@ -284,7 +244,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
         );
     });
     // the frame's body and the step split over 3 threads: the same bits
-    let split = SimHandle::new(&shot, &params);
+    let split = sim_of(&shot, &params);
     run(&shot, &split, 0..24, 3, true, |f, _, posed, _| {
         assert!(
             posed == shot_bits[f as usize].as_slice(),
@@ -292,7 +252,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
         );
     });
     // restored mid-shot in a new simulation: the same bits from there on
-    let resumed = SimHandle::new(&shot, &params);
+    let resumed = sim_of(&shot, &params);
     assert_eq!(
         pelage_sim_restore(resumed.sim, saved.as_ptr().cast(), saved.len()),
         PelageStatus::Ok
@@ -310,7 +270,7 @@ fn a_violent_shot_stays_sound_clear_and_repeatable() {
         "a restored simulation reads other posed guides"
     );
     // a simulation that has not stepped has no posed guides to read
-    let fresh = SimHandle::new(&shot, &params);
+    let fresh = sim_of(&shot, &params);
     assert_eq!(
         pelage_sim_read(fresh.sim, read.as_mut_ptr().cast(), 12, read.len()),
         PelageStatus::InvalidArgument
@@ -339,7 +299,7 @@ fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
     let n = shot.roots.len();
     let mut params = shot.params();
     params.external.constant = 1.0;
-    let sim = SimHandle::new(&shot, &params);
+    let sim = sim_of(&shot, &params);
     let guides = guides_desc(&shot.roots, &shot.points);
     // the creature turned a quarter and moved: the host's curves are the
     // groomed guides, carried along by the same motion
@@ -379,7 +339,7 @@ fn another_simulators_region_takes_its_curves_and_bad_ones_are_refused() {
         "a refused step changed the state"
     );
     assert_eq!(step(&sway_free), PelageStatus::Ok);
-    let posed = sim.read(n);
+    let posed = sim.read(n, JOINTS);
     // every segment along the host's (the roots sit on the posed mesh,
     // which sways: compare directions)
     let mut worst = 0.0f32;
@@ -399,7 +359,7 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
     use pelage_core::interp::groom::StrandGroom;
     use pelage_tests::measure::{bind_vec, curves_desc, groom_handle};
     let shot = Shot::new();
-    let sim = SimHandle::new(&shot, &shot.params());
+    let sim = sim_of(&shot, &shot.params());
     let guides = guides_desc(&shot.roots, &shot.points);
     let rest = mesh_view(&shot.rest);
     let hairs = stamp_roots(rest, 6_000, 2);
@@ -446,7 +406,7 @@ fn a_frame_posed_from_the_simulation_grows_the_hairs_its_read_guides_grow() {
             std::ptr::null_mut(),
         );
         assert_eq!(s, PelageStatus::Ok);
-        let posed = sim.read(shot.roots.len());
+        let posed = sim.read(shot.roots.len(), JOINTS);
         let simulated = guides_desc(&shot.roots, &posed);
         assert_eq!(
             pelage_frame_set_guides(read.0, &simulated, on_threads(1)),
@@ -507,7 +467,7 @@ fn a_step_that_cannot_build_its_body_changes_nothing() {
     // refused
     let mut shots = vec![];
     for threads in [1, 2, 3] {
-        let sim = SimHandle::new(&shot, &params);
+        let sim = sim_of(&shot, &params);
         refused(&sim, threads);
         let posing = handle_of(&shot, 0);
         assert_eq!(
@@ -516,19 +476,19 @@ fn a_step_that_cannot_build_its_body_changes_nothing() {
             "a simulation whose only step was refused has no guides"
         );
         run(&shot, &sim, 0..3, threads, false, |_, _, _, _| {});
-        let (state, posed) = (save(&sim), sim.read(n));
+        let (state, posed) = (save(&sim), sim.read(n, JOINTS));
         refused(&sim, threads);
         assert!(save(&sim) == state, "the state changed ({threads} threads)");
         assert!(
-            sim.read(n) == posed,
+            sim.read(n, JOINTS) == posed,
             "the posed guides changed ({threads} threads)"
         );
         run(&shot, &sim, 3..6, threads, false, |_, _, _, _| {});
-        shots.push((save(&sim), sim.read(n)));
+        shots.push((save(&sim), sim.read(n, JOINTS)));
     }
-    let never = SimHandle::new(&shot, &params);
+    let never = sim_of(&shot, &params);
     run(&shot, &never, 0..6, 2, false, |_, _, _, _| {});
-    let reference = (save(&never), never.read(n));
+    let reference = (save(&never), never.read(n, JOINTS));
     for (k, bits) in shots.iter().enumerate() {
         assert!(*bits == reference, "shot {k} differs");
     }
@@ -570,14 +530,14 @@ fn a_nan_from_the_distance_callback_fails_the_call_and_changes_nothing() {
             .into_owned()
     };
     for threads in [1, 3] {
-        let sim = SimHandle::new(&shot, &params);
+        let sim = sim_of(&shot, &params);
         run(&shot, &sim, 0..3, threads, false, |_, _, _, _| {});
-        let (state, posed) = (save(&sim), sim.read(n));
+        let (state, posed) = (save(&sim), sim.read(n, JOINTS));
         let next = handle_of(&shot, 3);
         assert_eq!(step(&sim, next.0, &nan, threads), PelageStatus::NonFinite);
         assert!(message().contains("NaN"), "{}", message());
         assert!(save(&sim) == state, "the state changed ({threads} threads)");
-        assert!(sim.read(n) == posed, "the posed guides changed");
+        assert!(sim.read(n, JOINTS) == posed, "the posed guides changed");
     }
     // trimming against it: refused, nothing written
     let posed = handle_of(&shot, 3);
@@ -608,7 +568,7 @@ fn a_nan_from_the_distance_callback_fails_the_call_and_changes_nothing() {
 fn non_finite_simulation_inputs_are_non_finite() {
     let shot = Shot::new();
     let n = shot.roots.len();
-    let sim = SimHandle::new(&shot, &shot.params());
+    let sim = sim_of(&shot, &shot.params());
     let frame = handle_of(&shot, 0);
     let nan_capsule = [PelageCapsule {
         a: [0.0, f32::NAN, 0.0],
@@ -705,7 +665,7 @@ fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
     };
     let frame = handle_of(&shot, 0);
     for threads in [1, 3] {
-        let sim = SimHandle::new(&shot, &params);
+        let sim = sim_of(&shot, &params);
         let mut info = PelageStepInfo { groomed_guides: 7 };
         let mut step = PelageStepParams {
             run: on_threads(threads),
@@ -725,7 +685,7 @@ fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
         assert_eq!(info.groomed_guides, 0);
         // heard before the step and after each phase, never decreasing;
         // a cancel after the first phase takes the step back
-        let (state, posed) = (save(&sim), sim.read(n));
+        let (state, posed) = (save(&sim), sim.read(n, JOINTS));
         let mut heard = Heard {
             fractions: vec![],
             stop: usize::MAX,
@@ -733,7 +693,7 @@ fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
         step.run.progress = Some(hear);
         step.run.progress_user_data = (&mut heard as *mut Heard).cast();
         let moved = handle_of(&shot, 2);
-        let listened = SimHandle::new(&shot, &params);
+        let listened = sim_of(&shot, &params);
         run(&shot, &listened, 0..1, threads, false, |_, _, _, _| {});
         assert_eq!(
             pelage_sim_step(listened.sim, moved.0, &step, std::ptr::null_mut()),
@@ -755,6 +715,9 @@ fn a_step_reports_its_groomed_guides_and_progress_and_can_be_cancelled() {
             PelageStatus::Cancelled
         );
         assert!(save(&sim) == state, "a cancelled step changed the state");
-        assert!(sim.read(n) == posed, "a cancelled step changed the guides");
+        assert!(
+            sim.read(n, JOINTS) == posed,
+            "a cancelled step changed the guides"
+        );
     }
 }
