@@ -17,6 +17,7 @@
 
 use glam::Vec3;
 use pelage_core::rng::{self, Purpose};
+use pelage_core::stamp::same_air;
 use pelage_core::surface::body::Body;
 use pelage_core::surface::grid::{floor_i32, HashGrid};
 use pelage_core::{Mesh, Root};
@@ -304,7 +305,7 @@ impl Grid {
     /// none.
     fn nearest(&self, p: Vec3, n: Vec3, skip: u32, start: f32) -> f32 {
         let closest = |best: &mut f32, it: &Item| {
-            if it.index != skip && n.dot(it.normal) > 0.0 {
+            if it.index != skip && same_air(p, n, it.pos, it.normal) {
                 *best = best.min(p.distance_squared(it.pos));
             }
         };
@@ -461,7 +462,9 @@ pub fn neighbours(skin: &Skin, roots: &[Root], radius: f32) -> Neighbours {
         // must count once
         let mut near = Vec::new();
         grid.visit(it.pos, close, |o| {
-            if o.index > it.index && it.normal.dot(o.normal) > 0.0 && it.pos.distance(o.pos) < close
+            if o.index > it.index
+                && same_air(it.pos, it.normal, o.pos, o.normal)
+                && it.pos.distance(o.pos) < close
             {
                 near.push((o.index, o.shell != it.shell));
             }
@@ -559,7 +562,8 @@ pub fn dart_throwing(skin: &Skin, n: usize, seed: u64) -> Darts {
     let mut dart = 0u64;
     let mut radius = 0.0;
     let blocks = |it: &Item, o: &Item, radius: f32| {
-        it.normal.dot(o.normal) > 0.0 && it.pos.distance_squared(o.pos) < radius * radius
+        same_air(it.pos, it.normal, o.pos, o.normal)
+            && it.pos.distance_squared(o.pos) < radius * radius
     };
     for want in [n / 4, n / 2, n] {
         radius = DART_SPACING * skin.r_hex(want);

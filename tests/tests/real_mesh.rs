@@ -18,24 +18,9 @@ use pelage_tests::head::head_with_parts;
 use pelage_tests::measure::{
     groomed, mesh_desc, mesh_view, on_threads, stamp_roots, stamp_vec, ExpandCall,
 };
-use pelage_tests::quality::{empty_space, neighbours, prefix, Skin};
+use pelage_tests::quality::{empty_space, neighbours, prefix, winding_number, Skin};
 
 const CVS: usize = 12;
-
-/// The generalized winding number of `mesh` at `p`, triangle by triangle
-/// (Van Oosterom and Strackee's solid angles, in f64).
-fn winding(mesh: &pelage_core::Mesh, p: Vec3) -> f64 {
-    let total: f64 = (0..mesh.triangle_count())
-        .map(|f| {
-            let [a, b, c] = mesh.corners(f).map(|v| (v - p).as_dvec3());
-            let (la, lb, lc) = (a.length(), b.length(), c.length());
-            let det = a.dot(b.cross(c));
-            let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-            2.0 * det.atan2(den)
-        })
-        .sum();
-    total / (4.0 * std::f64::consts::PI)
-}
 
 #[test]
 fn the_stamp_keeps_its_spacing_across_shells_and_skips_buried_skin() {
@@ -193,7 +178,7 @@ fn settle_leaves_no_point_inside_an_open_head_with_shells() {
         inside.first()
     );
     for p in points.iter().step_by(points.len() / 1500) {
-        let w = winding(&mesh, *p);
+        let w = winding_number(&mesh, *p);
         assert!(w <= 0.5, "{p}: winding number {w}");
     }
 }

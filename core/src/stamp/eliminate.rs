@@ -17,7 +17,7 @@
 //! it. Sequential and exact in its order (ties go to the higher index), so
 //! the same stamp gives the same ranks on any machine.
 
-use super::{Candidate, Scratch, Stamper};
+use super::{same_air, Candidate, Scratch, Stamper};
 use crate::surface::grid::HashGrid;
 use crate::Error;
 use glam::Vec3;
@@ -109,7 +109,8 @@ impl Stamper<'_, '_> {
                 // d >= r with r = 2 reach / (s_a + s_b), without a division
                 let (scale, far) = (a[3] + b[3], 2.0 * reach);
                 let d2 = point(at, i).distance_squared(point(at, j));
-                let same_side = a[4] * b[4] + a[5] * b[5] + a[6] * b[6] > 0.0;
+                let normal = |x: &[f32; 8]| Vec3::new(x[4], x[5], x[6]);
+                let same_side = same_air(point(at, i), normal(a), point(at, j), normal(b));
                 if !same_side || d2 * scale * scale >= far * far {
                     return 0.0;
                 }

@@ -77,6 +77,21 @@ use shell::Shells;
 use sizing::*;
 pub use sizing::{max_roots, required_bytes, DENSITY_STEPS};
 
+/// Roots of two faces whose normals' dot product is above this face the
+/// same open air and keep their distance (see [`same_air`]).
+pub const SAME_AIR_DOT: f32 = 0.0;
+
+/// Whether roots at `p` and `q` on faces of unit normals `n` and `m` face
+/// the same open air, and so keep their distance: their normals are less
+/// than 90 degrees apart ([`SAME_AIR_DOT`]), or each lies in front of the
+/// other's tangent plane (a concave crease of any angle: an eye corner, a
+/// lid against an eyeball, the root of an ear). The two sides of a thin
+/// part, or of a convex edge, are behind each other.
+#[inline]
+pub fn same_air(p: Vec3, n: Vec3, q: Vec3, m: Vec3) -> bool {
+    n.dot(m) > SAME_AIR_DOT || ((q - p).dot(n) >= 0.0 && (p - q).dot(m) >= 0.0)
+}
+
 /// Width of the band above the target where the radius correction stops;
 /// the surplus is trimmed by LOD rank (the end of the last step: the points
 /// nearest to others, so the trim opens no hole), or up to 65,536 roots by

@@ -1,7 +1,7 @@
 //! The candidates near a face's boundary as small records, and the buffer
 //! the edge and LOD passes gather them in for vector tests.
 
-use super::{Candidate, Stamper};
+use super::{Candidate, Stamper, SAME_AIR_DOT};
 use crate::arena::{Arena, ArenaLayout};
 use crate::surface::grid::HashGrid;
 use crate::Error;
@@ -206,23 +206,39 @@ impl<'m, 'a> Stamper<'m, 'a> {
     }
 
     /// Sets the value of each gathered point to `value` of the larger
-    /// density scale of its face and face `f`, removes the points of faces
-    /// whose normal opposes `f`'s (the two sides of an ear never clash),
-    /// and pads the lanes.
+    /// density scale of its face and face `f`, removes the points that do
+    /// not face the same air as face `f` (see [`same_air`](super::same_air):
+    /// the two sides of an ear never clash; tested on the gathered point
+    /// and on `f`'s corners), and pads the lanes.
     pub(super) fn weigh(&self, buf: &mut Gathered, f: u32, value: impl Fn(f32) -> f32) {
         let face = &self.faces[f as usize];
         let normal = Vec3::from(face.normal);
-        // gathered points come in runs of one face: its value is reused
-        let (mut last, mut last_value, mut facing) = (u32::MAX, 0.0, true);
+        let here = self.mesh.corners(f as usize)[0];
+        // gathered points come in runs of one face: its value is reused, and
+        // whether some point of face `f` lies strictly in front of its
+        // plane (a corner of `f` does, if any point does; corners the
+        // faces share lie on both planes and leave a knife edge's two
+        // sides apart)
+        let (mut last, mut last_value) = (u32::MAX, 0.0);
+        let (mut facing, mut seen) = (true, false);
         for i in 0..buf.len {
             let o = buf.face[i];
             if o != last {
                 let other = &self.faces[o as usize];
-                facing = Vec3::from(other.normal).dot(normal) > 0.0;
+                let m = Vec3::from(other.normal);
+                facing = m.dot(normal) > SAME_AIR_DOT;
+                seen = !facing && {
+                    let at = self.mesh.corners(o as usize)[0];
+                    let corners = self.mesh.corners(f as usize);
+                    corners.iter().any(|&q| (q - at).dot(m) > 0.0)
+                };
                 (last, last_value) = (o, value(other.scale.max(face.scale)));
             }
             buf.r2[i] = last_value;
-            if !facing {
+            // across a concave crease: the point in front of this face's
+            // plane, and this face partly in front of its own
+            let ahead = seen && (Vec3::new(buf.x[i], buf.y[i], buf.z[i]) - here).dot(normal) > 0.0;
+            if !(facing || ahead) {
                 buf.remove(i);
             }
         }
