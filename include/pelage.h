@@ -961,6 +961,25 @@ enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct Pel
 // Thread safety: frees `frame`.
 void pelage_frame_free(PelageFrame frame);
 
+// Whether each of `count` host points (float3, `point_stride` bytes
+// apart, >= 12 and a multiple of 4) lies inside the body of this frame's
+// mesh, by pelage's one inside rule: the generalized winding number of
+// the mesh above 1/2 (1 inside a closed shell, falling smoothly to 0
+// across a hole). The body collider, settle and trimming use the same
+// rule. Writes 1 (inside) or 0 to `inside[i]`. Uses the body
+// `pelage_frame_set_colliders` built for the frame when it has one, else
+// builds one for the call. Runs as `run` says (progress: the body's build,
+// when the call makes one, as the first fifth, then the share of points).
+// On failure `inside` is untouched, but for CANCELLED and PANIC (then
+// unspecified).
+//
+// Returns OK, NULL_PARAMETER, NON_FINITE (a point), INVALID_ARGUMENT (a
+// point beyond 1e9, the stride, a body of this frame's mesh too large),
+// MISALIGNED, CANCELLED, OUT_OF_MEMORY, PANIC.
+//
+// Thread safety: reads `frame`.
+enum PelageStatus pelage_frame_inside(PelageFrame frame, const void *points, size_t point_stride, size_t count, struct PelageRun run, uint8_t *inside);
+
 // Default groom maps (constants; see the field docs), seed 0.
 //
 // Thread safety: free.

@@ -1,8 +1,8 @@
 //! The frame handle: one frame's deformed mesh and posed guides, prepared
 //! once and read by any number of expansions.
 
-use crate::body::body_in;
-use crate::buffers::{collected, grow, req, req_mut, zeroed};
+use crate::body::{body_in, BodyMemory};
+use crate::buffers::{collected, grow, req, req_mut, slice_mut, strided, zeroed};
 use crate::colliders::{HostColliders, HostField};
 use crate::handles::{free, into_handle, object_mut, Handle};
 use crate::status::Failure;
@@ -16,7 +16,9 @@ use pelage_core::collide::{
 };
 use pelage_core::surface::body::Body;
 
+use glam::Vec3;
 use pelage_core::interp::posed::PosedFrame;
+use pelage_core::surface::mesh::MAX_COORDINATE;
 use pelage_core::{Arena, Mesh, Strided};
 
 /// The opaque object a `PelageFrame` points to.
@@ -370,4 +372,60 @@ pub extern "C" fn pelage_frame_set_colliders(
 #[no_mangle]
 pub extern "C" fn pelage_frame_free(frame: PelageFrame) {
     free(frame);
+}
+
+/// Whether each of `count` host points (float3, `point_stride` bytes
+/// apart, >= 12 and a multiple of 4) lies inside the body of this frame's
+/// mesh, by pelage's one inside rule: the generalized winding number of
+/// the mesh above 1/2 (1 inside a closed shell, falling smoothly to 0
+/// across a hole). The body collider, settle and trimming use the same
+/// rule. Writes 1 (inside) or 0 to `inside[i]`. Uses the body
+/// `pelage_frame_set_colliders` built for the frame when it has one, else
+/// builds one for the call. Runs as `run` says (progress: the body's build,
+/// when the call makes one, as the first fifth, then the share of points).
+/// On failure `inside` is untouched, but for CANCELLED and PANIC (then
+/// unspecified).
+///
+/// Returns OK, NULL_PARAMETER, NON_FINITE (a point), INVALID_ARGUMENT (a
+/// point beyond 1e9, the stride, a body of this frame's mesh too large),
+/// MISALIGNED, CANCELLED, OUT_OF_MEMORY, PANIC.
+///
+/// Thread safety: reads `frame`.
+#[no_mangle]
+pub extern "C" fn pelage_frame_inside(
+    frame: PelageFrame,
+    points: *const std::ffi::c_void,
+    point_stride: usize,
+    count: usize,
+    run: PelageRun,
+    inside: *mut u8,
+) -> PelageStatus {
+    ffi_boundary! {
+        let frame = crate::handles::object(frame)?;
+        let points = strided::<[f32; 3]>(points, point_stride, count, "points")?;
+        for (i, p) in points.iter().enumerate() {
+            if !p.iter().all(|c| c.is_finite()) {
+                return Err(pelage_core::Error::NonFinite { what: "points", index: i }.into());
+            }
+            if !p.iter().all(|c| c.abs() <= MAX_COORDINATE) {
+                return Err(pelage_core::Error::OutOfDomain { what: "points (within 1e9)", index: i }.into());
+            }
+        }
+        let out = slice_mut(inside, count, "inside")?;
+        let progress = run.progress();
+        let mut memory = BodyMemory::default();
+        let (body, rest) = match frame.body() {
+            Some(body) => (body, progress),
+            None => (
+                &memory.body(frame.posed.mesh(), COLLISION_CELLS_PER_TRIANGLE, run.thread_count, progress.within(0.0, 0.2))?,
+                progress.within(0.2, 1.0),
+            ),
+        };
+        split_with_progress(count, run.thread_count, out, 1, rest, |range, part| {
+            for (o, i) in part.iter_mut().zip(range) {
+                *o = body.contains(Vec3::from(points.get(i))) as u8;
+            }
+        })?;
+        Ok(())
+    }
 }

@@ -42,8 +42,8 @@ pub use expand::{
     pelage_expand_size, PelageCurves, PelageEndPoints, PelageExpandParams, PelageStrands,
 };
 pub use frame::{
-    pelage_frame_free, pelage_frame_new, pelage_frame_set_colliders, pelage_frame_set_guides,
-    PelageFrame, PelageFrameTy,
+    pelage_frame_free, pelage_frame_inside, pelage_frame_new, pelage_frame_set_colliders,
+    pelage_frame_set_guides, PelageFrame, PelageFrameTy,
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,

@@ -2715,6 +2715,36 @@ static void test_trim_and_edits(void) {
     EXPECT(PELAGE_STATUS_OK, pelage_frame_set_guides(g_in.frame, &g_in.guides, threads_run(1)));
     EXPECT(PELAGE_STATUS_OK, pelage_groom_expand(groom, g_in.frame, 0, n, &g_in.expand_params, &c));
   }
+  {
+    /* the inside rule for host points: the sphere's centre is inside, a
+     * point beyond it and one a hair outside its skin are not; the same
+     * answers with the frame's own body and with one built for the call */
+    const float pts[4][3] = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 2.0f}, {0.0f, 0.0f, 0.9f}, {0.0f, 0.0f, 1.05f}};
+    uint8_t in[4], again[4];
+    FILL(in, sizeof in);
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_inside(g_in.frame, pts, 12, 4, threads_run(2), in));
+    CHECK(in[0] == 1 && in[1] == 0 && in[2] == 1 && in[3] == 0);
+    PelageColliders with_body = col;
+    with_body.body = 1;
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, &with_body, threads_run(1)));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_inside(g_in.frame, pts, 12, 4, threads_run(1), again));
+    CHECK(memcmp(in, again, sizeof in) == 0);
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_colliders(g_in.frame, NULL, threads_run(1)));
+    float bad[2][3] = {{0.0f, 0.0f, 0.0f}, {0.0f, NAN, 0.0f}};
+    FILL(again, sizeof again);
+    EXPECT(PELAGE_STATUS_NON_FINITE, pelage_frame_inside(g_in.frame, bad, 12, 2, threads_run(1), again));
+    bad[1][1] = 2e9f;
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_inside(g_in.frame, bad, 12, 2, threads_run(1), again));
+    CHECK(untouched(again, sizeof again));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_inside(NULL, pts, 12, 4, threads_run(1), in));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_inside(g_in.frame, NULL, 12, 4, threads_run(1), in));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_inside(g_in.frame, pts, 12, 4, threads_run(1), NULL));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_inside(g_in.frame, NULL, 12, 0, threads_run(1), NULL));
+    Progress stop = progress_new(1);
+    PelageRun heard = threads_run(1);
+    heard.progress = on_progress, heard.progress_user_data = &stop;
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_frame_inside(g_in.frame, pts, 12, 4, heard, in));
+  }
 
   /* LOD counts need patches sorted by rank; masks need a finite threshold */
   {
