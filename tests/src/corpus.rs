@@ -57,6 +57,7 @@
 //! leaves them.
 
 mod head;
+pub mod report;
 pub mod topology;
 
 use std::ops::Range;
