@@ -388,14 +388,24 @@ impl BodyGrid<'_> {
     /// (2 pi): where it cannot, the capped surface's integer winding number
     /// decides alone. A cap within a ball of radius `R` subtends at most
     /// `2 pi (1 - sqrt(1 - R^2 / D^2))` from a distance `D > R` to the
-    /// ball's centre; with `K` caps, each kept below `2 pi / K`, their sum
-    /// stays below a half turn.
+    /// ball's centre. A cell is marked when the sum of those bounds over
+    /// every cap, each at the cell's nearest point, reaches a half turn
+    /// (with [`MAX_SUMMED`] caps or fewer: the sum is taken only within
+    /// the cells where, with `K` caps, some cap's bound reaches `2 pi / K`,
+    /// which holds every cell whose sum does; past that count, every cell
+    /// there is marked). Most of those cells are far enough from every
+    /// cap: a mesh open at the neck, the mouth and the eyes has its near
+    /// cells within about a cap's radius of a cap, where the share alone
+    /// reaches 1.7 radii of the neck, over much of the head.
     fn mark_near_caps(&self, layers: &Range<usize>, class: &mut [u8]) {
         let shape = &self.shape;
         let skip = layers.start * shape.layer_cells();
         let share = 1.0 - 1.0 / self.loops.len() as f32;
         let reach = 1.0 / libm::sqrtf(1.0 - share * share);
         let half_diagonal = 0.5 * libm::sqrtf(3.0) / shape.inv_cell;
+        let summed = self.loops.len() <= MAX_SUMMED;
+        #[cfg(test)]
+        let summed = summed && !super::EXACT_CAPS.with(|e| e.get());
         for ball in self.loops {
             let centre = Vec3::from(ball.centre);
             let d = ball.radius * reach * 1.001 + half_diagonal;
@@ -403,13 +413,39 @@ impl BodyGrid<'_> {
             for z in a[2].max(layers.start)..=b[2].min(layers.end.wrapping_sub(1)) {
                 for y in a[1]..=b[1] {
                     for x in a[0]..=b[0] {
-                        if shape.centre(x, y, z).distance(centre) <= d {
-                            class[shape.index(x, y, z) - skip] |= NEAR_CAP;
+                        let at = shape.centre(x, y, z);
+                        let c = &mut class[shape.index(x, y, z) - skip];
+                        if *c & NEAR_CAP == 0
+                            && at.distance(centre) <= d
+                            && (!summed || self.caps_may_reach(at, half_diagonal))
+                        {
+                            *c |= NEAR_CAP;
                         }
                     }
                 }
             }
         }
+    }
+
+    /// Whether the caps' bounds at the nearest point of the ball of radius
+    /// `half_diagonal` around `at` (a cell) sum to a half turn, or nearly
+    /// (by far more than their rounding).
+    fn caps_may_reach(&self, at: Vec3, half_diagonal: f32) -> bool {
+        let half_turn = core::f64::consts::TAU * (1.0 - 1e-4);
+        let mut sum = 0.0f64;
+        for ball in self.loops {
+            let d = at.distance(Vec3::from(ball.centre)) as f64 - half_diagonal as f64 * 1.001;
+            let r = ball.radius as f64 * 1.001;
+            if d <= r {
+                return true;
+            }
+            let s = r / d;
+            sum += core::f64::consts::TAU * (1.0 - libm::sqrt(1.0 - s * s));
+            if sum >= half_turn {
+                return true;
+            }
+        }
+        false
     }
 }
 

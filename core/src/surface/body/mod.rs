@@ -26,7 +26,12 @@
 //! `w`, changed by each crossing of a three-leg path (along x, y, then z)
 //! from the centre to the point, all inside the cell, so only that cell's
 //! triangles are tested. Near a cap the path also meets the caps, and the
-//! caps' solid angle is evaluated exactly.
+//! caps' solid angle decides: "near" is where the caps' bounds, summed,
+//! may reach a half turn; there the caps are bounded, then evaluated one by
+//! one, nearest first, as a running product of complex numbers (one
+//! arctangent a cap, not one a triangle), until the answer is settled by
+//! far more than the rounding; a point too close to the threshold for that
+//! takes the exact sum, an arctangent per cap triangle.
 //!
 //! Crossings are counted watertight: edge functions are evaluated with the
 //! edge's endpoints in a canonical order, so the two triangles sharing an
@@ -50,6 +55,11 @@ use wide::{f32x4, CmpEq, CmpGt, CmpNe};
 pub const CELLS_PER_TRIANGLE: f32 = 32.0;
 /// Most cells along one axis.
 const MAX_DIM: f32 = 1024.0;
+
+/// Most caps whose bounds are summed per cell to mark the cells near a
+/// cap (see `BodyGrid::mark_near_caps`); a mesh with more holes marks by
+/// the cap count alone.
+const MAX_SUMMED: usize = 32;
 
 /// The threshold on the generalized winding number above which a point is
 /// inside.
@@ -183,9 +193,84 @@ impl<'a> Body<'a> {
     }
 
     /// Whether `w` less the caps' solid angle at `p` over 4 pi is above
-    /// [`INSIDE_WINDING`]. Caps near `p` are evaluated exactly; the far
-    /// ones only when their bounds leave the answer open.
+    /// [`INSIDE_WINDING`]: [`caps_bounded`](Self::caps_bounded) when it
+    /// settles it, else [`caps_exact`](Self::caps_exact).
     fn caps_decide(&self, w: i32, p: Vec3) -> bool {
+        #[cfg(test)]
+        if EXACT_CAPS.with(|e| e.get()) {
+            return self.caps_exact(w, p);
+        }
+        let settled = self.caps_bounded(w, p);
+        #[cfg(test)]
+        FAST.with(|f| {
+            let mut counts = f.get();
+            counts[settled.is_some() as usize] += 1;
+            f.set(counts)
+        });
+        settled.unwrap_or_else(|| self.caps_exact(w, p))
+    }
+
+    /// [`caps_exact`](Self::caps_exact)'s answer, when the caps' bounds,
+    /// then [`fan_angle`] on the caps nearest `p`, settle it by far more
+    /// than their rounding (`None` otherwise: near the threshold, a
+    /// doubtful evaluation, or more than [`MAX_SUMMED`] caps). The answer
+    /// is the sign of `limit - S`, `S` the caps' solid angle: where the
+    /// evaluated caps' sum and the others' bounds put `S` farther from
+    /// `limit` than they can err, that sign is the exact evaluation's,
+    /// found without an arctangent per cap triangle, most often with one
+    /// cap evaluated or none (most points near a hole are far from the
+    /// threshold: outside, seeing a small part of its cap).
+    fn caps_bounded(&self, w: i32, p: Vec3) -> Option<bool> {
+        const TURN: f64 = 4.0 * core::f64::consts::PI;
+        // a margin far above the evaluations' rounding (~1e-12 a triangle)
+        const MARGIN: f64 = 1e-8;
+        if self.loops.len() > MAX_SUMMED {
+            return None;
+        }
+        let limit = TURN * (w as f64 - INSIDE_WINDING as f64);
+        let mut bounds = [0.0f64; MAX_SUMMED];
+        let bounds = &mut bounds[..self.loops.len()];
+        for (b, ball) in bounds.iter_mut().zip(self.loops) {
+            *b = ball.bound(p);
+        }
+        // the caps evaluated one by one, the largest bound first, until
+        // the evaluated caps' angle and the other caps' bounds settle it
+        let (mut angle, mut error) = (0.0f64, 0.0f64);
+        loop {
+            let slack: f64 = bounds.iter().sum();
+            let value = limit - angle;
+            if libm::fabs(value) > slack + error + MARGIN {
+                #[cfg(test)]
+                if error == 0.0 {
+                    FAST.with(|f| {
+                        let mut counts = f.get();
+                        counts[2] += 1;
+                        f.set(counts)
+                    });
+                }
+                return Some(value > 0.0);
+            }
+            let (k, &largest) = bounds
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))?;
+            if largest == 0.0 {
+                return None;
+            }
+            let first = match k {
+                0 => 0,
+                _ => self.loops[k - 1].end as usize,
+            };
+            let (a, e) = fan_angle(&self.caps[first..self.loops[k].end as usize], p)?;
+            (angle, error, bounds[k]) = (angle + a, error + e, 0.0);
+        }
+    }
+
+    /// Whether `w` less the caps' solid angle at `p` over 4 pi is above
+    /// [`INSIDE_WINDING`], a cap triangle at a time. Caps near `p` are
+    /// evaluated exactly; the far ones only when their bounds leave the
+    /// answer open.
+    fn caps_exact(&self, w: i32, p: Vec3) -> bool {
         const NEAR: f64 = 0.8;
         let turn = 4.0 * core::f64::consts::PI;
         let (mut exact, mut slack) = (0.0f64, 0.0f64);
@@ -521,6 +606,14 @@ std::thread_local! {
     static UNCULLED: core::cell::Cell<bool> = const { core::cell::Cell::new(false) };
     /// Triangles the planes culled on this thread.
     static CULLED: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
+    /// Queries on this thread decide near a cap by [`Body::caps_exact`]
+    /// alone, and bodies built on it mark near-cap cells by the cap count
+    /// alone, as before [`fan_angle`] and the summed bounds: the reference
+    /// the fast answers are compared with.
+    static EXACT_CAPS: core::cell::Cell<bool> = const { core::cell::Cell::new(false) };
+    /// Near-cap queries on this thread: left to the exact evaluation,
+    /// settled fast, settled by the bounds alone.
+    static FAST: core::cell::Cell<[usize; 3]> = const { core::cell::Cell::new([0; 3]) };
 }
 
 /// How far from a triangle's plane, in units of its computed normal `n`
@@ -616,6 +709,102 @@ fn solid_angle(t: &Stored, p: Vec3) -> f64 {
     let det = a.dot(b.cross(c));
     let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
     2.0 * libm::atan2(det, den)
+}
+
+/// A corner of a cap triangle seen from `p`, as [`solid_angle`] takes it
+/// (the difference rounded to f32 first): the vector, its length, and its
+/// reciprocal.
+#[derive(Clone, Copy)]
+struct Seen {
+    at: [f32; 3],
+    v: glam::DVec3,
+    length: f64,
+    inverse: f64,
+}
+
+impl Seen {
+    #[inline]
+    fn new(at: [f32; 3], p: Vec3) -> Self {
+        let v = Vec3::from(at) - p;
+        let v = glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+        let length = v.length();
+        Seen {
+            at,
+            v,
+            length,
+            inverse: 1.0 / length,
+        }
+    }
+}
+
+/// The signed solid angle the cap triangles `fan` subtend at `p` (the sum
+/// of [`solid_angle`] over them), and a bound on its error: each
+/// triangle's `2 atan2(det, den)` is not taken, the arguments `(den, det)`
+/// (scaled to the unit sphere) are multiplied up as complex numbers, whole
+/// turns counted as the product goes round, and one arctangent taken at the
+/// end. Corners shared with the previous triangle (a fan's centre, the
+/// rim corner consecutive triangles share) are seen once. `None` when an
+/// argument or the running product lies so near the negative real axis, or
+/// an argument so near zero (`p` on a triangle's edge line), that rounding
+/// could move a turn: the caller evaluates exactly then.
+fn fan_angle(fan: &[Stored], p: Vec3) -> Option<(f64, f64)> {
+    // relative closeness to the negative real axis, and smallest scaled
+    // argument, taken as doubtful: each keeps an argument's rounding
+    // (~1e-15 of its terms) below ~1e-12 of a radian
+    const AXIS: f64 = 1e-6;
+    const SMALLEST: f64 = 1e-3;
+    let (mut re, mut im, mut turns) = (1.0f64, 0.0f64, 0i64);
+    let mut seen: Option<[Seen; 3]> = None;
+    for (k, t) in fan.iter().enumerate() {
+        let [b, a, m] = t.corners();
+        let look = |at: [f32; 3], before: Option<Seen>| match before {
+            Some(s) if s.at.map(f32::to_bits) == at.map(f32::to_bits) => s,
+            _ => Seen::new(at, p),
+        };
+        // this triangle's first corner is often the last one's second,
+        // and every triangle of a cap shares its third
+        let (sb, sa, sm) = match seen {
+            Some([lb, _, lm]) => (Seen::new(b, p), look(a, Some(lb)), look(m, Some(lm))),
+            None => (Seen::new(b, p), Seen::new(a, p), Seen::new(m, p)),
+        };
+        seen = Some([sb, sa, sm]);
+        if sb.length == 0.0 || sa.length == 0.0 || sm.length == 0.0 {
+            return None;
+        }
+        // solid_angle's terms for (b, a, m), over the three lengths
+        let (vb, va, vm) = (sb.v, sa.v, sm.v);
+        let scale = sb.inverse * sa.inverse * sm.inverse;
+        let det = vb.dot(va.cross(vm)) * scale;
+        let den = (sb.length * sa.length * sm.length
+            + vb.dot(va) * sm.length
+            + vb.dot(vm) * sa.length
+            + va.dot(vm) * sb.length)
+            * scale;
+        if det * det + den * den < SMALLEST * SMALLEST
+            || (den < 0.0 && libm::fabs(det) <= AXIS * -den)
+        {
+            return None;
+        }
+        let (r, i) = (re * den - im * det, re * det + im * den);
+        // the arguments add within (-2 pi, 2 pi]: past pi when both were
+        // in the upper half-plane and the product is in the lower one
+        if im >= 0.0 && det >= 0.0 && i < 0.0 {
+            turns += 1;
+        } else if im < 0.0 && det < 0.0 && i >= 0.0 {
+            turns -= 1;
+        }
+        if r < 0.0 && libm::fabs(i) <= AXIS * -r {
+            return None;
+        }
+        (re, im) = (r, i);
+        // each factor is at most 4 and at least 1e-3 in size
+        if k % 64 == 63 {
+            let size = libm::fabs(re).max(libm::fabs(im));
+            (re, im) = (re / size, im / size);
+        }
+    }
+    let angle = 2.0 * (libm::atan2(im, re) + core::f64::consts::TAU * turns as f64);
+    Some((angle, 1e-10 * (fan.len() as f64 + 1.0)))
 }
 
 #[cfg(test)]

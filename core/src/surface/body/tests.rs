@@ -500,3 +500,97 @@ fn open_and_degenerate_meshes() {
         Err(Error::CapacityExceeded { .. })
     ));
 }
+
+/// A head-like mesh: a sphere with a wavy surface (so its rims are not
+/// planar), open at a wide neck, a mouth and two eyes, with an eyeball
+/// through each eye hole and a sliver hole.
+fn holed_head() -> crate::testmesh::TestMesh {
+    let mut m = sphere(24, 48);
+    for v in &mut m.p {
+        let around = libm::atan2f(v[2], v[0]);
+        v[1] += 0.06 * libm::sinf(5.0 * around) * (1.0 - v[1] * v[1]);
+    }
+    let p = m.p.clone();
+    let centroid = |t: &[u32; 3]| t.iter().map(|&v| Vec3::from(p[v as usize])).sum::<Vec3>() / 3.0;
+    let holes = [
+        (Vec3::new(0.0, -1.0, 0.0), 0.55),
+        (Vec3::new(0.0, -0.4, 0.92), 0.3),
+        (Vec3::new(0.35, 0.3, 0.89), 0.18),
+        (Vec3::new(-0.35, 0.3, 0.89), 0.18),
+    ];
+    m.t.retain(|t| {
+        let c = centroid(t);
+        holes.iter().all(|(at, r)| c.distance(*at) > *r)
+    });
+    // a lone sliver hole: one more triangle gone
+    m.t.remove(m.t.len() / 3);
+    for x in [0.33f32, -0.33] {
+        let eye = sphere(10, 20);
+        let base = m.p.len() as u32;
+        m.p.extend(
+            eye.p
+                .iter()
+                .map(|v| [v[0] * 0.2 + x, v[1] * 0.2 + 0.28, v[2] * 0.2 + 0.8]),
+        );
+        m.t.extend(eye.t.iter().map(|t| t.map(|v| v + base)));
+        m.uv.extend(eye.uv);
+    }
+    m
+}
+
+#[test]
+fn near_a_hole_the_bounded_caps_answer_as_the_exact_ones() {
+    // summed bounds and the caps' product of arguments against a cap
+    // triangle at a time, at points all around the holes (many near the
+    // threshold, none left out), at two densities; at the origin, and
+    // small and large far from it (float32 differences there)
+    let far = Vec3::new(0.8, 0.36, -0.48);
+    for (scale, offset) in [(1.0, Vec3::ZERO), (0.125, far * 1e3), (12.5, far * 1e4)] {
+        let mut m = holed_head();
+        for v in &mut m.p {
+            *v = (Vec3::from(*v) * scale + offset).to_array();
+        }
+        let mesh = m.mesh();
+        let mut rim_memory = vec![0u8; Rim::required_bytes(&mesh)];
+        let rim = Rim::new(&mesh, &mut Arena::new(&mut rim_memory)).unwrap();
+        assert_eq!(rim.loop_count(), 5);
+        let balls: Vec<(Vec3, f32)> = (0..5).map(|k| rim.ball(k, &mesh)).collect();
+        for density in [2.0, 8.0] {
+            let mut memory = vec![];
+            let body = build_at(&mesh, density, &mut memory);
+            EXACT_CAPS.with(|e| e.set(true));
+            let mut exact_memory = vec![];
+            let exact = build_at(&mesh, density, &mut exact_memory);
+            let points: Vec<Vec3> = (0..40_000u64)
+                .map(|i| {
+                    let r = |c| rng::unit(23, i, Purpose::Uniform, c);
+                    let d = Vec3::new(r(0), r(1), r(2)) * 2.0 - Vec3::ONE;
+                    if i % 4 == 0 {
+                        offset + d * 1.3 * scale
+                    } else {
+                        let (at, radius) = balls[(i as usize / 4) % balls.len()];
+                        at + d * radius * 1.6
+                    }
+                })
+                .collect();
+            let want: Vec<bool> = points.iter().map(|&p| exact.contains(p)).collect();
+            EXACT_CAPS.with(|e| e.set(false));
+            let near = exact.class.iter().filter(|&&c| c & NEAR_CAP != 0).count();
+            let tight = body.class.iter().filter(|&&c| c & NEAR_CAP != 0).count();
+            assert!(tight < near, "{tight} near-cap cells, {near} before");
+            FAST.with(|f| f.set([0; 3]));
+            for (p, want) in points.iter().zip(&want) {
+                assert_eq!(body.contains(*p), *want, "{p}, density {density}");
+            }
+            // most near-cap queries are settled without an arctangent per
+            // cap triangle, by the bounds or by the product
+            let [exactly, fast, bounded] = FAST.with(|f| f.get());
+            assert!(
+                exactly * 50 < fast && bounded < fast && 2 * bounded > fast,
+                "{exactly} exactly, {fast} fast, {bounded} by bounds"
+            );
+            let inside = want.iter().filter(|&&w| w).count();
+            assert!((5_000..30_000).contains(&inside), "{inside}");
+        }
+    }
+}
