@@ -15,7 +15,7 @@ RUST_TARGETS_test := thumbv7em-none-eabihf
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
 .PHONY: demo farm-demo test deps deps-demo deps-farm deps-test docs-check rust-test rust-lint \
-        rust-miri rust-fuzz cmake-test header-check bench perf
+        rust-miri rust-fuzz cmake-test header-check bench perf python-venv python-test
 
 # A build tree that is already configured keeps its settings (after `make
 # test` it has the tests on, and their packages are installed); a new one is
@@ -47,7 +47,7 @@ farm-demo: deps-farm
 	else farm/cluster.sh stop && echo "farm-demo: cluster stopped"; fi; \
 	exit $$rc
 
-test: deps-test docs-check rust-lint rust-test rust-miri rust-fuzz cmake-test header-check
+test: deps-test docs-check rust-lint rust-test rust-miri rust-fuzz cmake-test python-test header-check
 
 # Installs the Debian packages and rustup targets of DEPS_<name> and
 # RUST_TARGETS_<name> that are missing (the one recipe for every list).
@@ -104,9 +104,26 @@ docs-check:
 	      { echo "README.md's C snippet has a line cpp_examples/minimal.c does not: $$line"; exit 1; }; \
 	  done
 
-# The committed header must be exactly what the build generates.
+# The Python package (python/): a virtual environment in the build tree with
+# the pinned test requirements (pip's downloads cached beside it, so a second
+# run installs from the cache), the package installed from the working tree
+# as a user would (`pip install ./python`, which builds the library with
+# cargo; without build isolation, so setuptools comes from the venv), then
+# its pytest suite.
+PY_DIR := $(BUILD)/python
+PY_VENV := $(PY_DIR)/venv
+PY_PIP = $(PY_VENV)/bin/pip --disable-pip-version-check --cache-dir $(abspath $(PY_DIR))/pip-cache
+python-venv: deps-test
+	@test -x $(PY_VENV)/bin/python || python3 -m venv $(PY_VENV)
+	@$(PY_PIP) install -q -r python/requirements-test.txt
+python-test: python-venv
+	$(PY_PIP) install -q --no-build-isolation --force-reinstall --no-deps ./python
+	$(PY_VENV)/bin/pytest -q -p no:cacheprovider python/tests
+
+# The committed header, and its declarations for cffi, must be exactly what
+# the build generates.
 header-check:
-	git diff --exit-code -- include/pelage.h
+	git diff --exit-code -- include/pelage.h python/pelage/_cdef.h
 
 # Every benchmark's tables, printed to the terminal.
 bench:
