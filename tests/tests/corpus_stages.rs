@@ -29,8 +29,9 @@ fn size(e: &CorpusMesh) -> f32 {
 /// generalized winding number above 1/2): a record's first point past the
 /// meet is inside, and a record at the root is one whose first segment
 /// enters at once. A root lies on the skin by construction, so it is
-/// never a meet itself. Placed far from the origin, 2 records may stand
-/// on a point the winding number calls out.
+/// never a meet itself. Far from the origin too: the body works relative
+/// to its grid's corner (at 1e3 a record stood on a point the winding
+/// number calls out when it worked in world coordinates).
 #[test]
 fn trim_records_against_the_body_agree_with_the_inside_rule() {
     for e in &corpus::representative() {
@@ -79,11 +80,8 @@ fn trim_records_against_the_body_agree_with_the_inside_rule() {
             outside.len(),
             at_root.len()
         );
-        // far from the origin the body's crossings round (see the inside
-        // query's test): a record or two may stand on a point a hair out
-        let allowed = if e.recipe.is_placed() { 2 } else { 0 };
         assert!(
-            outside.len() <= allowed,
+            outside.is_empty(),
             "{}: records whose point past the meet is outside (guide, cv, winding): {outside:?}",
             e.name
         );
@@ -200,8 +198,9 @@ fn the_simulation_runs_on_every_representative_mesh() {
 /// `pelage_frame_inside` answers by the one inside rule, the generalized
 /// winding number above 1/2, on open meshes of several shells too: points
 /// a little off the skin on both sides, across the holes, and scattered in
-/// the mesh's box (points within 1e-3 of the threshold left out). Placed
-/// far from the origin, 2 of 1,200 may disagree (see below). Placed
+/// the mesh's box (points within 1e-3 of the threshold left out), far
+/// from the origin too (a point at 1e3 read the other way when the body
+/// worked in world coordinates). Placed
 /// far from the origin, 2 of 1,200 may disagree (see below).
 #[test]
 fn the_inside_query_is_the_winding_number_on_open_meshes() {
@@ -260,10 +259,6 @@ fn the_inside_query_is_the_winding_number_on_open_meshes() {
             e.name,
             wrong.len()
         );
-        // far from the origin the body's crossings round (issue 48's local
-        // origin is to take that away): a point a hair past the threshold
-        // may read the other way
-        let allowed = if e.recipe.is_placed() { 2 } else { 0 };
-        assert!(wrong.len() <= allowed, "{}: {wrong:?}", e.name);
+        assert!(wrong.is_empty(), "{}: {wrong:?}", e.name);
     }
 }

@@ -4,13 +4,21 @@
 use super::*;
 
 /// Grid placement, computed the same way when sizing and when building.
+///
+/// A body stores its triangles, caps and cell centres relative to the
+/// grid's `origin` (a cell below the mesh's bounds), and a query moves its
+/// points there first: far from the world's origin the subtraction is
+/// exact (the point and the origin are within a factor 2), so the
+/// crossings are computed at the mesh's own scale instead of at the
+/// rounding of coordinates in the thousands.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Shape {
+    /// The grid's corner (world).
     pub(super) origin: Vec3,
     pub(super) inv_cell: f32,
     pub(super) dims: [usize; 3],
     pub(super) triangles: usize,
-    /// The bounds of the mesh.
+    /// The bounds of the mesh (world).
     pub(super) lo: Vec3,
     pub(super) hi: Vec3,
 }
@@ -67,38 +75,46 @@ impl Shape {
         (0..mesh.triangle_count())
             .filter(|&f| solid(f))
             .map(|f| {
-                let [a, b, c] = mesh.corners(f);
+                let [a, b, c] = mesh.corners(f).map(|p| self.local(p));
                 let (a, b) = self.cell_range(a.min(b).min(c), a.max(b).max(c));
                 (0..3).map(|k| b[k] - a[k] + 1).product::<usize>()
             })
             .fold(0usize, usize::saturating_add)
     }
 
-    /// The largest coordinate magnitude of the triangles' bounds, and two
+    /// The largest local coordinate of the triangles' bounds, and two
     /// cells more: what rounding is measured against (surface cells lie
-    /// within a cell of the bounds).
+    /// within a cell of the bounds, which start a cell from the origin).
     pub(super) fn reach(&self) -> f32 {
-        self.lo.abs().max(self.hi.abs()).max_element() + 2.0 / self.inv_cell
+        (self.hi - self.lo).max_element() + 3.0 / self.inv_cell
+    }
+
+    /// World point `p` relative to the grid's origin.
+    #[inline]
+    pub(super) fn local(&self, p: Vec3) -> Vec3 {
+        p - self.origin
     }
 
     pub(super) fn cells(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
     }
 
-    /// The cell of `p` along each axis (may be out of the grid).
+    /// The cell of local point `p` along each axis (may be out of the
+    /// grid).
     #[inline]
     pub(super) fn cell_of(&self, p: Vec3) -> [i32; 3] {
-        let q = (p - self.origin) * self.inv_cell;
+        let q = p * self.inv_cell;
         [floor_i32(q.x), floor_i32(q.y), floor_i32(q.z)]
     }
 
-    /// The cell of coordinate `v` along `axis` (may be out of the grid).
+    /// The cell of local coordinate `v` along any axis (may be out of the
+    /// grid).
     #[inline]
-    pub(super) fn cell_on(&self, v: f32, axis: usize) -> i32 {
-        floor_i32((v - self.origin[axis]) * self.inv_cell)
+    pub(super) fn cell_on(&self, v: f32) -> i32 {
+        floor_i32(v * self.inv_cell)
     }
 
-    /// Cells the bounds `lo`..`hi` of a triangle touch, padded by a
+    /// Cells the local bounds `lo`..`hi` of a triangle touch, padded by a
     /// thousandth of a cell so that a crossing computed with rounding still
     /// lands in a listed cell.
     pub(super) fn cell_range(&self, lo: Vec3, hi: Vec3) -> ([usize; 3], [usize; 3]) {
@@ -107,9 +123,7 @@ impl Shape {
         // clamped into the grid first, the coordinate's floor is its
         // truncation: the cell of `cell_of`, clamped
         let cell = |p: Vec3A| {
-            let q = ((p - Vec3A::from(self.origin)) * self.inv_cell)
-                .max(Vec3A::ZERO)
-                .min(last);
+            let q = (p * self.inv_cell).max(Vec3A::ZERO).min(last);
             let [x, y, z, _] = f32x4::from(q.extend(0.0).to_array()).trunc_int().to_array();
             [x as usize, y as usize, z as usize]
         };
@@ -121,10 +135,10 @@ impl Shape {
         (z * self.dims[1] + y) * self.dims[0] + x
     }
 
-    /// The centre of cell `(x, y, z)`.
+    /// The centre of cell `(x, y, z)` (local).
     #[inline]
     pub(super) fn centre(&self, x: usize, y: usize, z: usize) -> Vec3 {
-        self.origin + Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) / self.inv_cell
+        Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) / self.inv_cell
     }
 
     /// Cells in one layer (one z).
@@ -357,7 +371,7 @@ impl BodyGrid<'_> {
                         continue;
                     };
                     // the first centre at or past the crossing
-                    let x = shape.cell_on(h, 0);
+                    let x = shape.cell_on(h);
                     if !(0..shape.dims[0] as i32).contains(&x) {
                         continue;
                     }
@@ -540,8 +554,8 @@ impl<'a> Body<'a> {
             if !(lo.cmpge(shape.lo).all() && hi.cmple(shape.hi).all()) {
                 return Err(another);
             }
-            *t = Stored::new([a, b, c], reach, shape.inv_cell);
-            let (a, b) = shape.cell_range(lo, hi);
+            *t = Stored::new([a, b, c].map(|p| shape.local(p)), reach, shape.inv_cell);
+            let (a, b) = shape.cell_range(shape.local(lo), shape.local(hi));
             // at most MAX_DIM + 4 cells a side
             *span = [a[0], a[1], a[2], b[0], b[1], b[2]].map(|c| c as u16);
         }
@@ -596,11 +610,12 @@ pub(super) fn cap(
     caps: &mut [Stored],
     loops: &mut [CapBall],
 ) {
-    let at = |v: u32| Vec3::from(mesh.positions.get(v as usize));
+    let at = |v: u32| shape.local(Vec3::from(mesh.positions.get(v as usize)));
     let reach = shape.reach();
     let mut next = 0;
     for (k, ball) in loops.iter_mut().enumerate() {
         let (mean, radius) = rim.ball(k, mesh);
+        let mean = shape.local(mean);
         for e in rim.loop_edges(k) {
             let (a, b) = (at(e[0]), at(e[1]));
             caps[next] = Stored::new([b, a, mean], reach, shape.inv_cell);

@@ -113,6 +113,7 @@ impl<'a> Body<'a> {
     /// True when `p` is inside the body: its generalized winding number is
     /// above [`INSIDE_WINDING`].
     pub fn contains(&self, p: Vec3) -> bool {
+        let p = self.shape.local(p);
         match self.capped(p) {
             (w, false) => w >= 1,
             (w, true) => self.caps_decide(w, p),
@@ -125,11 +126,11 @@ impl<'a> Body<'a> {
     /// hole's cap as skin, where [`contains`](Self::contains) follows the
     /// winding number's smooth fall across the hole; cheaper near a hole.
     pub fn capped_winding(&self, p: Vec3) -> i32 {
-        self.capped(p).0
+        self.capped(self.shape.local(p)).0
     }
 
     /// [`capped_winding`](Self::capped_winding), and whether a cap may
-    /// decide [`contains`](Self::contains) at `p`.
+    /// decide [`contains`](Self::contains) at `p` (local).
     fn capped(&self, p: Vec3) -> (i32, bool) {
         let c = self.shape.cell_of(p);
         let inside = (0..3).all(|k| c[k] >= 0 && (c[k] as usize) < self.shape.dims[k]);
@@ -295,6 +296,7 @@ impl<'a> Body<'a> {
 
     /// True when the segment from `a` to `b` meets a triangle of the body.
     pub fn blocks(&self, a: Vec3, b: Vec3) -> bool {
+        let (a, b) = (self.shape.local(a), self.shape.local(b));
         let mut hit = false;
         self.walk(a, b, |refs, _| {
             hit = refs
@@ -309,6 +311,7 @@ impl<'a> Body<'a> {
     /// (of its own triangles; the caps over its holes are not met): the
     /// parameter `t` in `[0, 1]` of the point `a + t (b - a)`, or `None`.
     pub fn first_meet(&self, a: Vec3, b: Vec3) -> Option<f32> {
+        let (a, b) = (self.shape.local(a), self.shape.local(b));
         let mut first: Option<f32> = None;
         self.walk(a, b, |refs, leave| {
             for &t in refs {
@@ -323,16 +326,13 @@ impl<'a> Body<'a> {
         first
     }
 
-    /// Walks the grid cells the segment from `a` to `b` passes through, in
+    /// Walks the grid cells the segment from `a` to `b` (local) passes through, in
     /// order, from where it enters the grid to where it leaves it, handing
     /// `visit` each cell's triangles and the segment parameter at which it
     /// leaves the cell, until `visit` returns true.
     fn walk(&self, a: Vec3, b: Vec3, mut visit: impl FnMut(&[u32], f32) -> bool) {
         let shape = &self.shape;
-        let (from, to) = (
-            (a - shape.origin) * shape.inv_cell,
-            (b - shape.origin) * shape.inv_cell,
-        );
+        let (from, to) = (a * shape.inv_cell, b * shape.inv_cell);
         if !(from.is_finite() && to.is_finite()) {
             return;
         }

@@ -182,11 +182,11 @@ fn planes_cull_only_triangles_no_leg_crosses() {
         .iter_mut()
         .for_each(|p| *p = p.map(|c| libm::roundf(c * 8.0) * 0.5));
     let holed = holed_sphere(0.7);
-    // (3e4 from the origin the room for rounding is wider than a
-    // cell there: nothing is culled)
+    // (3e4 from the origin too: the body works relative to its grid's
+    // corner, so the room for rounding is the mesh's, not the world's)
     let meshes = [
         (&slivers, 1.0f32, true),
-        (&far, 1.0, false),
+        (&far, 1.0, true),
         (&lattice, 4.0, true),
         (&holed, 1.0, true),
     ];
