@@ -69,7 +69,7 @@ pub fn median(mut v: Vec<Duration>) -> Duration {
     v[v.len() / 2]
 }
 
-/// One mesh's baseline figures (see [`baseline`]).
+/// One mesh's figures (see [`stamp_table`]).
 #[derive(Clone, Debug, Default)]
 pub struct Row {
     name: String,
