@@ -754,37 +754,55 @@ mod tests {
 
     #[test]
     fn pairs_across_shells_and_sides() {
-        // two lattice planes half a spacing apart: facing the same way,
-        // every point has a partner on the other shell at 0.5 (twice the
-        // points on twice the area: r_hex stays 1)
-        for (flip, across) in [(false, M * M), (true, 0)] {
-            let (lower, tris) = plane(0.0);
+        // two lattice planes half a spacing apart, every point with a
+        // partner on the other shell at 0.5 (twice the points on twice the
+        // area: r_hex stays 1): facing the same way, or facing each other
+        // across the gap, the pairs face the same air; facing away from
+        // each other (the two sides of a thin part) they do not
+        let flip = |tris: &mut [[u32; 3]]| tris.iter_mut().for_each(|t| t.swap(1, 2));
+        for (lower_down, upper_down, across) in [
+            (false, false, M * M),
+            (false, true, M * M),
+            (true, false, 0),
+        ] {
+            let (lower, mut tris) = plane(0.0);
             let (upper, mut upper_tris) = plane(0.5);
             let pos = [lower, upper].concat();
-            if flip {
-                upper_tris.iter_mut().for_each(|t| t.swap(1, 2));
+            if lower_down {
+                flip(&mut tris);
+            }
+            if upper_down {
+                flip(&mut upper_tris);
             }
             let mut all_tris = tris.to_vec();
             all_tris.extend(upper_tris.iter().map(|t| t.map(|i| i + 4)));
             let mesh = Mesh::new(Strided::from_slice(&pos), Strided::from_slice(&all_tris));
             let shells = [0, 0, 1, 1];
             let skin = Skin::new(mesh, &shells, |_| true);
-            let mut roots = lattice(0);
-            roots.extend(lattice(2).into_iter().map(|mut r| {
-                if flip {
-                    // the swapped corners swap the barycentrics
+            // the swapped corners swap the barycentrics
+            let swapped = |mut r: Root, swap: bool| {
+                if swap {
                     (r.u, r.v) = (r.v, r.u);
                 }
+                r
+            };
+            let mut roots: Vec<Root> = lattice(0)
+                .into_iter()
+                .map(|r| swapped(r, lower_down))
+                .collect();
+            roots.extend(lattice(2).into_iter().map(|r| {
+                let mut r = swapped(r, upper_down);
                 r.id += (M * M) as u32;
                 r
             }));
+            let case = (lower_down, upper_down);
             let rh = skin.r_hex(roots.len());
             let n = neighbours(&skin, &roots, 0.9);
-            assert_eq!(n.close_pairs, across, "flip {flip}");
-            assert_eq!(n.close_across_shells, across, "flip {flip}");
-            // opposite sides: each plane sees only its own lattice
-            let nearest = if flip { 1.0 } else { 0.5 };
-            assert!(close(n.min * rh, nearest), "flip {flip}: {n:?}");
+            assert_eq!(n.close_pairs, across, "{case:?}");
+            assert_eq!(n.close_across_shells, across, "{case:?}");
+            // back to back: each plane sees only its own lattice
+            let nearest = if across == 0 { 1.0 } else { 0.5 };
+            assert!(close(n.min * rh, nearest), "{case:?}: {n:?}");
             // faces that grow no fur leave the area and the samples
             let bare = Skin::new(mesh, &shells, |f| f < 2);
             assert!(close(bare.area() as f32, skin.area() as f32 / 2.0));
