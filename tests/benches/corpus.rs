@@ -17,9 +17,10 @@ use glam::{DQuat, DVec3, Vec3};
 use pelage::*;
 use pelage_core::rng::{self, Purpose};
 use pelage_core::Root;
-use pelage_tests::corpus::{corpus, mesh_desc, representative, CorpusMesh};
+use pelage_tests::animated::colliders;
+use pelage_tests::corpus::{corpus, mesh_desc, representative, turned_about_centre, CorpusMesh};
 use pelage_tests::creature::CreatureMesh;
-use pelage_tests::measure::{frame, guides_desc, on_threads, stamp_roots, Frame};
+use pelage_tests::measure::{frame, guides_desc, on_threads, stamp_roots, Frame, SimHandle};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -84,49 +85,15 @@ fn guides(mesh: &pelage_core::Mesh, roots: &[Root], size: f32) -> Vec<[f32; 3]> 
 /// Frame `f` of the sway: the mesh turned about the vertical through its
 /// bounds' centre and moved sideways, rigidly (in f64, rounded once).
 fn swayed(m: &CreatureMesh, f: usize, size: f64) -> CreatureMesh {
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for p in &m.positions {
-        let p = DVec3::from(p.map(f64::from));
-        (lo, hi) = (lo.min(p), hi.max(p));
-    }
-    let centre = 0.5 * (lo + hi);
     let phase = std::f64::consts::TAU * f as f64 / FRAMES as f64;
     let turn = DQuat::from_rotation_y(0.25 * phase.sin());
     let shift = DVec3::new(0.04 * size * phase.sin(), 0.02 * size * phase.cos(), 0.0);
-    let moved = |p: &[f32; 3]| {
-        let p = DVec3::from(p.map(f64::from));
-        (turn * (p - centre) + centre + shift).as_vec3().to_array()
-    };
-    let turned = |n: &[f32; 3]| (turn * DVec3::from(n.map(f64::from))).as_vec3().to_array();
-    CreatureMesh {
-        positions: m.positions.iter().map(moved).collect(),
-        triangles: m.triangles.clone(),
-        uvs: m.uvs.clone(),
-        normals: m.normals.iter().map(turned).collect(),
-    }
+    turned_about_centre(m, turn, shift)
 }
 
-/// The colliders: nothing, or the body.
-fn colliders(body: bool) -> PelageColliders {
-    PelageColliders {
-        spheres: std::ptr::null(),
-        sphere_count: 0,
-        capsules: std::ptr::null(),
-        capsule_count: 0,
-        planes: std::ptr::null(),
-        plane_count: 0,
-        body: body as u32,
-        distance: None,
-        distance_user_data: std::ptr::null_mut(),
-    }
-}
-
-/// A mesh's simulation, ready to step: the sim, its memory, and the
-/// frames of the sway.
+/// A mesh's simulation, ready to step, and the frames of the sway.
 struct Rig {
-    sim: PelageSim,
-    _memory: Vec<u8>,
-    _meshes: Vec<CreatureMesh>,
+    sim: SimHandle,
     frames: Vec<Frame>,
     guides: usize,
     /// Samples of each variant: no body, the step's body, the frame's.
@@ -142,39 +109,22 @@ impl Rig {
         let roots = stamp_roots(view, GUIDES, 1);
         let points = guides(&view, &roots, size as f32);
         let rest = guides_desc(&roots, &points);
-        let desc = e.desc();
         let params = PelageSimParams {
             joints: JOINTS as u32,
             points_per_guide: JOINTS as u32,
             link_radius: (0.05 * size) as f32,
             ..pelage_sim_params_defaults()
         };
-        let mut bytes = 0;
-        assert_eq!(
-            pelage_sim_size(&desc, roots.len(), &params, &mut bytes),
-            PelageStatus::Ok
-        );
-        let mut memory = vec![0u8; bytes];
-        let mut sim = std::ptr::null_mut();
-        let pose = PelageRestPose {
-            mesh: &desc,
-            guides: &rest,
-        };
-        let arena = PelageArena {
-            memory: memory.as_mut_ptr().cast(),
-            bytes,
-        };
-        let s = pelage_sim_new(&pose, &params, arena, &mut sim);
-        assert_eq!(s, PelageStatus::Ok, "{}", e.name);
-        let meshes: Vec<_> = (0..FRAMES).map(|f| swayed(&e.mesh, f, size)).collect();
-        let frames = meshes
-            .iter()
-            .map(|m| frame(&mesh_desc(m), &rest, JOINTS as u32, THREADS).unwrap())
+        let sim = SimHandle::new(&e.desc(), &rest, &params);
+        // a frame copies its mesh: the swayed mesh is dropped once it has one
+        let frames = (0..FRAMES)
+            .map(|f| {
+                let m = swayed(&e.mesh, f, size);
+                frame(&mesh_desc(&m), &rest, JOINTS as u32, THREADS).unwrap()
+            })
             .collect();
         Rig {
             sim,
-            _memory: memory,
-            _meshes: meshes,
             frames,
             guides: roots.len(),
             times: [vec![], vec![], vec![]],
@@ -187,8 +137,8 @@ impl Rig {
     /// body, 1 the body the step builds, 2 the frame's body (set before
     /// each step, timed apart).
     fn run(&mut self, variant: usize) {
-        assert_eq!(pelage_sim_reset(self.sim), PelageStatus::Ok);
-        let c = colliders(variant != 0);
+        assert_eq!(pelage_sim_reset(self.sim.sim), PelageStatus::Ok);
+        let c = colliders(&[], variant != 0);
         for f in &self.frames {
             if variant == 2 {
                 let t = Instant::now();
@@ -204,7 +154,7 @@ impl Rig {
                 ..pelage_step_params_defaults()
             };
             let t = Instant::now();
-            let s = pelage_sim_step(self.sim, f.0, &step, &mut info);
+            let s = pelage_sim_step(self.sim.sim, f.0, &step, &mut info);
             self.times[variant].push(t.elapsed().as_secs_f64());
             assert_eq!(s, PelageStatus::Ok);
             if variant == 1 {
@@ -226,13 +176,6 @@ impl Rig {
             set_colliders: median(self.set_colliders.clone()),
             groomed: self.groomed,
         }
-    }
-}
-
-impl Drop for Rig {
-    fn drop(&mut self) {
-        self.frames.clear();
-        pelage_sim_free(self.sim);
     }
 }
 

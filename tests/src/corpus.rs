@@ -49,9 +49,7 @@
 //!
 //! A mesh without UVs has an empty `uvs` Vec; [`mesh_desc`] then passes a
 //! NULL `uvs` pointer, as the C API documents for absent UVs, and
-//! [`mesh_view`] no UVs (`crate::measure::mesh_desc` and `mesh_view` would
-//! pass an empty buffer as if it held one UV per vertex: do not use them on
-//! these meshes). Without UVs a mesh keeps its triangles, so the same
+//! [`mesh_view`] no UVs (the same for normals). Without UVs a mesh keeps its triangles, so the same
 //! root (face, u, v) is the same point with and without UVs; its vertices
 //! stay split along the former UV seams, as an exporter that drops UVs
 //! leaves them.
@@ -65,6 +63,7 @@ use std::ops::Range;
 use glam::{DQuat, DVec3};
 
 use crate::creature::CreatureMesh;
+pub use crate::measure::{mesh_desc, mesh_view};
 pub use head::{Detail, COARSE, EAR_HALF_THICK, FULL, TEETH};
 
 /// Scale of a centimetre scene: the head is about 25 units across.
@@ -103,41 +102,16 @@ pub fn placed(mesh: &CreatureMesh, offset: DVec3, rotation: DQuat) -> CreatureMe
     }
 }
 
-/// The mesh as a C API description (borrows `m`): `uvs` and `normals` are
-/// NULL when `m` has none (empty Vecs).
-pub fn mesh_desc(m: &CreatureMesh) -> pelage::PelageMeshDesc {
-    let or_null = |empty: bool, p: *const std::ffi::c_void| {
-        if empty {
-            std::ptr::null()
-        } else {
-            p
-        }
-    };
-    pelage::PelageMeshDesc {
-        positions: m.positions.as_ptr().cast(),
-        position_stride: 12,
-        vertex_count: m.positions.len(),
-        indices: m.triangles.as_ptr().cast(),
-        index_stride: 12,
-        triangle_count: m.triangles.len(),
-        uvs: or_null(m.uvs.is_empty(), m.uvs.as_ptr().cast()),
-        uv_stride: 8,
-        normals: or_null(m.normals.is_empty(), m.normals.as_ptr().cast()),
-        normal_stride: 12,
+/// The mesh turned by `turn` about the centre of its bounds and moved by
+/// `shift`, rigidly ([`placed`]): a frame of a host's animation.
+pub fn turned_about_centre(mesh: &CreatureMesh, turn: DQuat, shift: DVec3) -> CreatureMesh {
+    let (mut lo, mut hi) = (DVec3::MAX, DVec3::MIN);
+    for p in &mesh.positions {
+        let p = DVec3::from(p.map(f64::from));
+        (lo, hi) = (lo.min(p), hi.max(p));
     }
-}
-
-/// The mesh as a core mesh (borrows `m`), with UVs and normals only when
-/// `m` has them.
-pub fn mesh_view(m: &CreatureMesh) -> pelage_core::Mesh<'_> {
-    use pelage_core::Strided;
-    let mut mesh = pelage_core::Mesh::new(
-        Strided::from_slice(&m.positions),
-        Strided::from_slice(&m.triangles),
-    );
-    mesh.uvs = (!m.uvs.is_empty()).then(|| Strided::from_slice(&m.uvs));
-    mesh.normals = (!m.normals.is_empty()).then(|| Strided::from_slice(&m.normals));
-    mesh
+    let centre = (lo + hi) / 2.0;
+    placed(mesh, centre - turn * centre + shift, turn)
 }
 
 /// What a corpus mesh is built from.

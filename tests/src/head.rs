@@ -171,7 +171,7 @@ fn undented_radius(d: DVec3) -> f64 {
     0.5 * (r + neck + ((r - neck).powi(2) + k * k).sqrt())
 }
 
-fn dir(theta: f64, phi: f64) -> DVec3 {
+pub(crate) fn dir(theta: f64, phi: f64) -> DVec3 {
     DVec3::from(direction(theta, phi))
 }
 
@@ -180,12 +180,12 @@ fn angle_between(a: DVec3, b: DVec3) -> f64 {
     2.0 * (0.5 * (a - b).length()).min(1.0).asin()
 }
 
-fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
+pub(crate) fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
     let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
 
-fn bump(d: DVec3, centre: DVec3, width: f64, height: f64) -> f64 {
+pub(crate) fn bump(d: DVec3, centre: DVec3, width: f64, height: f64) -> f64 {
     let a = angle_between(d, centre) / width;
     height * (-a * a).exp()
 }
@@ -236,8 +236,9 @@ fn append(mesh: &mut CreatureMesh, part: Part) -> Range<usize> {
 }
 
 /// Area-weighted vertex normals, summed over vertices with bit-identical
-/// positions so seam duplicates agree.
-fn smooth_normals(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
+/// positions so seam duplicates agree (zero-area faces add nothing; a
+/// vertex of only such faces points up).
+pub(crate) fn smooth_normals(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
     let mut ids = HashMap::new();
     let canon: Vec<usize> = positions
         .iter()
@@ -254,7 +255,7 @@ fn smooth_normals(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3
     }
     canon
         .iter()
-        .map(|&k| acc[k].normalize().as_vec3().into())
+        .map(|&k| acc[k].normalize_or(DVec3::Y).as_vec3().into())
         .collect()
 }
 

@@ -14,8 +14,8 @@ pub fn mesh_view(m: &CreatureMesh) -> Mesh<'_> {
         Strided::from_slice(&m.positions),
         Strided::from_slice(&m.triangles),
     );
-    mesh.uvs = Some(Strided::from_slice(&m.uvs));
-    mesh.normals = Some(Strided::from_slice(&m.normals));
+    mesh.uvs = (!m.uvs.is_empty()).then(|| Strided::from_slice(&m.uvs));
+    mesh.normals = (!m.normals.is_empty()).then(|| Strided::from_slice(&m.normals));
     mesh
 }
 
@@ -310,8 +310,16 @@ impl Groomed {
     }
 }
 
-/// The creature as a C API mesh description (borrows `m`).
+/// The creature as a C API mesh description (borrows `m`): `uvs` and
+/// `normals` are NULL when `m` has none (empty Vecs).
 pub fn mesh_desc(m: &CreatureMesh) -> pelage::PelageMeshDesc {
+    let or_null = |empty: bool, p: *const std::ffi::c_void| {
+        if empty {
+            std::ptr::null()
+        } else {
+            p
+        }
+    };
     pelage::PelageMeshDesc {
         positions: m.positions.as_ptr().cast(),
         position_stride: 12,
@@ -319,9 +327,9 @@ pub fn mesh_desc(m: &CreatureMesh) -> pelage::PelageMeshDesc {
         indices: m.triangles.as_ptr().cast(),
         index_stride: 12,
         triangle_count: m.triangles.len(),
-        uvs: m.uvs.as_ptr().cast(),
+        uvs: or_null(m.uvs.is_empty(), m.uvs.as_ptr().cast()),
         uv_stride: 8,
-        normals: m.normals.as_ptr().cast(),
+        normals: or_null(m.normals.is_empty(), m.normals.as_ptr().cast()),
         normal_stride: 12,
     }
 }

@@ -93,23 +93,12 @@ fn trim_records_against_the_body_agree_with_the_inside_rule() {
     }
 }
 
-/// The mesh's centre: the middle of its box.
-fn centre(mesh: &CreatureMesh) -> DVec3 {
-    let (mut lo, mut hi) = (DVec3::MAX, DVec3::MIN);
-    for p in &mesh.positions {
-        let p = DVec3::from(p.map(f64::from));
-        (lo, hi) = (lo.min(p), hi.max(p));
-    }
-    (lo + hi) / 2.0
-}
-
 /// Frame `k` of a shot that turns the mesh about its centre (0.08 rad a
 /// frame about y) and moves it sideways (1% of its size a frame).
 fn shot_frame(e: &CorpusMesh, k: usize) -> CreatureMesh {
-    let c = centre(&e.mesh);
     let turn = DQuat::from_rotation_y(0.08 * k as f64);
     let shift = DVec3::X * (0.01 * size(e) as f64 * k as f64);
-    corpus::placed(&e.mesh, c - turn * c + shift, turn)
+    corpus::turned_about_centre(&e.mesh, turn, shift)
 }
 
 /// The simulation on every representative mesh, with its body as a

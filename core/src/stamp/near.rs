@@ -213,7 +213,8 @@ impl<'m, 'a> Stamper<'m, 'a> {
     pub(super) fn weigh(&self, buf: &mut Gathered, f: u32, value: impl Fn(f32) -> f32) {
         let face = &self.faces[f as usize];
         let normal = Vec3::from(face.normal);
-        let here = self.mesh.corners(f as usize)[0];
+        let corners = self.mesh.corners(f as usize);
+        let here = corners[0];
         // gathered points come in runs of one face: its value is reused, and
         // whether some point of face `f` lies strictly in front of its
         // plane (a corner of `f` does, if any point does; corners the
@@ -229,7 +230,6 @@ impl<'m, 'a> Stamper<'m, 'a> {
                 facing = m.dot(normal) > SAME_AIR_DOT;
                 seen = !facing && {
                     let at = self.mesh.corners(o as usize)[0];
-                    let corners = self.mesh.corners(f as usize);
                     corners.iter().any(|&q| (q - at).dot(m) > 0.0)
                 };
                 (last, last_value) = (o, value(other.scale.max(face.scale)));

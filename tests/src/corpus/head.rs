@@ -12,13 +12,13 @@
 //! along it (deeper at the inner eye corners and at the mouth corners), so
 //! no rim is planar.
 
-use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::ops::Range;
 
 use glam::DVec3;
 
-use crate::creature::{direction, CreatureMesh};
+use crate::creature::CreatureMesh;
+use crate::head::{bump, dir, smooth_normals, smoothstep};
 
 /// Resolution of a corpus head.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -166,24 +166,6 @@ fn holes() -> [Hole; 3] {
     ]
 }
 
-fn dir(theta: f64, phi: f64) -> DVec3 {
-    DVec3::from(direction(theta, phi))
-}
-
-fn angle_between(a: DVec3, b: DVec3) -> f64 {
-    2.0 * (0.5 * (a - b).length()).min(1.0).asin()
-}
-
-fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
-    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
-}
-
-fn bump(d: DVec3, centre: DVec3, width: f64, height: f64) -> f64 {
-    let a = angle_between(d, centre) / width;
-    height * (-a * a).exp()
-}
-
 /// The skull without holes, dents or brow: `crate::head`'s ellipsoid,
 /// muzzle and cheeks, with a neck tube at most `neck_cap` wide (infinite
 /// for the open head; the closed reference caps it to close the bottom).
@@ -266,29 +248,6 @@ impl Builder {
             .extend(piece.triangles.iter().map(|t| t.map(|i| i + base)));
         self.parts.push((name, first..m.triangles.len()));
     }
-}
-
-/// Area-weighted vertex normals, summed over vertices with bit-identical
-/// positions so seam duplicates agree (zero-area faces add nothing).
-pub(super) fn smooth_normals(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
-    let mut ids = HashMap::new();
-    let canon: Vec<usize> = positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| *ids.entry(p.map(f32::to_bits)).or_insert(i))
-        .collect();
-    let mut acc = vec![DVec3::ZERO; positions.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| DVec3::from(positions[i as usize].map(f64::from)));
-        let n = (b - a).cross(c - a);
-        for &i in t {
-            acc[canon[i as usize]] += n;
-        }
-    }
-    canon
-        .iter()
-        .map(|&k| acc[k].normalize_or(DVec3::Y).as_vec3().into())
-        .collect()
 }
 
 /// The corpus head at `detail` and `scale`, with its parts in face order:
