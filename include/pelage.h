@@ -46,6 +46,13 @@
  * the call (PELAGE_STATUS_CANCELLED) when it returns false. A zeroed
  * PelageRun is every core, no callback.
  *
+ * Coordinates. Points are float32, in one space per frame: a frame's mesh,
+ * guides and colliders, and all that is read from it or from a simulation
+ * stepped on it, are relative to the frame's origin (double precision,
+ * pelage_frame_set_origin; zero by default). A host whose character is far
+ * from its world's origin gives them relative to an origin near the
+ * character and adds the origin back to the outputs.
+ *
  * Names. pelage_<object>_<verb>; a stage of the pipeline (stamp, bind,
  * settle, expand, trim) is its own object, so its entry point is
  * pelage_<stage> and its sizing pelage_<stage>_size; a noun in the verb's
@@ -956,6 +963,33 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 // Thread safety: writes `frame`.
 enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders, struct PelageRun run);
 
+// Sets where the frame's local space sits in the host's world: `origin`,
+// 3 doubles (zero for a new frame), with world = origin + local. The
+// frame's mesh, its guides and colliders (the host's distance callback
+// too) are then given relative to it, and everything read from the frame
+// or a simulation stepped on it (expanded hairs, posed guides) comes back
+// relative to it; a host adds it back in double precision. A character
+// far from the world's origin keeps float32's precision this way: at 1e4
+// a float32 world point holds about 1e-3, relative to an origin that
+// follows the character it holds the character's own detail. Frames of
+// one shot may have different origins: a simulation stepping from one to
+// the next carries its state across by the difference (see
+// pelage_sim_step).
+//
+// Returns OK, NULL_PARAMETER, NON_FINITE, INVALID_ARGUMENT (a coordinate
+// beyond 1e15), MISALIGNED, PANIC.
+//
+// Thread safety: writes `frame`.
+enum PelageStatus pelage_frame_set_origin(PelageFrame frame, const double *origin);
+
+// Writes the frame's origin (pelage_frame_set_origin) to `origin`, 3
+// doubles.
+//
+// Returns OK, NULL_PARAMETER, MISALIGNED, PANIC.
+//
+// Thread safety: reads `frame`.
+enum PelageStatus pelage_frame_origin(PelageFrame frame, double *origin);
+
 // Releases a frame. NULL is accepted and does nothing.
 //
 // Thread safety: frees `frame`.
@@ -1319,8 +1353,11 @@ struct PelageStepParams pelage_step_params_defaults(void);
 // triangle has collapsed in the frame (zero area, no vertex normals) has
 // no frame there (every axis zero): its guide collapses onto the root for
 // that step, as render hairs expanded there do, and comes back with the
-// triangle. Everything is checked first; when a check fails the state is
-// unchanged. `info` (optional, NULL to skip) gets what the step reports.
+// triangle. The state is carried to the frame's origin
+// (pelage_frame_set_origin) from the last step's by their difference in
+// double precision, so a character followed by its origin simulates as it
+// would at the world's origin. Everything is checked first; when a check
+// fails the state is unchanged. `info` (optional, NULL to skip) gets what the step reports.
 // PANIC (a worker thread that could not start, or a panic) can leave the
 // step half made: reset or restore the simulation before stepping again.
 //
@@ -1360,11 +1397,12 @@ enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct
 // Thread safety: writes `frame`; reads `sim`.
 enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, struct PelageRun run);
 
-// Writes the posed guides of the last step (world space), or of the step
-// a restored state was saved after: `points_per_guide` float3 per guide,
-// guide after guide, `point_stride` bytes apart (>= 12, a multiple of 4),
-// capacity `point_capacity` points. Hand them to pelage_frame_set_guides
-// (with the simulated guides' roots) to expand render hairs from them.
+// Writes the posed guides of the last step, or of the step a restored
+// state was saved after, relative to pelage_sim_origin: `points_per_guide`
+// float3 per guide, guide after guide, `point_stride` bytes apart (>= 12,
+// a multiple of 4), capacity `point_capacity` points. Hand them to
+// pelage_frame_set_guides (with the simulated guides' roots, on a frame
+// of the same origin) to expand render hairs from them.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (stride; no posed guides:
 // no step since pelage_sim_new or pelage_sim_reset, or a state restored
@@ -1372,6 +1410,16 @@ enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, 
 //
 // Thread safety: reads `sim`.
 enum PelageStatus pelage_sim_read(PelageSim sim, void *points, size_t point_stride, size_t point_capacity);
+
+// Writes the origin the simulation's state and posed guides are relative
+// to, 3 doubles: that of the frame it last stepped on (see
+// pelage_frame_set_origin), or of the step a restored state was saved
+// after; zero before any step.
+//
+// Returns OK, NULL_PARAMETER, MISALIGNED, PANIC.
+//
+// Thread safety: reads `sim`.
+enum PelageStatus pelage_sim_origin(PelageSim sim, double *origin);
 
 // Forgets the motion: the next step starts every guide from its neutral
 // pose (a cut, the start of a shot).

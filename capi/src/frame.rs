@@ -2,7 +2,7 @@
 //! once and read by any number of expansions.
 
 use crate::body::{body_in, BodyMemory};
-use crate::buffers::{collected, grow, req, req_mut, slice_mut, strided, zeroed};
+use crate::buffers::{collected, grow, req, req_mut, slice, slice_mut, strided, zeroed};
 use crate::colliders::{HostColliders, HostField};
 use crate::handles::{free, into_handle, object_mut, Handle};
 use crate::status::Failure;
@@ -362,6 +362,48 @@ pub extern "C" fn pelage_frame_set_colliders(
             _body_memory: body_memory,
             _refs_memory: refs_memory,
         });
+        Ok(())
+    }
+}
+
+/// Sets where the frame's local space sits in the host's world: `origin`,
+/// 3 doubles (zero for a new frame), with world = origin + local. The
+/// frame's mesh, its guides and colliders (the host's distance callback
+/// too) are then given relative to it, and everything read from the frame
+/// or a simulation stepped on it (expanded hairs, posed guides) comes back
+/// relative to it; a host adds it back in double precision. A character
+/// far from the world's origin keeps float32's precision this way: at 1e4
+/// a float32 world point holds about 1e-3, relative to an origin that
+/// follows the character it holds the character's own detail. Frames of
+/// one shot may have different origins: a simulation stepping from one to
+/// the next carries its state across by the difference (see
+/// pelage_sim_step).
+///
+/// Returns OK, NULL_PARAMETER, NON_FINITE, INVALID_ARGUMENT (a coordinate
+/// beyond 1e15), MISALIGNED, PANIC.
+///
+/// Thread safety: writes `frame`.
+#[no_mangle]
+pub extern "C" fn pelage_frame_set_origin(frame: PelageFrame, origin: *const f64) -> PelageStatus {
+    ffi_boundary! {
+        let frame = object_mut(frame)?;
+        let origin = slice(origin, 3, "origin")?;
+        frame.posed.set_origin([origin[0], origin[1], origin[2]])?;
+        Ok(())
+    }
+}
+
+/// Writes the frame's origin (pelage_frame_set_origin) to `origin`, 3
+/// doubles.
+///
+/// Returns OK, NULL_PARAMETER, MISALIGNED, PANIC.
+///
+/// Thread safety: reads `frame`.
+#[no_mangle]
+pub extern "C" fn pelage_frame_origin(frame: PelageFrame, origin: *mut f64) -> PelageStatus {
+    ffi_boundary! {
+        let frame = crate::handles::object(frame)?;
+        slice_mut(origin, 3, "origin")?.copy_from_slice(&frame.posed.origin());
         Ok(())
     }
 }

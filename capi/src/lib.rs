@@ -42,8 +42,9 @@ pub use expand::{
     pelage_expand_size, PelageCurves, PelageEndPoints, PelageExpandParams, PelageStrands,
 };
 pub use frame::{
-    pelage_frame_free, pelage_frame_inside, pelage_frame_new, pelage_frame_set_colliders,
-    pelage_frame_set_guides, PelageFrame, PelageFrameTy,
+    pelage_frame_free, pelage_frame_inside, pelage_frame_new, pelage_frame_origin,
+    pelage_frame_set_colliders, pelage_frame_set_guides, pelage_frame_set_origin, PelageFrame,
+    PelageFrameTy,
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,
@@ -68,10 +69,11 @@ pub use region::{PelageRegionKind, PelageRegionMap};
 pub use roots::{pelage_roots_evaluate, PelageRoot};
 pub use settle::{pelage_settle, pelage_settle_size, PelageSettleInfo};
 pub use sim::{
-    pelage_frame_set_sim_guides, pelage_sim_free, pelage_sim_new, pelage_sim_params_defaults,
-    pelage_sim_read, pelage_sim_reset, pelage_sim_restore, pelage_sim_save, pelage_sim_size,
-    pelage_sim_state_size, pelage_sim_step, pelage_step_params_defaults, PelageSim,
-    PelageSimParams, PelageSimTy, PelageStepInfo, PelageStepParams,
+    pelage_frame_set_sim_guides, pelage_sim_free, pelage_sim_new, pelage_sim_origin,
+    pelage_sim_params_defaults, pelage_sim_read, pelage_sim_reset, pelage_sim_restore,
+    pelage_sim_save, pelage_sim_size, pelage_sim_state_size, pelage_sim_step,
+    pelage_step_params_defaults, PelageSim, PelageSimParams, PelageSimTy, PelageStepInfo,
+    PelageStepParams,
 };
 pub use stamp::{
     pelage_stamp, pelage_stamp_params_defaults, pelage_stamp_size, PelageStampInfo,

@@ -1,7 +1,9 @@
 //! The simulation handle: guide dynamics across frames (paper 3).
 
 use crate::body::BodyMemory;
-use crate::buffers::{bytes, bytes_mut, grow, opt_mut, req, req_mut, strided, Float3Out};
+use crate::buffers::{
+    bytes, bytes_mut, grow, opt_mut, req, req_mut, slice_mut, strided, Float3Out,
+};
 use crate::colliders::HostColliders;
 use crate::frame::Frame;
 use crate::handles::{free, into_handle, object, object_mut, Handle};
@@ -299,8 +301,11 @@ pub struct PelageStepInfo {
 /// triangle has collapsed in the frame (zero area, no vertex normals) has
 /// no frame there (every axis zero): its guide collapses onto the root for
 /// that step, as render hairs expanded there do, and comes back with the
-/// triangle. Everything is checked first; when a check fails the state is
-/// unchanged. `info` (optional, NULL to skip) gets what the step reports.
+/// triangle. The state is carried to the frame's origin
+/// (pelage_frame_set_origin) from the last step's by their difference in
+/// double precision, so a character followed by its origin simulates as it
+/// would at the world's origin. Everything is checked first; when a check
+/// fails the state is unchanged. `info` (optional, NULL to skip) gets what the step reports.
 /// PANIC (a worker thread that could not start, or a panic) can leave the
 /// step half made: reset or restore the simulation before stepping again.
 ///
@@ -339,7 +344,7 @@ pub extern "C" fn pelage_sim_step(
             grow(&mut sim.whole, blocks.len(), 0.0, "the state kept through a step")?;
             sim.whole[..blocks.len()].copy_from_slice(blocks);
         }
-        let stepped = sim.sim.has_stepped();
+        let mark = sim.sim.mark();
         let done = step(sim, frame, &host, external, p, &progress)
             .and_then(|groomed| host.check_field().map(|()| groomed));
         match done {
@@ -352,7 +357,7 @@ pub extern "C" fn pelage_sim_step(
             Err(failure) => {
                 if whole {
                     let n = sim.sim.blocks().len();
-                    sim.sim.put_back(&sim.whole[..n], stepped);
+                    sim.sim.put_back(&sim.whole[..n], mark);
                 }
                 Err(failure)
             }
@@ -476,7 +481,7 @@ fn step_beside_body(
         0.0,
         "the guides' curves before the push-out",
     )?;
-    let stepped = sim.has_stepped();
+    let mark = sim.mark();
     let shapes = host.colliders(None);
     let Step {
         context,
@@ -525,7 +530,7 @@ fn step_beside_body(
     let body = match built {
         Ok(body) => body,
         Err(failure) => {
-            sim.undo(kept, stepped);
+            sim.undo(kept, mark);
             return Err(failure);
         }
     };
@@ -586,11 +591,12 @@ pub extern "C" fn pelage_frame_set_sim_guides(
     }
 }
 
-/// Writes the posed guides of the last step (world space), or of the step
-/// a restored state was saved after: `points_per_guide` float3 per guide,
-/// guide after guide, `point_stride` bytes apart (>= 12, a multiple of 4),
-/// capacity `point_capacity` points. Hand them to pelage_frame_set_guides
-/// (with the simulated guides' roots) to expand render hairs from them.
+/// Writes the posed guides of the last step, or of the step a restored
+/// state was saved after, relative to pelage_sim_origin: `points_per_guide`
+/// float3 per guide, guide after guide, `point_stride` bytes apart (>= 12,
+/// a multiple of 4), capacity `point_capacity` points. Hand them to
+/// pelage_frame_set_guides (with the simulated guides' roots, on a frame
+/// of the same origin) to expand render hairs from them.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (stride; no posed guides:
 /// no step since pelage_sim_new or pelage_sim_reset, or a state restored
@@ -625,6 +631,23 @@ pub extern "C" fn pelage_sim_read(
                 }
             }
         }
+        Ok(())
+    }
+}
+
+/// Writes the origin the simulation's state and posed guides are relative
+/// to, 3 doubles: that of the frame it last stepped on (see
+/// pelage_frame_set_origin), or of the step a restored state was saved
+/// after; zero before any step.
+///
+/// Returns OK, NULL_PARAMETER, MISALIGNED, PANIC.
+///
+/// Thread safety: reads `sim`.
+#[no_mangle]
+pub extern "C" fn pelage_sim_origin(sim: PelageSim, origin: *mut f64) -> PelageStatus {
+    ffi_boundary! {
+        let sim = &object(sim)?.sim;
+        slice_mut(origin, 3, "origin")?.copy_from_slice(&sim.origin());
         Ok(())
     }
 }

@@ -372,6 +372,10 @@ enum PelageStatus pelage_frame_set_guides(PelageFrame frame, const struct Pelage
 
 enum PelageStatus pelage_frame_set_colliders(PelageFrame frame, const struct PelageColliders *colliders, struct PelageRun run);
 
+enum PelageStatus pelage_frame_set_origin(PelageFrame frame, const double *origin);
+
+enum PelageStatus pelage_frame_origin(PelageFrame frame, double *origin);
+
 void pelage_frame_free(PelageFrame frame);
 
 enum PelageStatus pelage_frame_inside(PelageFrame frame, const void *points, size_t point_stride, size_t count, struct PelageRun run, uint8_t *inside);
@@ -433,6 +437,8 @@ enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct
 enum PelageStatus pelage_frame_set_sim_guides(PelageFrame frame, PelageSim sim, struct PelageRun run);
 
 enum PelageStatus pelage_sim_read(PelageSim sim, void *points, size_t point_stride, size_t point_capacity);
+
+enum PelageStatus pelage_sim_origin(PelageSim sim, double *origin);
 
 enum PelageStatus pelage_sim_reset(PelageSim sim);
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, List, Optional
+from typing import TYPE_CHECKING, Any, Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -162,6 +162,26 @@ class Frame(Handle):
         status = lib.pelage_frame_set_colliders(self._get(), struct, call.run())
         call.check(status, "pelage_frame_set_colliders", [colliders])
         self.colliders = colliders
+
+    @property
+    def origin(self) -> Tuple[float, float, float]:
+        """Where the frame's local space sits in the host's world
+        (``pelage_frame_origin``): world = origin + local, in doubles."""
+        out = ffi.new("double[3]")
+        check(lib.pelage_frame_origin(self._get(), out), "pelage_frame_origin")
+        return (out[0], out[1], out[2])
+
+    @origin.setter
+    def origin(self, origin: Sequence[float]) -> None:
+        """Sets the origin (``pelage_frame_set_origin``): the frame's mesh,
+        guides, colliders and outputs are relative to it; a character far
+        from the world's origin keeps float32's precision relative to an
+        origin near it, and a simulation carries its state across frames
+        whose origins differ."""
+        values = [float(c) for c in origin]
+        if len(values) != 3:
+            raise ValueError("origin: 3 values")
+        check(lib.pelage_frame_set_origin(self._get(), ffi.new("double[3]", values)), "pelage_frame_set_origin")
 
     def inside(
         self, points: Any, *, threads: Optional[int] = None, progress: Optional[ProgressFn] = None

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, List, Optional, Union
+from typing import Any, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -134,6 +134,14 @@ class Sim(Handle):
         status = lib.pelage_sim_read(self._get(), ptr(view), stride, view.shape[0])
         check(status, "pelage_sim_read")
         return out
+
+    @property
+    def origin(self) -> Tuple[float, float, float]:
+        """The origin the state and posed guides are relative to
+        (``pelage_sim_origin``): that of the frame of the last step."""
+        out = ffi.new("double[3]")
+        check(lib.pelage_sim_origin(self._get(), out), "pelage_sim_origin")
+        return (out[0], out[1], out[2])
 
     def reset(self) -> None:
         """Forgets the motion (``pelage_sim_reset``): the next step starts

@@ -101,3 +101,27 @@ def test_external_curves_take_over(scene, frame):
     south = scene.guides.points.reshape(GUIDES, POINTS, 3)[:, 0, 2] < -0.3
     assert (a[north, -1, 0] - b[north, -1, 0]).mean() > 0.02
     assert np.abs(a[south] - b[south]).max() < 1e-6
+
+
+def test_an_origin_that_follows_the_mesh_matches_the_world_origin(scene):
+    # the same run at the world's origin, and far away given relative to an
+    # origin that moves with the mesh: the same guides, shifted
+    far = np.array([1.0e4, -2.0e3, 3.0e3])
+    with pelage.Sim(scene.mesh, scene.guides) as home, pelage.Sim(scene.mesh, scene.guides) as away:
+        for f in range(6):
+            shift = np.array([0.05 * f, 0.0, 0.0])
+            with pelage.Frame(moved_mesh(shift), GUIDES, POINTS) as here, pelage.Frame(
+                moved_mesh((0.0, 0.0, 0.0)), GUIDES, POINTS
+            ) as there:
+                there.origin = far + shift
+                assert there.origin == tuple(far + shift)
+                home.step(here, 1 / 24)
+                away.step(there, 1 / 24)
+            assert away.origin == tuple(far + shift)
+            apart = home.read().astype(np.float64) - (away.read().astype(np.float64) + shift)
+            assert np.abs(apart).max() < 1e-5
+        with pelage.Frame(moved_mesh((0.0, 0.0, 0.0)), GUIDES, POINTS) as frame:
+            with pytest.raises(pelage.NonFinite):
+                frame.origin = (0.0, float("nan"), 0.0)
+            with pytest.raises(ValueError):
+                frame.origin = (0.0, 0.0)

@@ -2745,6 +2745,29 @@ static void test_trim_and_edits(void) {
     heard.progress = on_progress, heard.progress_user_data = &stop;
     EXPECT(PELAGE_STATUS_CANCELLED, pelage_frame_inside(g_in.frame, pts, 12, 4, heard, in));
   }
+  {
+    /* the frame's origin: zero when new, kept as given, refused when not
+     * finite or beyond 1e15 (and then unchanged) */
+    double at[3] = {1.0, 1.0, 1.0};
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_origin(g_in.frame, at));
+    CHECK(at[0] == 0.0 && at[1] == 0.0 && at[2] == 0.0);
+    const double far[3] = {1e4, -2.5e3, 123456.789};
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_origin(g_in.frame, far));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_origin(g_in.frame, at));
+    CHECK(memcmp(at, far, sizeof at) == 0);
+    const double nan_at[3] = {0.0, NAN, 0.0}, huge[3] = {0.0, 0.0, 2e15};
+    EXPECT(PELAGE_STATUS_NON_FINITE, pelage_frame_set_origin(g_in.frame, nan_at));
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_set_origin(g_in.frame, huge));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_origin(g_in.frame, at));
+    CHECK(memcmp(at, far, sizeof at) == 0);
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_origin(NULL, far));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_set_origin(g_in.frame, NULL));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_origin(NULL, at));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_origin(g_in.frame, NULL));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_sim_origin(NULL, at));
+    const double zero[3] = {0.0, 0.0, 0.0};
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_set_origin(g_in.frame, zero));
+  }
 
   /* LOD counts need patches sorted by rank; masks need a finite threshold */
   {

@@ -251,3 +251,165 @@ fn the_inside_query_is_the_winding_number_on_open_meshes() {
         assert!(wrong.is_empty(), "{}: {wrong:?}", e.name);
     }
 }
+
+/// Where a mesh is taken far from the origin to: its own placement, or
+/// 1e4 away for a mesh at the origin.
+fn far_offset(e: &CorpusMesh) -> DVec3 {
+    if e.recipe.offset != DVec3::ZERO {
+        e.recipe.offset
+    } else {
+        DVec3::new(1e4, -3e3, 5e3)
+    }
+}
+
+/// The largest distance between `a` and `b` shifted by `by`, in f64.
+fn worst_apart(a: &[[f32; 3]], b: &[[f32; 3]], by: DVec3) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            let (p, q) = (DVec3::from(p.map(f64::from)), DVec3::from(q.map(f64::from)));
+            (p - (q + by)).abs().max_element()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// A character far from the origin, given relative to an origin that
+/// follows it (`pelage_frame_set_origin`, every frame's different), gives
+/// the simulated guides, their render hairs and the trim records of the
+/// same character at the world's origin: within 1e-4 of the hair length,
+/// with the body as a collider, on every representative mesh.
+#[test]
+fn an_origin_that_follows_the_character_gives_the_answers_at_the_origin() {
+    use pelage::*;
+    for e in &corpus::representative() {
+        let home = CorpusMesh::new(e.name.clone(), e.about, e.recipe.at_origin());
+        let far = far_offset(e);
+        let length = 0.08 * size(&home);
+        let maps = pelage_groom_maps_defaults();
+        let g = pelage_tests::measure::groomed(&home.mesh, (300, POINTS, length), 3000, &maps, 2);
+        let guides = g.guides();
+        let params = PelageSimParams {
+            joints: POINTS as u32,
+            points_per_guide: POINTS as u32,
+            ..pelage_sim_params_defaults()
+        };
+        let sims = [0, 1].map(|_| SimHandle::new(&home.desc(), &guides, &params));
+        let (mut worst_guides, mut worst_hairs) = (0.0f64, 0.0f64);
+        let mut records: [Vec<PelageTrimRecord>; 2] = Default::default();
+        for k in 0..10 {
+            let turn = DQuat::from_rotation_y(0.08 * k as f64);
+            let shift = DVec3::X * (0.01 * size(&home) as f64 * k as f64);
+            // at the origin, moving; far away, the same frame relative to
+            // an origin that moves with it
+            let meshes = [
+                corpus::turned_about_centre(&home.mesh, turn, shift),
+                corpus::turned_about_centre(&home.mesh, turn, DVec3::ZERO),
+            ];
+            let origins = [DVec3::ZERO, far + shift];
+            let mut posed: Vec<Vec<[f32; 3]>> = vec![];
+            let mut hairs: Vec<Vec<[f32; 4]>> = vec![];
+            for side in 0..2 {
+                let desc = corpus::mesh_desc(&meshes[side]);
+                let handle = frame(&desc, &guides, POINTS as u32, 2).expect("frame");
+                let origin = origins[side].to_array();
+                assert_eq!(
+                    pelage_frame_set_origin(handle.0, origin.as_ptr()),
+                    PelageStatus::Ok
+                );
+                let body = colliders(&[], true);
+                let step = PelageStepParams {
+                    colliders: &body,
+                    run: on_threads(2),
+                    ..pelage_step_params_defaults()
+                };
+                let s = pelage_sim_step(sims[side].sim, handle.0, &step, std::ptr::null_mut());
+                assert_eq!(s, PelageStatus::Ok, "{} frame {k}", e.name);
+                let mut at = [f64::NAN; 3];
+                assert_eq!(
+                    pelage_sim_origin(sims[side].sim, at.as_mut_ptr()),
+                    PelageStatus::Ok
+                );
+                assert_eq!(at, origin);
+                posed.push(sims[side].read(g.guide_roots.len(), POINTS));
+                if k == 9 {
+                    let s = pelage_frame_set_sim_guides(handle.0, sims[side].sim, on_threads(2));
+                    assert_eq!(s, PelageStatus::Ok);
+                    let expand = PelageExpandParams {
+                        points_per_strand: POINTS as u32,
+                        run: on_threads(2),
+                        ..pelage_expand_params_defaults()
+                    };
+                    let strands =
+                        pelage_tests::measure::strands_desc(&g.strands, &g.bindings, &g.grooms);
+                    let mut per = 0;
+                    assert_eq!(pelage_expand_size(&expand, &mut per), PelageStatus::Ok);
+                    let mut out = vec![[0.0f32; 4]; per * g.strands.len()];
+                    let s = pelage_expand(
+                        handle.0,
+                        &strands,
+                        &expand,
+                        &pelage_tests::measure::curves_desc(&mut out, None),
+                    );
+                    assert_eq!(s, PelageStatus::Ok);
+                    hairs.push(out);
+                    let mut found = vec![PelageTrimRecord::default(); g.guide_roots.len()];
+                    let mut count = 0;
+                    let s = pelage_trim_find(
+                        handle.0,
+                        std::ptr::null(),
+                        &body,
+                        on_threads(2),
+                        found.as_mut_ptr(),
+                        found.len(),
+                        &mut count,
+                    );
+                    assert_eq!(s, PelageStatus::Ok);
+                    found.truncate(count);
+                    records[side] = found;
+                }
+            }
+            worst_guides = worst_guides.max(worst_apart(&posed[0], &posed[1], shift));
+            if k == 9 {
+                let xyz = |h: &[[f32; 4]]| h.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+                worst_hairs = worst_hairs.max(worst_apart(&xyz(&hairs[0]), &xyz(&hairs[1]), shift));
+            }
+        }
+        let (a, b) = (&records[0], &records[1]);
+        let same_guides = a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(x, y)| (x.guide, x.cv) == (y.guide, y.cv));
+        let worst_record = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x.length - y.length).abs())
+            .fold(0.0f32, f32::max);
+        let l = length as f64;
+        println!(
+            "{}: at {far:?} by a following origin, guides {:.2e} L, hairs {:.2e} L, {} trim records, worst {:.2e} L",
+            e.name,
+            worst_guides / l,
+            worst_hairs / l,
+            a.len(),
+            worst_record
+        );
+        assert!(
+            worst_guides <= 1e-4 * l,
+            "{}: guides {worst_guides}",
+            e.name
+        );
+        assert!(worst_hairs <= 1e-4 * l, "{}: hairs {worst_hairs}", e.name);
+        assert!(
+            same_guides,
+            "{}: trim records of other guides ({} vs {})",
+            e.name,
+            a.len(),
+            b.len()
+        );
+        assert!(
+            worst_record <= 1e-4,
+            "{}: a trim record {worst_record} L apart",
+            e.name
+        );
+    }
+}

@@ -53,6 +53,18 @@ pub struct Sim<'a> {
     /// Of the parameters, roots, rest guides and per-guide constants: a
     /// saved state restores only into a simulation with the same.
     pub(super) fingerprint: u64,
+    /// The origin of the frame of the last step: the state's positions are
+    /// relative to it (see [`PosedFrame::set_origin`]).
+    pub(super) origin: [f64; 3],
+}
+
+/// What a host keeps before a step to take it back ([`Sim::undo`],
+/// [`Sim::put_back`]): whether a step had run, and the origin the state
+/// was relative to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepMark {
+    stepped: bool,
+    origin: [f64; 3],
 }
 
 impl<'a> Sim<'a> {
@@ -177,6 +189,7 @@ impl<'a> Sim<'a> {
             topology: (rest.triangle_count(), rest.positions.len()),
             stepped: false,
             fingerprint,
+            origin: [0.0; 3],
         })
     }
 
@@ -205,8 +218,8 @@ impl<'a> Sim<'a> {
         &self.links
     }
 
-    /// Posed point `k` of guide `g` after the last step, in world space
-    /// (zero before the first step).
+    /// Posed point `k` of guide `g` after the last step, relative to
+    /// [`origin`](Self::origin) (zero before the first step).
     pub fn posed(&self, g: usize, k: usize) -> Vec3 {
         self.root_frame(g).to_world(self.posed_local(g, k))
     }
@@ -227,6 +240,21 @@ impl<'a> Sim<'a> {
         Vec3::from(state(self.block(g)).target)
     }
 
+    /// The origin of the frame of the last step, which the posed guides
+    /// and the state are relative to (zero before the first step).
+    pub fn origin(&self) -> [f64; 3] {
+        self.origin
+    }
+
+    /// What [`undo`](Self::undo) and [`put_back`](Self::put_back) take to
+    /// return to the simulation as it is now.
+    pub fn mark(&self) -> StepMark {
+        StepMark {
+            stepped: self.stepped,
+            origin: self.origin,
+        }
+    }
+
     fn block(&self, g: usize) -> &[f32] {
         let per = Self::block_floats(&self.params);
         &self.blocks[g * per..(g + 1) * per]
@@ -242,12 +270,11 @@ impl<'a> Sim<'a> {
     /// Takes back a step that could not finish, before its push-out
     /// ([`StepContext::collide`]) began: every guide's state and spring
     /// target as [`StepContext::keep`] saved them in `kept` before the step
-    /// advanced them ([`KEPT_FLOATS`] per guide, all of them), and
-    /// `stepped`, what [`has_stepped`](Self::has_stepped) said before the
-    /// step began. A step that shaped its guides apart
+    /// advanced them ([`KEPT_FLOATS`] per guide, all of them), and `mark`,
+    /// what [`mark`](Self::mark) said before the step began. A step that shaped its guides apart
     /// ([`StepContext::shape`]) wrote no posed point before its push-out,
     /// so the simulation is then as it was.
-    pub fn undo(&mut self, kept: &[f32], stepped: bool) {
+    pub fn undo(&mut self, kept: &[f32], mark: StepMark) {
         let per = Self::block_floats(&self.params);
         for (b, k) in self
             .blocks
@@ -256,7 +283,7 @@ impl<'a> Sim<'a> {
         {
             b[..KEPT_FLOATS].copy_from_slice(k);
         }
-        self.stepped = stepped;
+        (self.stepped, self.origin) = (mark.stepped, mark.origin);
     }
 
     /// Every guide's block, its state then its posed points: what
@@ -267,16 +294,17 @@ impl<'a> Sim<'a> {
 
     /// Takes back a whole step, push-out included: every block as
     /// [`blocks`](Self::blocks) gave them before it (all of them), and
-    /// `stepped`, what [`has_stepped`](Self::has_stepped) said then.
-    pub fn put_back(&mut self, blocks: &[f32], stepped: bool) {
+    /// `mark`, what [`mark`](Self::mark) said then.
+    pub fn put_back(&mut self, blocks: &[f32], mark: StepMark) {
         self.blocks.copy_from_slice(blocks);
-        self.stepped = stepped;
+        (self.stepped, self.origin) = (mark.stepped, mark.origin);
     }
 
     /// Forgets the motion: the next step starts from the neutral pose.
     pub fn reset(&mut self) {
         self.blocks.fill(0.0);
         self.stepped = false;
+        self.origin = [0.0; 3];
     }
 
     /// Poses `frame`'s guides with the posed guides of the last step, for
@@ -289,7 +317,8 @@ impl<'a> Sim<'a> {
     /// (from the same roots), and the errors those it would return. The
     /// frame must be of a mesh with the rest mesh's counts and take
     /// [`points`](Self::points) points per strand, and a step must have run
-    /// since the simulation was made, reset or restored; when those hold,
+    /// since the simulation was made, reset or restored, with a frame of
+    /// the same origin ([`origin`](Self::origin)); when those hold,
     /// the frame has no guides from here until a successful finish.
     ///
     /// [`GuideFiller::fill`]: crate::interp::posed::GuideFiller::fill
@@ -311,6 +340,11 @@ impl<'a> Sim<'a> {
         if !self.stepped {
             return Err(Error::InvalidArgument(
                 "the simulation has no posed guides until it steps (after being made, reset or restored)",
+            ));
+        }
+        if frame.origin() != self.origin {
+            return Err(Error::InvalidArgument(
+                "the frame's origin differs from that of the frame the simulation last stepped with",
             ));
         }
         let mut posing = frame.posing_from(SimGuides { sim: self })?;
@@ -460,8 +494,10 @@ impl<'a> Sim<'a> {
     ) -> Result<Step<'s>, Error> {
         self.check_step(frame, colliders, external, dt)?;
         let block = Self::block_floats(&self.params);
-        let cut = self.is_cut(frame);
+        let shift = self.shift_to(frame.origin());
+        let cut = self.is_cut(frame, shift);
         self.stepped = true;
+        self.origin = frame.origin();
         Ok(Step {
             context: StepContext {
                 params: &self.params,
@@ -476,10 +512,19 @@ impl<'a> Sim<'a> {
                 dt,
                 block,
                 cut,
+                shift,
             },
             blocks: &mut *self.blocks,
             snapshot: &mut *self.snapshot,
         })
+    }
+
+    /// What carries a position of the last step's state to one relative to
+    /// `origin`: the difference of the origins, taken in double precision
+    /// and rounded once (zero when they are the same).
+    fn shift_to(&self, origin: [f64; 3]) -> Vec3 {
+        let [x, y, z] = core::array::from_fn(|i| (self.origin[i] - origin[i]) as f32);
+        Vec3::new(x, y, z)
     }
 
     /// True when `frame` is a cut from the last step: its roots moved, on
@@ -488,7 +533,7 @@ impl<'a> Sim<'a> {
     /// spin or run moves some roots far and others little, and stays
     /// below the body's own size per step. Summed in one order on one
     /// thread, so any split of the step sees the same answer.
-    fn is_cut(&self, frame: &PosedFrame) -> bool {
+    fn is_cut(&self, frame: &PosedFrame, shift: Vec3) -> bool {
         let mesh = frame.mesh();
         let block = Self::block_floats(&self.params);
         let (mut moved, mut lo, mut hi) = (0.0f64, Vec3::MAX, Vec3::MIN);
@@ -498,7 +543,9 @@ impl<'a> Sim<'a> {
                 return false;
             }
             let p = mesh.point(r.face as usize, r.u, r.v);
-            moved += f64::from(p.distance(Vec3::from(last.frame[0])));
+            // `- shift`, not `+ shift` on the last root: subtracting a zero
+            // shift keeps every bit, so a fixed origin changes nothing
+            moved += f64::from((p - shift).distance(Vec3::from(last.frame[0])));
             (lo, hi) = (lo.min(p), hi.max(p));
         }
         let mean = moved / self.roots.len().max(1) as f64;
@@ -534,6 +581,7 @@ impl Sim<'_> {
             counts: [self.len(), self.params.joints, self.params.points].map(|c| c as u64),
             fingerprint: self.fingerprint,
             stepped: self.stepped,
+            origin: self.origin,
         }
     }
 
@@ -564,7 +612,7 @@ impl Sim<'_> {
     /// values) and changes nothing on error. Once restored, the posed
     /// guides are those of the step saved, if any.
     pub fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
-        self.stepped = read_state(bytes, self.state_header(), self.blocks)?;
+        (self.stepped, self.origin) = read_state(bytes, self.state_header(), self.blocks)?;
         Ok(())
     }
 }

@@ -7,6 +7,7 @@
 //! after and goes on with the same bits as an uninterrupted run.
 
 use crate::cache::container::{self, Reader};
+use crate::interp::posed::MAX_ORIGIN;
 use crate::surface::frame::Frame;
 use crate::Error;
 use bytemuck::{Pod, Zeroable};
@@ -71,8 +72,9 @@ const MAX_STATE: f32 = 1e18;
 const MAGIC: &[u8; 8] = b"PLGSTATE";
 /// State-file format version (1 was the unframed "PLGS" state of 0.11).
 pub const STATE_VERSION: u32 = 2;
-/// Header fields: guides, joints, points, the fingerprint, stepped.
-const FIELDS: usize = 5;
+/// Header fields: guides, joints, points, the fingerprint, stepped, and
+/// the origin's three doubles (their bits).
+const FIELDS: usize = 8;
 
 /// A 64-bit fingerprint of words, for telling one simulation's inputs
 /// from another's (not a defence against forgery: the CRC guards the
@@ -104,7 +106,7 @@ impl Fingerprint {
 }
 
 /// What a state file holds besides its blocks.
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy, PartialEq)]
 pub(super) struct StateHeader {
     /// Guides, joints per guide, points per posed guide.
     pub(super) counts: [u64; 3],
@@ -112,6 +114,8 @@ pub(super) struct StateHeader {
     pub(super) fingerprint: u64,
     /// A step had run: the blocks hold posed guides.
     pub(super) stepped: bool,
+    /// The origin the blocks' positions are relative to.
+    pub(super) origin: [f64; 3],
 }
 
 /// Bytes a state file of `blocks` takes.
@@ -129,6 +133,9 @@ pub(super) fn write_state(out: &mut [u8], header: StateHeader, blocks: &[f32]) -
         points,
         header.fingerprint,
         header.stepped as u64,
+        header.origin[0].to_bits(),
+        header.origin[1].to_bits(),
+        header.origin[2].to_bits(),
     ];
     let needed = state_file_bytes(blocks);
     container::write(&mut out[..needed], MAGIC, STATE_VERSION, &fields, |w| {
@@ -138,15 +145,24 @@ pub(super) fn write_state(out: &mut [u8], header: StateHeader, blocks: &[f32]) -
 
 /// Reads a state file into `blocks` (guide after guide, `blocks.len()` /
 /// guides floats each) when its framing, counts, fingerprint and values
-/// are those `expected` has and sound, returning whether a step had run;
-/// on error `blocks` is unchanged.
+/// are those `expected` has and sound, returning whether a step had run
+/// and the origin; on error `blocks` is unchanged.
 pub(super) fn read_state(
     bytes: &[u8],
     expected: StateHeader,
     blocks: &mut [f32],
-) -> Result<bool, Error> {
+) -> Result<(bool, [f64; 3]), Error> {
     let file = container::read(bytes, MAGIC, STATE_VERSION, FIELDS)?;
-    let [guides, joints, points, fingerprint, stepped, ..] = file.fields;
+    let [guides, joints, points, fingerprint, stepped, x, y, z, ..] = file.fields;
+    let origin = [x, y, z].map(f64::from_bits);
+    if origin
+        .iter()
+        .any(|c| !c.is_finite() || c.abs() > MAX_ORIGIN)
+    {
+        return Err(Error::Corrupt {
+            what: "state's origin is not finite or beyond 1e15",
+        });
+    }
     if [guides, joints, points] != expected.counts {
         return Err(Error::InvalidArgument(
             "the state is of another guide set (guide, joint or point count)",
@@ -184,7 +200,7 @@ pub(super) fn read_state(
         });
     }
     Reader::new(file.payload).words(blocks)?;
-    Ok(stepped == 1)
+    Ok((stepped == 1, origin))
 }
 
 /// Where [`GuideState::started`] sits in a block.

@@ -43,6 +43,9 @@ pub struct StepContext<'s> {
     pub(super) block: usize,
     /// The step is a cut ([`SimParams::teleport`]).
     pub(super) cut: bool,
+    /// Added to a position of the last step's state to make it relative to
+    /// this step's frame's origin.
+    pub(super) shift: Vec3,
 }
 
 impl StepContext<'_> {
@@ -94,7 +97,9 @@ impl StepContext<'_> {
                     y = carry(y);
                     v = carry(v);
                 } else {
-                    velocity = (tip - Vec3::from(state.tip)) / self.dt;
+                    // the last tip in this step's origin; subtracting a zero
+                    // shift keeps every bit
+                    velocity = (tip - Vec3::from(state.tip) - self.shift) / self.dt;
                     // the tip keeps its velocity; the neutral tip's changed
                     v += Vec3::from(state.tip_velocity) - velocity;
                 }

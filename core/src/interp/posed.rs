@@ -14,6 +14,10 @@ use crate::surface::frame::{self, Frame, FRAME_LANES};
 use crate::{Error, Mesh, Root};
 use glam::Vec3;
 
+/// Largest coordinate of a frame's origin: beyond it a double holds the
+/// origin to worse than a tenth of a unit.
+pub const MAX_ORIGIN: f64 = 1e15;
+
 /// A deformed mesh with its vertex tangents (see
 /// [`frame::vertex_tangents`]) and its posed guides, resampled to the
 /// strand point count, in their own root frames (local) and in world space.
@@ -30,6 +34,9 @@ pub struct PosedFrame<'a> {
     points: usize,
     guides: usize,
     posed: bool,
+    /// Where the frame's local space sits in the host's world (see
+    /// [`PosedFrame::set_origin`]).
+    origin: [f64; 3],
 }
 
 impl<'m> PosedFrame<'m> {
@@ -67,6 +74,7 @@ impl<'m> PosedFrame<'m> {
             points: points_per_strand,
             guides: guide_count,
             posed: false,
+            origin: [0.0; 3],
         })
     }
 
@@ -158,6 +166,35 @@ impl<'m> PosedFrame<'m> {
             ));
         }
         Ok(())
+    }
+
+    /// Sets where the frame's local space sits in the host's world: its
+    /// mesh, guides, colliders and every output are relative to `origin`
+    /// (world = origin + local), which the host keeps in double precision.
+    /// A character far from the world's origin, given relative to an
+    /// origin near it, keeps float32's precision (at 1e4 a float32 world
+    /// point is only good to about 1e-3). A simulation stepping through
+    /// frames whose origins differ carries its state across by their
+    /// difference, taken in double precision (see
+    /// [`Sim::begin`](crate::dynamics::sim::Sim::begin)). The origin must
+    /// be finite and within [`MAX_ORIGIN`].
+    pub fn set_origin(&mut self, origin: [f64; 3]) -> Result<(), Error> {
+        if let Some(index) = origin.iter().position(|c| !c.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "origin",
+                index,
+            });
+        }
+        if origin.iter().any(|c| c.abs() > MAX_ORIGIN) {
+            return Err(Error::InvalidArgument("origin beyond 1e15"));
+        }
+        self.origin = origin;
+        Ok(())
+    }
+
+    /// Where the frame's local space sits in the host's world.
+    pub fn origin(&self) -> [f64; 3] {
+        self.origin
     }
 
     /// The deformed mesh (checked).

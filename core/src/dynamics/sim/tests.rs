@@ -581,7 +581,7 @@ fn a_damaged_state_is_refused_and_changes_nothing() {
     ));
     // a sound state with a value no step makes (checksum made anew)
     let mut huge = good.clone();
-    let at = header_bytes(5);
+    let at = header_bytes(8);
     huge[at..at + 4].copy_from_slice(&1e30f32.to_le_bytes());
     reseal(&mut huge);
     assert!(matches!(sim.restore(&huge), Err(Error::Corrupt { .. })));
@@ -592,6 +592,14 @@ fn a_damaged_state_is_refused_and_changes_nothing() {
     assert!(matches!(
         sim.restore(&stepped),
         Err(Error::Corrupt { what }) if what.contains("stepped")
+    ));
+    // an origin that is not finite, the checksum made anew
+    let mut origin = good.clone();
+    origin[56..64].copy_from_slice(&f64::NAN.to_bits().to_le_bytes());
+    reseal(&mut origin);
+    assert!(matches!(
+        sim.restore(&origin),
+        Err(Error::Corrupt { what }) if what.contains("origin")
     ));
     // 0.11's unframed state: "PLGS", then its version 1
     let mut old = good.clone();
@@ -746,7 +754,7 @@ fn no_posed_point_ends_inside_a_collider() {
         if undone {
             before = saved(&apart);
         }
-        let stepped = apart.has_stepped();
+        let mark = apart.mark();
         let Step {
             context: ctx,
             blocks,
@@ -764,7 +772,7 @@ fn no_posed_point_ends_inside_a_collider() {
         ctx.shape(0, &mut blocks[..cut], &mut shaped[..7 * 3 * m]);
         ctx.shape(7, &mut blocks[cut..], &mut shaped[7 * 3 * m..]);
         if undone {
-            apart.undo(&kept, stepped);
+            apart.undo(&kept, mark);
             assert!(saved(&apart) == before, "the step taken back");
             continue;
         }
@@ -900,7 +908,7 @@ fn links_reduce_strain_and_move_linked_tips_together() {
 
 /// Writes a state's CRC anew after a test changed its bytes.
 fn reseal(state: &mut [u8]) {
-    let at = header_bytes(5) - 8;
+    let at = header_bytes(8) - 8;
     let mut h = crc32fast::Hasher::new();
     h.update(&state[..at]);
     h.update(&state[at + 8..]);
@@ -1120,4 +1128,89 @@ fn a_cut_from_a_run_to_a_still_shot_adds_no_whip() {
     }
     assert!(settled < 1e-4, "the run must settle first: {settled}");
     assert!(most < 1e-3, "{most} from rest after the cut");
+}
+
+/// The rest sphere turned by `turn` and placed at `place` in a world held
+/// in double precision, given relative to `origin`.
+fn placed_relative(rest: &TestMesh, turn: Quat, place: [f64; 3], origin: [f64; 3]) -> TestMesh {
+    let local = |p: Vec3| -> [f32; 3] {
+        let q = turn * p;
+        core::array::from_fn(|i| (q[i] as f64 + place[i] - origin[i]) as f32)
+    };
+    TestMesh {
+        p: rest.p.iter().map(|&p| local(Vec3::from(p))).collect(),
+        n: rest
+            .n
+            .iter()
+            .map(|&n| (turn * Vec3::from(n)).into())
+            .collect(),
+        ..rest.clone()
+    }
+}
+
+#[test]
+fn an_origin_that_follows_the_character_gives_the_answers_at_the_world_origin() {
+    // a run with a turn, at the world's origin and 1e4 away; far away the
+    // host gives the mesh relative to an origin that follows the character
+    // (every frame's origin differs), or in float32 world space
+    let s = Scene::new(60);
+    let (far, dt) = (1e4f64, 1.0 / 24.0);
+    let length = 0.3f64;
+    let (mut b0, mut b1, mut b2) = (vec![], vec![], vec![]);
+    let mut at_zero = s.sim(&params(), &mut b0);
+    let mut followed = s.sim(&params(), &mut b1);
+    let mut world = s.sim(&params(), &mut b2);
+    let none = Colliders::default();
+    let (mut worst_followed, mut worst_world) = (0.0f64, 0.0f64);
+    let mut saved = vec![];
+    for t in 0..36 {
+        let tf = t as f64;
+        let run = [
+            0.9 * tf * dt as f64,
+            0.2 * (3.0 * tf * dt as f64).sin(),
+            0.0,
+        ];
+        let turn = Quat::from_rotation_z(0.4 * t as f32 * dt);
+        let at = |o: f64| run.map(|c| c + o);
+        let step_at = |sim: &mut Sim, place: [f64; 3], origin: [f64; 3]| {
+            let mesh = placed_relative(&s.rest, turn, place, origin);
+            let mut layout = ArenaLayout::new();
+            PosedFrame::layout(&mut layout, mesh.p.len(), 1, 2);
+            let mut buf = vec![0u8; layout.bytes()];
+            let mut frame = PosedFrame::new(mesh.mesh(), 1, 2, &mut Arena::new(&mut buf)).unwrap();
+            frame.set_origin(origin).unwrap();
+            sim.step(&frame, &none, dt).unwrap();
+        };
+        step_at(&mut at_zero, at(0.0), [0.0; 3]);
+        step_at(&mut followed, at(far), at(far));
+        step_at(&mut world, at(far), [0.0; 3]);
+        assert_eq!(followed.origin(), at(far));
+        assert_sound(&followed, "followed");
+        for (g, k) in (0..s.guide_roots.len()).flat_map(|g| (0..JOINTS).map(move |k| (g, k))) {
+            let reference = at_zero.posed(g, k);
+            let error = |p: Vec3, origin: [f64; 3]| -> f64 {
+                (0..3)
+                    .map(|i| (p[i] as f64 + origin[i] - far - reference[i] as f64).abs())
+                    .fold(0.0, f64::max)
+            };
+            worst_followed = worst_followed.max(error(followed.posed(g, k), followed.origin()));
+            worst_world = worst_world.max(error(world.posed(g, k), [0.0; 3]));
+        }
+        if t == 20 {
+            saved = vec![0u8; followed.state_bytes()];
+            followed.save(&mut saved).unwrap();
+        }
+    }
+    assert!(
+        worst_followed <= 1e-4 * length,
+        "followed: {worst_followed} of a {length} guide"
+    );
+    // float32 world points at 1e4 cannot do it: the test can tell
+    assert!(worst_world > 10.0 * 1e-4 * length, "world: {worst_world}");
+    // the saved origin comes back with the state
+    let mut b3 = vec![];
+    let mut restored = s.sim(&params(), &mut b3);
+    restored.restore(&saved).unwrap();
+    let run20 = 0.9 * 20.0 * dt as f64;
+    assert_eq!(restored.origin()[0], run20 + far);
 }
