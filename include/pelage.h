@@ -1014,6 +1014,26 @@ void pelage_frame_free(PelageFrame frame);
 // Thread safety: reads `frame`.
 enum PelageStatus pelage_frame_inside(PelageFrame frame, const void *points, size_t point_stride, size_t count, struct PelageRun run, uint8_t *inside);
 
+// The signed distance from each of `count` host points (as for
+// pelage_frame_inside) to this frame's mesh: the distance to the nearest
+// point of its triangles, negative inside by pelage's inside rule (as a
+// PelageDistanceFn's), so a host can push its own points out of the body
+// or measure how deep they went. Near a hole the inside reaches across
+// it while the distance is to the skin (the rim). Writes `distances[i]`.
+// Uses the frame's body as pelage_frame_inside does; the nearest-point
+// tree is built for the call (progress: the body's build, when the call
+// makes one, then the tree, a fifth each, then the share of points). On
+// failure `distances` is untouched, but for CANCELLED and PANIC (then
+// unspecified).
+//
+// Returns OK, NULL_PARAMETER, NON_FINITE (a point), INVALID_ARGUMENT (a
+// point beyond 1e9, the stride, a body of this frame's mesh too large, a
+// mesh without a triangle of area), MISALIGNED, CANCELLED, OUT_OF_MEMORY,
+// PANIC.
+//
+// Thread safety: reads `frame`.
+enum PelageStatus pelage_frame_signed_distance(PelageFrame frame, const void *points, size_t point_stride, size_t count, struct PelageRun run, float *distances);
+
 // Default groom maps (constants; see the field docs), seed 0.
 //
 // Thread safety: free.

@@ -6,7 +6,7 @@ use crate::buffers::{collected, grow, req, req_mut, slice, slice_mut, strided, z
 use crate::colliders::{HostColliders, HostField};
 use crate::handles::{free, into_handle, object_mut, Handle};
 use crate::status::Failure;
-use crate::threads::{chunks_with_progress, split_with_progress, PelageRun};
+use crate::threads::{chunks_with_progress, split_with_progress, PelageRun, Progress};
 use crate::{PelageColliders, PelageGuidesDesc, PelageMeshDesc, PelageStatus};
 use pelage_core::arena::ArenaLayout;
 use pelage_core::cache::groom_file::Groom;
@@ -19,6 +19,7 @@ use pelage_core::surface::body::Body;
 use glam::Vec3;
 use pelage_core::interp::posed::PosedFrame;
 use pelage_core::surface::mesh::MAX_COORDINATE;
+use pelage_core::surface::nearest::Nearest;
 use pelage_core::{Arena, Mesh, Strided};
 
 /// The opaque object a `PelageFrame` points to.
@@ -124,6 +125,32 @@ impl Frame {
     /// The body `pelage_frame_set_colliders` built for this frame, if any.
     pub(crate) fn body(&self) -> Option<&Body<'_>> {
         self.push.as_ref().and_then(|c| c.body.as_ref())
+    }
+
+    /// The body a query of host points reads, and the progress left for
+    /// the query: the frame's own body, or one built in `memory` as the
+    /// first `share` of `run`'s progress.
+    fn body_for_query<'m>(
+        &'m self,
+        memory: &'m mut BodyMemory,
+        built: &'m mut Option<Body<'m>>,
+        run: &PelageRun,
+        share: f64,
+    ) -> Result<(&'m Body<'m>, Progress), Failure> {
+        let progress = run.progress();
+        Ok(match self.body() {
+            Some(body) => (body, progress),
+            None => {
+                let mesh = self.posed.mesh();
+                let body = memory.body(
+                    mesh,
+                    COLLISION_CELLS_PER_TRIANGLE,
+                    run.thread_count,
+                    progress.within(0.0, share),
+                )?;
+                (&*built.insert(body), progress.within(share, 1.0))
+            }
+        })
     }
 
     /// The posed frame, for no longer than this handle lives.
@@ -444,25 +471,10 @@ pub extern "C" fn pelage_frame_inside(
 ) -> PelageStatus {
     ffi_boundary! {
         let frame = crate::handles::object(frame)?;
-        let points = strided::<[f32; 3]>(points, point_stride, count, "points")?;
-        for (i, p) in points.iter().enumerate() {
-            if !p.iter().all(|c| c.is_finite()) {
-                return Err(pelage_core::Error::NonFinite { what: "points", index: i }.into());
-            }
-            if !p.iter().all(|c| c.abs() <= MAX_COORDINATE) {
-                return Err(pelage_core::Error::OutOfDomain { what: "points (within 1e9)", index: i }.into());
-            }
-        }
+        let points = host_points(points, point_stride, count)?;
         let out = slice_mut(inside, count, "inside")?;
-        let progress = run.progress();
-        let mut memory = BodyMemory::default();
-        let (body, rest) = match frame.body() {
-            Some(body) => (body, progress),
-            None => (
-                &memory.body(frame.posed.mesh(), COLLISION_CELLS_PER_TRIANGLE, run.thread_count, progress.within(0.0, 0.2))?,
-                progress.within(0.2, 1.0),
-            ),
-        };
+        let (mut memory, mut built) = (BodyMemory::default(), None);
+        let (body, rest) = frame.body_for_query(&mut memory, &mut built, &run, 0.2)?;
         split_with_progress(count, run.thread_count, out, 1, rest, |range, part| {
             for (o, i) in part.iter_mut().zip(range) {
                 *o = body.contains(Vec3::from(points.get(i))) as u8;
@@ -470,4 +482,86 @@ pub extern "C" fn pelage_frame_inside(
         })?;
         Ok(())
     }
+}
+
+/// The signed distance from each of `count` host points (as for
+/// pelage_frame_inside) to this frame's mesh: the distance to the nearest
+/// point of its triangles, negative inside by pelage's inside rule (as a
+/// PelageDistanceFn's), so a host can push its own points out of the body
+/// or measure how deep they went. Near a hole the inside reaches across
+/// it while the distance is to the skin (the rim). Writes `distances[i]`.
+/// Uses the frame's body as pelage_frame_inside does; the nearest-point
+/// tree is built for the call (progress: the body's build, when the call
+/// makes one, then the tree, a fifth each, then the share of points). On
+/// failure `distances` is untouched, but for CANCELLED and PANIC (then
+/// unspecified).
+///
+/// Returns OK, NULL_PARAMETER, NON_FINITE (a point), INVALID_ARGUMENT (a
+/// point beyond 1e9, the stride, a body of this frame's mesh too large, a
+/// mesh without a triangle of area), MISALIGNED, CANCELLED, OUT_OF_MEMORY,
+/// PANIC.
+///
+/// Thread safety: reads `frame`.
+#[no_mangle]
+pub extern "C" fn pelage_frame_signed_distance(
+    frame: PelageFrame,
+    points: *const std::ffi::c_void,
+    point_stride: usize,
+    count: usize,
+    run: PelageRun,
+    distances: *mut f32,
+) -> PelageStatus {
+    ffi_boundary! {
+        let frame = crate::handles::object(frame)?;
+        let points = host_points(points, point_stride, count)?;
+        let out = slice_mut(distances, count, "distances")?;
+        let (mut memory, mut built) = (BodyMemory::default(), None);
+        let (body, rest) = frame.body_for_query(&mut memory, &mut built, &run, 0.2)?;
+        let mesh = frame.posed.mesh();
+        let mut layout = ArenaLayout::new();
+        Nearest::layout(&mut layout, mesh);
+        let mut bytes = zeroed(layout.bytes(), "the nearest-point tree")?;
+        let nearest = Nearest::new(mesh, &mut Arena::new(&mut bytes))?;
+        rest.within(0.0, 0.25).report(1.0)?;
+        let mut found = vec![0.0f32; count];
+        split_with_progress(count, run.thread_count, &mut found, 1, rest.within(0.25, 1.0), |range, part| {
+            for (o, i) in part.iter_mut().zip(range) {
+                let p = Vec3::from(points.get(i));
+                let d = nearest.distance(p);
+                *o = if body.contains(p) { -d } else { d };
+            }
+        })?;
+        if found.iter().any(|d| !d.is_finite()) {
+            return Err(Failure::new(PelageStatus::InvalidArgument, "the frame's mesh has no triangle of area"));
+        }
+        out.copy_from_slice(&found);
+        Ok(())
+    }
+}
+
+/// `count` host points, `stride` bytes apart, checked finite and within
+/// the coordinate limit.
+fn host_points<'p>(
+    points: *const std::ffi::c_void,
+    stride: usize,
+    count: usize,
+) -> Result<Strided<'p, [f32; 3]>, Failure> {
+    let points = strided::<[f32; 3]>(points, stride, count, "points")?;
+    for (i, p) in points.iter().enumerate() {
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(pelage_core::Error::NonFinite {
+                what: "points",
+                index: i,
+            }
+            .into());
+        }
+        if !p.iter().all(|c| c.abs() <= MAX_COORDINATE) {
+            return Err(pelage_core::Error::OutOfDomain {
+                what: "points (within 1e9)",
+                index: i,
+            }
+            .into());
+        }
+    }
+    Ok(points)
 }

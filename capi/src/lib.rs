@@ -43,8 +43,8 @@ pub use expand::{
 };
 pub use frame::{
     pelage_frame_free, pelage_frame_inside, pelage_frame_new, pelage_frame_origin,
-    pelage_frame_set_colliders, pelage_frame_set_guides, pelage_frame_set_origin, PelageFrame,
-    PelageFrameTy,
+    pelage_frame_set_colliders, pelage_frame_set_guides, pelage_frame_set_origin,
+    pelage_frame_signed_distance, PelageFrame, PelageFrameTy,
 };
 pub use groom::{
     pelage_groom_evaluate, pelage_groom_maps_defaults, PelageGroomMaps, PelageStrandGroom,

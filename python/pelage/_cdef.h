@@ -380,6 +380,8 @@ void pelage_frame_free(PelageFrame frame);
 
 enum PelageStatus pelage_frame_inside(PelageFrame frame, const void *points, size_t point_stride, size_t count, struct PelageRun run, uint8_t *inside);
 
+enum PelageStatus pelage_frame_signed_distance(PelageFrame frame, const void *points, size_t point_stride, size_t count, struct PelageRun run, float *distances);
+
 struct PelageGroomMaps pelage_groom_maps_defaults(void);
 
 enum PelageStatus pelage_groom_evaluate(const struct PelageMeshDesc *mesh, const struct PelageGroomMaps *maps, const struct PelageRoot *roots, size_t root_count, struct PelageStrandGroom *grooms, size_t grooms_capacity);

@@ -198,6 +198,22 @@ class Frame(Handle):
         call.check(status, "pelage_frame_inside")
         return inside.view(np.bool_)
 
+    def signed_distance(
+        self, points: Any, *, threads: Optional[int] = None, progress: Optional[ProgressFn] = None
+    ) -> np.ndarray:
+        """The signed distance from each of the (n, 3) points to the frame's
+        mesh (``pelage_frame_signed_distance``): negative inside by the
+        inside rule of :meth:`inside`; a float32 array of n."""
+        pts = rows(points, np.float32, 3, "points")
+        out = np.zeros(pts.shape[0], np.float32)
+        call = Call(threads, progress)
+        stride = int(pts.strides[0]) if pts.shape[0] > 1 else 12
+        status = lib.pelage_frame_signed_distance(
+            self._get(), ptr(pts), stride, pts.shape[0], call.run(), ptr(out, "float *")
+        )
+        call.check(status, "pelage_frame_signed_distance")
+        return out
+
     def _release(self) -> None:
         self.colliders = None
 

@@ -125,6 +125,10 @@ def test_frame_inside(frame):
     assert frame.inside(points).tolist() == [True, True, False, False]
     with pytest.raises(pelage.NonFinite):
         frame.inside([[0, 0, np.inf]])
+    distances = frame.signed_distance(points)
+    assert distances.dtype == np.float32 and distances.shape == (4,)
+    assert ((distances < 0) == frame.inside(points)).all()
+    assert np.allclose(distances, [-1.0, -0.1, 0.1, 1.0], atol=0.05)
 
 
 def test_patches_boxes_and_lod(scene, frame):

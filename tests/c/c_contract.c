@@ -2744,6 +2744,27 @@ static void test_trim_and_edits(void) {
     PelageRun heard = threads_run(1);
     heard.progress = on_progress, heard.progress_user_data = &stop;
     EXPECT(PELAGE_STATUS_CANCELLED, pelage_frame_inside(g_in.frame, pts, 12, 4, heard, in));
+    /* the signed distance: negative where inside, about the sphere's
+     * radius at its centre, a hair's length off its skin */
+    float d[4];
+    FILL(d, sizeof d);
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_signed_distance(g_in.frame, pts, 12, 4, threads_run(2), d));
+    for (int i = 0; i < 4; i++) CHECK((d[i] < 0.0f) == (in[i] == 1));
+    CHECK(fabsf(d[0] + 1.0f) < 0.05f && fabsf(d[1] - 1.0f) < 0.05f);
+    CHECK(fabsf(d[2] + 0.1f) < 0.05f && fabsf(d[3] - 0.05f) < 0.05f);
+    float d_again[4];
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_signed_distance(g_in.frame, pts, 12, 4, threads_run(1), d_again));
+    CHECK(memcmp(d, d_again, sizeof d) == 0);
+    FILL(d_again, sizeof d_again);
+    EXPECT(PELAGE_STATUS_INVALID_ARGUMENT, pelage_frame_signed_distance(g_in.frame, bad, 12, 2, threads_run(1), d_again));
+    bad[1][1] = NAN;
+    EXPECT(PELAGE_STATUS_NON_FINITE, pelage_frame_signed_distance(g_in.frame, bad, 12, 2, threads_run(1), d_again));
+    CHECK(untouched(d_again, sizeof d_again));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_signed_distance(NULL, pts, 12, 4, threads_run(1), d));
+    FAILS(PELAGE_STATUS_NULL_PARAMETER, pelage_frame_signed_distance(g_in.frame, pts, 12, 4, threads_run(1), NULL));
+    EXPECT(PELAGE_STATUS_OK, pelage_frame_signed_distance(g_in.frame, NULL, 12, 0, threads_run(1), NULL));
+    stop = progress_new(1);
+    EXPECT(PELAGE_STATUS_CANCELLED, pelage_frame_signed_distance(g_in.frame, pts, 12, 4, heard, d));
   }
   {
     /* the frame's origin: zero when new, kept as given, refused when not

@@ -7,5 +7,6 @@ pub mod frame;
 pub mod grid;
 pub mod map;
 pub mod mesh;
+pub mod nearest;
 pub mod region;
 pub mod rim;
