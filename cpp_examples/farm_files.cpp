@@ -46,7 +46,9 @@ uint64_t get(const unsigned char* p, int bytes) {
   for (int i = bytes - 1; i >= 0; --i) v = v << 8 | p[i];
   return v;
 }
-uint32_t get_be32(const unsigned char* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
+uint32_t get_be32(const unsigned char* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
 
 std::vector<unsigned char> read_all(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -100,11 +102,12 @@ void remove_stale_temps(const std::string& dir, const std::string& base) {
   closedir(d);
 }
 
-// The fault test's hook: SHOT_FAULT_STALL=<file name> makes the writer of
-// that file stop halfway through its temporary file, flushed, until killed.
+// The fault test's hook: SHOT_FAULT_STALL=<file name>[,<file name>...] makes
+// the writer of those files stop halfway through the temporary file, flushed,
+// until it is killed.
 bool stall_here(const std::string& base) {
   const char* stall = std::getenv("SHOT_FAULT_STALL");
-  return stall && base == stall;
+  return stall && ("," + std::string(stall) + ",").find("," + base + ",") != std::string::npos;
 }
 
 void write_fully(int fd, const unsigned char* data, size_t size) {
@@ -150,7 +153,9 @@ Framed unframe(const std::string& path, const std::vector<unsigned char>& bytes,
     throw std::runtime_error(path + ": " + magic + " version " + std::to_string(get(&bytes[8], 4)) +
                              ", this tool reads version " + std::to_string(version));
   }
-  if (bytes.size() < header) throw std::runtime_error(path + ": truncated (" + std::to_string(bytes.size()) + " bytes)");
+  if (bytes.size() < header) {
+    throw std::runtime_error(path + ": truncated (" + std::to_string(bytes.size()) + " bytes)");
+  }
   const size_t crc_at = header - 8;
   const uint64_t length = get(&bytes[crc_at - 8], 8);
   if (length != bytes.size() - header) {
@@ -194,11 +199,13 @@ std::vector<unsigned char> read_sealed(const std::string& path, const Identity& 
                                        uint32_t sample) {
   Sealed s = unseal(path, kind);
   if (!(s.id == id)) {
-    throw std::runtime_error(path + ": belongs to another shot (" + hex(s.id.shot) + ", " + std::to_string(s.id.frames) +
-                             " frames; this shot is " + hex(id.shot) + ", " + std::to_string(id.frames) + " frames)");
+    throw std::runtime_error(path + ": belongs to another shot (" + hex(s.id.shot) + ", " +
+                             std::to_string(s.id.frames) + " frames; this shot is " + hex(id.shot) + ", " +
+                             std::to_string(id.frames) + " frames)");
   }
   if (s.frame != frame || s.sample != sample) {
-    throw std::runtime_error(path + ": holds " + place(s.frame, s.sample) + " of this shot, not " + place(frame, sample));
+    throw std::runtime_error(path + ": holds " + place(s.frame, s.sample) + " of this shot, not " +
+                             place(frame, sample));
   }
   return std::move(s.file);
 }

@@ -276,7 +276,7 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
     clock = {};
     std::vector<creature::Mesh> meshes;
     std::vector<std::unique_ptr<creature::Frame>> samples;
-    size_t met = 0;
+    std::string written;
     // A frame already written is stepped through (the simulation carries
     // state from frame to frame) but not written again.
     const bool write = !done[size_t(f)];
@@ -291,7 +291,9 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
       check(pelage_frame_set_sim_guides(frame, sim.get(), PelageRun{0, nullptr, nullptr}), "pelage_frame_set_sim_guides");
       const std::string records = records_path(dir, f, k);
       if (write && !farm::sealed_ok(records, id, Kind::TrimRecords, uint32_t(f), uint32_t(k))) {
-        met = std::max(met, write_trim_records(records, id, f, k, frame, meshes[k], colliders, set.guide_count));
+        const size_t met = write_trim_records(records, id, f, k, frame, meshes[k], colliders, set.guide_count);
+        written += " trim records " + std::to_string(k) + " (" + std::to_string(met) +
+                   " guides meet the shirt or the body),";
       }
     }
     if (!write) {
@@ -305,13 +307,15 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
                                      &bytes),
             "pelage_guide_cache_write");
       write_sealed(cache_path, id, Kind::GuideCache, uint32_t(f), kEvery, cache.data(), bytes);
+      written += " guide cache " + std::to_string(bytes / 1000) + " KB,";
     }
     if (!farm::sealed_ok(mesh_path, id, Kind::Mesh, uint32_t(f), kEvery)) {
       const std::vector<unsigned char> mesh = mesh_file(meshes);
       write_sealed(mesh_path, id, Kind::Mesh, uint32_t(f), kEvery, mesh.data(), mesh.size());
+      written += " mesh,";
     }
-    std::printf("sim: frame %d: cache %.1f KB, up to %zu guides meet the shirt or the body: %.2f s\n", f,
-                double(bytes) / 1e3, met, clock.seconds());
+    written.pop_back();
+    std::printf("sim: frame %d: wrote%s: %.2f s\n", f, written.c_str(), clock.seconds());
   }
 }
 
@@ -478,6 +482,7 @@ void render(const std::string& dir, int first, int count) {
     }
   }
   if (todo.empty()) return;
+  std::printf("render: %zu of frames %d to %d to render\n", todo.size(), first, first + count - 1);
   const std::string lengths_path = dir + "/shot.ptriml";
   const std::vector<unsigned char> file = farm::read_sealed(lengths_path, asset.id, Kind::TrimLengths, kEvery, kEvery);
   std::vector<uint16_t> lengths(asset.info.strand_count);
