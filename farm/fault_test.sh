@@ -1,0 +1,147 @@
+#!/usr/bin/env bash
+# CTest farm_faults: a shot on the local Slurm cluster survives what a farm
+# does to it. It kills the simulation halfway through writing a file, then
+# (resumed) kills one render task halfway through writing its image and
+# another mid-run, cancels the render array, requeues a killed task and
+# resumes again. Every output must then equal an undisturbed run's bit for
+# bit, a watcher polling the shot's folder all along must never have seen a
+# file at a final path that is not the undisturbed run's (a partial file)
+# nor one written twice (a good file rewritten), and a file from another
+# frame, or one without a shot identity, must be refused.
+#
+#   farm/fault_test.sh <shot binary> <creature.obj> <work dir> [frames] [hairs]
+set -euo pipefail
+
+here=$(dirname "$(realpath "$0")")
+shot=$(realpath "$1") obj=$(realpath "$2") work=$3 frames=${4:-4} hairs=${5:-20000}
+export POLL_SECONDS=0.2
+
+if ! "$here/cluster.sh" status >/dev/null; then trap '"$here/cluster.sh" stop' EXIT; fi
+"$here/cluster.sh"
+
+rm -rf "$work"
+mkdir -p "$work/ref" "$work/run"
+work=$(realpath "$work")
+run=$work/run
+fail() {
+  echo "farm_faults: FAILED: $*" >&2
+  touch "$work/stop"
+  tail -n 5 "$run"/logs/*.log >&2 || true
+  exit 1
+}
+SECONDS=0
+
+"$shot" local "$obj" "$work/ref" "$frames" "$hairs" >"$work/ref.log"
+finals=()
+for f in "$work"/ref/*; do finals+=("$(basename "$f")"); done
+echo "farm_faults: undisturbed run, ${#finals[@]} files: done at $SECONDS s"
+
+# The watcher: every file that appears at a final path must be the
+# undisturbed run's bytes the first time it is seen, and never be replaced
+# (another inode or mtime) afterwards.
+watch() {
+  declare -A seen
+  local polls=0 name sig line
+  while [ ! -e "$work/stop" ]; do
+    while read -r line; do
+      name=${line%% *} sig=${line#* }
+      name=$(basename "$name")
+      case $name in *.part-*) continue ;; esac
+      if [ -z "${seen[$name]:-}" ]; then
+        if [ ! -e "$work/ref/$name" ]; then
+          echo "$name: not a file of the shot" >>"$work/violations"
+        elif ! cmp -s "$run/$name" "$work/ref/$name"; then
+          echo "$name: at its final path but not the undisturbed run's bytes ($sig)" >>"$work/violations"
+        fi
+        seen[$name]=$sig
+      elif [ "${seen[$name]}" != "$sig" ]; then
+        echo "$name: written again (${seen[$name]} then $sig)" >>"$work/violations"
+        seen[$name]=$sig
+      fi
+    done < <(find "$run" -maxdepth 1 -type f ! -name '.*' -printf '%p %i %s %T@\n' 2>/dev/null)
+    polls=$((polls + 1))
+    sleep 0.05
+  done
+  echo "$polls" >"$work/polls"
+}
+watch &
+watcher=$!
+
+# Waits up to 60 s for a command to succeed.
+wait_for() {
+  local what=$1
+  shift
+  for _ in $(seq 600); do if "$@"; then return; fi; sleep 0.1; done
+  fail "no $what after 60 s"
+}
+temp_of() { compgen -G "$run/$1.part-*" >/dev/null; }
+pid_of() { pgrep -fx "$shot $*" >/dev/null; }
+kill_task() { kill -KILL "$(pgrep -fx "$shot $*")"; }
+submit() { "$here/shot.sh" "$shot" "$obj" "$run" "$frames" "$hairs" 1 >>"$work/submits.log" 2>&1; }
+
+# 1. The simulation, killed halfway through writing frame 1's mesh.
+SHOT_FAULT_STALL=frame_0001.mesh submit &
+submitter=$!
+wait_for "simulation stalled in frame_0001.mesh" temp_of frame_0001.mesh
+[ ! -e "$run/frame_0001.mesh" ] || fail "frame_0001.mesh at its final path while being written"
+kill_task sim "$obj" "$run" "$frames" "$hairs"
+if wait "$submitter"; then fail "shot.sh succeeded with its simulation killed"; fi
+echo "farm_faults: simulation killed mid-write; shot.sh failed: done at $SECONDS s"
+
+# 2. Resumed: render task 1 killed halfway through writing its image, task
+#    2 killed mid-run, the array cancelled while task 3 writes its image
+#    (scancel's SIGTERM must remove the temporary file).
+SHOT_FAULT_STALL=frame_0001.png,frame_0003.png submit &
+submitter=$!
+wait_for "render task 1 stalled in frame_0001.png" temp_of frame_0001.png
+[ ! -e "$run/frame_0001.png" ] || fail "frame_0001.png at its final path while being written"
+kill_task render "$run" 1 1
+wait_for "render task 2" pid_of render "$run" 2 1
+kill_task render "$run" 2 1
+wait_for "render task 3 stalled in frame_0003.png" temp_of frame_0003.png
+scancel "$(tail -n 1 "$run/logs/jobs")"
+if wait "$submitter"; then fail "shot.sh succeeded with its render array cancelled"; fi
+! temp_of frame_0003.png || fail "the cancelled task left its temporary file"
+grep -q "render: frame 2: " "$run"/logs/render-*_2.log && fail "render task 2 was not killed mid-run"
+grep -q "shot: SHOT_FAULT_STALL: stalled halfway" "$run"/logs/render-*_1.log || fail "task 1's log lost its lines"
+
+for f in 1 2 3; do
+  png=$(printf 'frame_%04d.png' "$f")
+  [ ! -e "$run/$png" ] || fail "$png exists though its task was killed or cancelled"
+done
+echo "farm_faults: render tasks killed mid-write and mid-run, array cancelled: done at $SECONDS s"
+
+# 3. A killed task requeued by hand (released from the hold a requeue puts
+#    it in): the resume waits for it, then submits only what is still missing.
+array=$(tail -n 1 "$run/logs/jobs")
+scontrol requeue "${array}_2"
+submit &
+submitter=$!
+wait_for "the resume waiting for the requeued task" \
+  grep -q "waiting for the shot's jobs still queued: $array" "$work/submits.log"
+scontrol update JobId="${array}_2" StartTime=now
+wait "$submitter" || fail "the resumed shot failed"
+last=$(grep 'shot.sh: submitted' "$work/submits.log" | tail -n 1)
+[[ $last == *"sim done, shot pass done, render tasks 1,3 "* ]] ||
+  fail "the resume submitted more than frames 1 and 3: $last"
+echo "farm_faults: resumed after the requeued task (${last#shot.sh: }): done at $SECONDS s"
+
+touch "$work/stop"
+wait "$watcher"
+if [ -s "$work/violations" ]; then fail "seen while the faults happened: $(cat "$work/violations")"; fi
+for name in "${finals[@]}"; do cmp "$work/ref/$name" "$run/$name" || fail "$name differs"; done
+leftover=$(find "$run" -maxdepth 1 -name '*.part-*')
+[ -z "$leftover" ] || fail "temporary files left: $leftover"
+echo "farm_faults: ${#finals[@]} files bitwise equal to the undisturbed run; $(cat "$work/polls") polls saw no partial or rewritten file"
+
+# 4. Files in the wrong place are refused, and nothing is written.
+mkdir -p "$work/wrong"
+cp "$run/creature.pgroom" "$run/shot.ptriml" "$run/frame_0000.pguide" "$work/wrong/"
+cp "$run/frame_0001.mesh" "$work/wrong/frame_0000.mesh"
+if "$shot" render "$work/wrong" 0 1 2>"$work/wrong.log"; then fail "frame 1's mesh rendered as frame 0"; fi
+grep -q "frame_0000.mesh: holds frame 1 of this shot, not frame 0" "$work/wrong.log" || fail "$(cat "$work/wrong.log")"
+tail -c +73 "$run/frame_0000.mesh" >"$work/wrong/frame_0000.mesh"
+if "$shot" render "$work/wrong" 0 1 2>"$work/wrong.log"; then fail "a mesh without a shot identity rendered"; fi
+grep -q "without a shot identity" "$work/wrong.log" || fail "$(cat "$work/wrong.log")"
+[ ! -e "$work/wrong/frame_0000.png" ] || fail "a refused frame left an image"
+echo "farm_faults: another frame's file and an unsealed file refused: done at $SECONDS s"
