@@ -7,21 +7,33 @@
 # bit, a watcher polling the shot's folder all along must never have seen a
 # file at a final path that is not the undisturbed run's (a partial file)
 # nor one written twice (a good file rewritten), and a file from another
-# frame, or one without a shot identity, must be refused.
+# frame or shot, or one without a shot identity, must be refused. A shot on
+# a full disk (a small tmpfs: root, as cluster.sh is) must fail with only
+# whole files and resume on a larger one.
 #
-#   farm/fault_test.sh <shot binary> <creature.obj> <work dir> [frames] [hairs]
+#   farm/fault_test.sh <shot binary> <creature.obj> <work dir> [hairs]
+#
+# 4 frames, one per render task: the faults are aimed at tasks 1, 2 and 3.
 set -euo pipefail
 
 here=$(dirname "$(realpath "$0")")
-shot=$(realpath "$1") obj=$(realpath "$2") work=$3 frames=${4:-4} hairs=${5:-20000}
+shot=$(realpath "$1") obj=$(realpath "$2") work=$3 frames=4 hairs=${4:-20000}
 export POLL_SECONDS=0.2
 
-if ! "$here/cluster.sh" status >/dev/null; then trap '"$here/cluster.sh" stop' EXIT; fi
+mkdir -p "$work"
+work=$(realpath "$work")
+was_up=1
+"$here/cluster.sh" status >/dev/null || was_up=0
+cleanup() {
+  umount "$work/full" 2>/dev/null || true
+  if [ "$was_up" = 0 ]; then "$here/cluster.sh" stop; fi
+}
+trap cleanup EXIT
 "$here/cluster.sh"
 
-rm -rf "$work"
+umount "$work/full" 2>/dev/null || true
+rm -rf "${work:?}"/*
 mkdir -p "$work/ref" "$work/run"
-work=$(realpath "$work")
 run=$work/run
 fail() {
   echo "farm_faults: FAILED: $*" >&2
@@ -134,7 +146,27 @@ leftover=$(find "$run" -maxdepth 1 -name '*.part-*')
 [ -z "$leftover" ] || fail "temporary files left: $leftover"
 echo "farm_faults: ${#finals[@]} files bitwise equal to the undisturbed run; $(cat "$work/polls") polls saw no partial or rewritten file"
 
-# 4. Files in the wrong place are refused, and nothing is written.
+# 4. A full disk: a 2-frame shot on a 5 MB tmpfs fails when the simulation
+#    cannot write frame 0's mesh, leaving only whole files and no temporary
+#    one; on a larger disk the resumed shot equals an undisturbed run.
+full=$work/full
+mkdir -p "$full" "$work/ref2"
+mount -t tmpfs -o size=5m tmpfs "$full"
+"$shot" local "$obj" "$work/ref2" 2 "$hairs" >"$work/ref2.log"
+if "$here/shot.sh" "$shot" "$obj" "$full" 2 "$hairs" >>"$work/submits.log" 2>&1; then
+  fail "a shot on a full disk succeeded"
+fi
+grep -q "No space left on device" "$full"/logs/sim-*.log || fail "the simulation did not run out of space"
+for f in "$full"/*; do
+  if [ -f "$f" ]; then cmp "$f" "$work/ref2/$(basename "$f")" || fail "$f: partial on a full disk"; fi
+done
+[ -z "$(find "$full" -name '*.part-*')" ] || fail "a temporary file left on the full disk"
+mount -o remount,size=64m "$full"
+"$here/shot.sh" "$shot" "$obj" "$full" 2 "$hairs" >>"$work/submits.log" 2>&1 || fail "the shot did not resume"
+for f in "$work"/ref2/*; do cmp "$f" "$full/$(basename "$f")" || fail "$f differs after the full disk"; done
+echo "farm_faults: a full disk failed the simulation cleanly; resumed on a larger one: done at $SECONDS s"
+
+# 5. Files in the wrong place are refused, and nothing is written.
 mkdir -p "$work/wrong"
 cp "$run/creature.pgroom" "$run/shot.ptriml" "$run/frame_0000.pguide" "$work/wrong/"
 cp "$run/frame_0001.mesh" "$work/wrong/frame_0000.mesh"
@@ -143,5 +175,10 @@ grep -q "frame_0000.mesh: holds frame 1 of this shot, not frame 0" "$work/wrong.
 tail -c +73 "$run/frame_0000.mesh" >"$work/wrong/frame_0000.mesh"
 if "$shot" render "$work/wrong" 0 1 2>"$work/wrong.log"; then fail "a mesh without a shot identity rendered"; fi
 grep -q "without a shot identity" "$work/wrong.log" || fail "$(cat "$work/wrong.log")"
+cp "$run/frame_0000.mesh" "$work/wrong/"
+cp "$full/shot.ptriml" "$work/wrong/"
+if "$shot" render "$work/wrong" 0 1 2>"$work/wrong.log"; then fail "a 2-frame shot's lengths rendered in a 4-frame shot"; fi
+grep -q "shot.ptriml: belongs to another shot" "$work/wrong.log" || fail "$(cat "$work/wrong.log")"
 [ ! -e "$work/wrong/frame_0000.png" ] || fail "a refused frame left an image"
-echo "farm_faults: another frame's file and an unsealed file refused: done at $SECONDS s"
+umount "$full"
+echo "farm_faults: another frame's file, another shot's and an unsealed one refused: done at $SECONDS s"
