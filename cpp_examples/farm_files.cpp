@@ -110,6 +110,17 @@ bool stall_here(const std::string& base) {
   return stall && ("," + std::string(stall) + ",").find("," + base + ",") != std::string::npos;
 }
 
+// What open(2) would give a new file: mkstemp makes it 0600, but a shot's
+// folder is shared (a group-writable umask on a studio's NFS is common).
+mode_t file_mode() {
+  static const mode_t mode = [] {
+    const mode_t mask = umask(0);
+    umask(mask);
+    return mode_t(0666 & ~mask);
+  }();
+  return mode;
+}
+
 void write_fully(int fd, const unsigned char* data, size_t size) {
   while (size > 0) {
     const ssize_t n = ::write(fd, data, size);
@@ -232,7 +243,7 @@ void write_atomic(const std::string& path, const unsigned char* data, size_t siz
   std::memcpy(temp_path, temp.c_str(), temp.size() + 1);
   temp_set = 1;
   try {
-    if (fchmod(fd, 0644) != 0) throw std::runtime_error(errno_text());
+    if (fchmod(fd, file_mode()) != 0) throw std::runtime_error(errno_text());
     if (stall_here(base)) {
       write_fully(fd, data, size / 2);
       fsync(fd);

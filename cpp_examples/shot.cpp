@@ -125,9 +125,11 @@ std::vector<creature::Mesh> read_meshes(const std::string& path, const std::vect
 farm::Identity shot_identity(const std::string& obj, uint32_t hairs, int frames) {
   if (frames < 1) throw std::runtime_error("a shot has at least one frame");
   const std::vector<unsigned char> bytes = creature::read_file(obj);
-  const uint32_t settings[] = {pelage_version(), hairs,     uint32_t(frames), kGuides,  kCvs,
-                               kPatchSize,       kSamples,  kImageSize};
-  return {farm::fnv1a(bytes.data(), bytes.size(), farm::fnv1a(settings, sizeof settings)), uint32_t(frames)};
+  const uint32_t settings[] = {pelage_version(), hairs, uint32_t(frames), kGuides, kCvs, kPatchSize, kSamples,
+                               kImageSize};
+  const float scene[] = {kGuideLength, kShirtGap, kFps};
+  const uint64_t hash = farm::fnv1a(scene, sizeof scene, farm::fnv1a(settings, sizeof settings));
+  return {farm::fnv1a(bytes.data(), bytes.size(), hash), uint32_t(frames)};
 }
 
 void write_sealed(const std::string& path, const farm::Identity& id, Kind kind, uint32_t frame, uint32_t sample,
