@@ -89,7 +89,9 @@ wait_for() {
 temp_of() { compgen -G "$run/$1.part-*" >/dev/null; }
 pid_of() { pgrep -fx "$shot $*" >/dev/null; }
 kill_task() { kill -KILL "$(pgrep -fx "$shot $*")"; }
+# The first submission, then the resumes exactly as docs/FARM.md's recipes say.
 submit() { "$here/shot.sh" "$shot" "$obj" "$run" "$frames" "$hairs" 1 >>"$work/submits.log" 2>&1; }
+resume() { "$here/shot.sh" resume "$run" >>"$work/submits.log" 2>&1; }
 
 # 1. The simulation, killed halfway through writing frame 1's mesh.
 SHOT_FAULT_STALL=frame_0001.mesh submit &
@@ -103,7 +105,7 @@ echo "farm_faults: simulation killed mid-write; shot.sh failed: done at $SECONDS
 # 2. Resumed: render task 1 killed halfway through writing its image, task
 #    2 killed mid-run, the array cancelled while task 3 writes its image
 #    (scancel's SIGTERM must remove the temporary file).
-SHOT_FAULT_STALL=frame_0001.png,frame_0003.png submit &
+SHOT_FAULT_STALL=frame_0001.png,frame_0003.png resume &
 submitter=$!
 wait_for "render task 1 stalled in frame_0001.png" temp_of frame_0001.png
 [ ! -e "$run/frame_0001.png" ] || fail "frame_0001.png at its final path while being written"
@@ -127,7 +129,7 @@ echo "farm_faults: render tasks killed mid-write and mid-run, array cancelled: d
 #    it in): the resume waits for it, then submits only what is still missing.
 array=$(tail -n 1 "$run/logs/jobs")
 scontrol requeue "${array}_2"
-submit &
+resume &
 submitter=$!
 wait_for "the resume waiting for the requeued task" \
   grep -q "waiting for the shot's jobs still queued: $array" "$work/submits.log"
@@ -151,7 +153,7 @@ echo "farm_faults: ${#finals[@]} files bitwise equal to the undisturbed run; $(c
 #    one; on a larger disk the resumed shot equals an undisturbed run.
 full=$work/full
 mkdir -p "$full" "$work/ref2"
-mount -t tmpfs -o size=5m tmpfs "$full"
+mount -t tmpfs -o size=5m tmpfs "$full" || fail "cannot mount a tmpfs for the full disk (needs root with CAP_SYS_ADMIN)"
 "$shot" local "$obj" "$work/ref2" 2 "$hairs" >"$work/ref2.log"
 if "$here/shot.sh" "$shot" "$obj" "$full" 2 "$hairs" >>"$work/submits.log" 2>&1; then
   fail "a shot on a full disk succeeded"
@@ -162,7 +164,7 @@ for f in "$full"/*; do
 done
 [ -z "$(find "$full" -name '*.part-*')" ] || fail "a temporary file left on the full disk"
 mount -o remount,size=64m "$full"
-"$here/shot.sh" "$shot" "$obj" "$full" 2 "$hairs" >>"$work/submits.log" 2>&1 || fail "the shot did not resume"
+"$here/shot.sh" resume "$full" >>"$work/submits.log" 2>&1 || fail "the shot did not resume"
 for f in "$work"/ref2/*; do cmp "$f" "$full/$(basename "$f")" || fail "$f differs after the full disk"; done
 echo "farm_faults: a full disk failed the simulation cleanly; resumed on a larger one: done at $SECONDS s"
 

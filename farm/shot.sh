@@ -6,8 +6,9 @@
 # all nodes share; the same lines run on a one-node or a many-node cluster.
 #
 #   farm/shot.sh <shot binary> <creature.obj> <dir> <frames> <hairs> [frames per task]
+#   farm/shot.sh resume <dir>      the same, with the arguments <dir>'s shot was submitted with
 #
-# Running the same command again resumes the shot: it first waits for the
+# Running it again (either way) resumes the shot: it first waits for the
 # shot's jobs still queued (a requeued task, one still running), then asks
 # `shot status` what is missing or not good and submits only that; every
 # task also skips the files that are already good, so a good frame is never
@@ -17,26 +18,34 @@
 # set, its --partition; POLL_SECONDS (default 1) how often squeue is asked.
 set -euo pipefail
 
+if [ "${1:-}" = resume ] && [ $# = 2 ]; then
+  if [ ! -f "$2/logs/args" ]; then echo "shot.sh: $2 holds no shot submitted by shot.sh (no logs/args)" >&2; exit 2; fi
+  mapfile -t saved <"$2/logs/args"
+  set -- "${saved[@]}"
+fi
 if [ $# -lt 5 ]; then
   echo "usage: $0 <shot binary> <creature.obj> <dir> <frames> <hairs> [frames per task]" >&2
+  echo "       $0 resume <dir>" >&2
   exit 2
 fi
 shot=$(realpath "$1") obj=$(realpath "$2") frames=$4 hairs=$5 chunk=${6:-1}
 mkdir -p "$3/logs"
 dir=$(realpath "$3")
-again="$0 $*"
 
 # One submitter per shot: two would submit the same frames twice.
 exec 9>"$dir/logs/shot.lock"
 flock -n 9 || { echo "shot.sh: another shot.sh is submitting $dir; wait for it" >&2; exit 1; }
+printf '%s\n' "$shot" "$obj" "$dir" "$frames" "$hairs" "$chunk" >"$dir/logs/args.new"
+mv "$dir/logs/args.new" "$dir/logs/args"
 
 # The shot's jobs, from this run and every earlier one, and those of them
-# still in the queue (%F: an array task's array id). An unreachable
+# still in the queue (%F: an array task's array id; the shot's jobs are this
+# user's, and asking for only those spares a busy slurmctld). An unreachable
 # slurmctld counts as "still queued": only an answer ends the wait.
 touch "$dir/logs/jobs"
 queued() {
   local q
-  if ! q=$(squeue -h -o %F 2>/dev/null); then echo unreachable; return; fi
+  if ! q=$(squeue -h -o %F -u "$(id -un)" 2>/dev/null); then echo unreachable; return; fi
   grep -xF -f "$dir/logs/jobs" <<<"$q" | sort -u | xargs || true
 }
 wait_queue() {
@@ -116,7 +125,7 @@ if [ "$failed" != 0 ]; then
       if [ -f "$log" ]; then tail -n 20 "$log" | sed "s|^|$(basename "$log"): |" >&2; fi
     done
   done
-  echo "shot.sh: once the cause is fixed, resume with: $again" >&2
+  echo "shot.sh: once the cause is fixed, resume with: $0 resume $dir" >&2
   exit 1
 fi
 echo "shot.sh: $frames frames in $dir"
