@@ -59,10 +59,10 @@ std::vector<unsigned char> read_all(const std::string& path) {
 const char kSealMagic[] = "PLSHOT\0";  // 8 bytes with the terminator
 const uint32_t kSealVersion = 1;
 const size_t kSealFields = 5;
-const char* const kKindNames[] = {"", "groom file", "guide cache", "deformed mesh file", "trim records file",
-                                  "trim lengths file"};
+const char* const kKindNames[] = {"",          "groom file",        "guide cache",      "deformed mesh file",
+                                  "trim records file", "trim lengths file", "simulation state"};
 
-const char* kind_name(uint64_t kind) { return kind >= 1 && kind <= 5 ? kKindNames[kind] : "file of an unknown kind"; }
+const char* kind_name(uint64_t kind) { return kind >= 1 && kind <= 6 ? kKindNames[kind] : "file of an unknown kind"; }
 
 std::string hex(uint64_t v) {
   char s[17];

@@ -23,7 +23,7 @@ struct Identity {
 };
 
 // What a sealed file holds (the seal's first header field; never reused).
-enum class Kind : uint64_t { Groom = 1, GuideCache = 2, Mesh = 3, TrimRecords = 4, TrimLengths = 5 };
+enum class Kind : uint64_t { Groom = 1, GuideCache = 2, Mesh = 3, TrimRecords = 4, TrimLengths = 5, SimState = 6 };
 
 // The frame or sample field of a file that holds no single one (the shot's
 // files; a frame's files that hold every shutter sample).

@@ -50,6 +50,9 @@ const float kShirtGap = 0.6f * kGuideLength;
 // shutter), each one simulation step.
 const int kSamples = 2;
 const int kImageSize = 512;
+// Part of the shot's identity: bump it with any change to this tool that
+// changes its files' bits, so a shot folder's older files are not taken as good.
+const uint32_t kRecipe = 1;
 
 std::string frame_path(const std::string& dir, int frame, const std::string& suffix) {
   char name[16];
@@ -125,8 +128,8 @@ std::vector<creature::Mesh> read_meshes(const std::string& path, const std::vect
 farm::Identity shot_identity(const std::string& obj, uint32_t hairs, int frames) {
   if (frames < 1) throw std::runtime_error("a shot has at least one frame");
   const std::vector<unsigned char> bytes = creature::read_file(obj);
-  const uint32_t settings[] = {pelage_version(), hairs, uint32_t(frames), kGuides, kCvs, kPatchSize, kSamples,
-                               kImageSize};
+  const uint32_t settings[] = {kRecipe,    pelage_version(), hairs,    uint32_t(frames), kGuides,
+                               kCvs,       kPatchSize,       kSamples, kImageSize};
   const float scene[] = {kGuideLength, kShirtGap, kFps};
   const uint64_t hash = farm::fnv1a(scene, sizeof scene, farm::fnv1a(settings, sizeof settings));
   return {farm::fnv1a(bytes.data(), bytes.size(), hash), uint32_t(frames)};
@@ -272,15 +275,29 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   PelageExpandParams ep = pelage_expand_params_defaults();
   ep.points_per_strand = kCvs;
 
+  // A killed simulation goes on from the state saved after the last frame
+  // that it, and every frame before it, finished: the same bits as a run
+  // that was never killed (pelage_sim_restore).
+  int start = 0;
+  for (int f = 0; f < frames && done[size_t(f)]; ++f) {
+    if (farm::sealed_ok(frame_path(dir, f, ".psim"), id, Kind::SimState, uint32_t(f), kEvery)) start = f + 1;
+  }
+  if (start > 0) {
+    const std::vector<unsigned char> state =
+        farm::read_sealed(frame_path(dir, start - 1, ".psim"), id, Kind::SimState, uint32_t(start - 1), kEvery);
+    check(pelage_sim_restore(sim.get(), state.data(), state.size()), "pelage_sim_restore");
+    std::printf("sim: frames 0 to %d already good: going on from the state saved after frame %d\n", start - 1,
+                start - 1);
+  }
   check(pelage_guide_cache_size(set.guide_count, kCvs, kSamples, 0, &bytes), "pelage_guide_cache_size");
   std::vector<unsigned char> cache(bytes);
-  for (int f = 0; f < frames; ++f) {
+  for (int f = start; f < frames; ++f) {
     clock = {};
     std::vector<creature::Mesh> meshes;
     std::vector<std::unique_ptr<creature::Frame>> samples;
     std::string written;
-    // A frame already written is stepped through (the simulation carries
-    // state from frame to frame) but not written again.
+    // A frame already written after the restored state is stepped through
+    // (the simulation carries state from frame to frame), not written again.
     const bool write = !done[size_t(f)];
     for (int k = 0; k < kSamples; ++k) {
       meshes.push_back(posed(rest, (float(f) + float(k) / kSamples) / kFps));
@@ -298,12 +315,8 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
                    " guides meet the shirt or the body),";
       }
     }
-    if (!write) {
-      std::printf("sim: frame %d: already good, stepped through: %.2f s\n", f, clock.seconds());
-      continue;
-    }
     const std::string cache_path = frame_path(dir, f, ".pguide"), mesh_path = frame_path(dir, f, ".mesh");
-    if (!farm::sealed_ok(cache_path, id, Kind::GuideCache, uint32_t(f), kEvery)) {
+    if (write && !farm::sealed_ok(cache_path, id, Kind::GuideCache, uint32_t(f), kEvery)) {
       const PelageFrame at[kSamples] = {samples[0]->get(), samples[1]->get()};
       check(pelage_guide_cache_write(&set, at, kSamples, 0, PelageRun{1, nullptr, nullptr}, cache.data(), cache.size(),
                                      &bytes),
@@ -311,13 +324,26 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
       write_sealed(cache_path, id, Kind::GuideCache, uint32_t(f), kEvery, cache.data(), bytes);
       written += " guide cache " + std::to_string(bytes / 1000) + " KB,";
     }
-    if (!farm::sealed_ok(mesh_path, id, Kind::Mesh, uint32_t(f), kEvery)) {
+    if (write && !farm::sealed_ok(mesh_path, id, Kind::Mesh, uint32_t(f), kEvery)) {
       const std::vector<unsigned char> mesh = mesh_file(meshes);
       write_sealed(mesh_path, id, Kind::Mesh, uint32_t(f), kEvery, mesh.data(), mesh.size());
       written += " mesh,";
     }
-    written.pop_back();
-    std::printf("sim: frame %d: wrote%s: %.2f s\n", f, written.c_str(), clock.seconds());
+    // Last, so a saved state follows its frame's files.
+    const std::string state_path = frame_path(dir, f, ".psim");
+    if (!farm::sealed_ok(state_path, id, Kind::SimState, uint32_t(f), kEvery)) {
+      check(pelage_sim_state_size(sim.get(), &bytes), "pelage_sim_state_size");
+      std::vector<unsigned char> state(bytes);
+      check(pelage_sim_save(sim.get(), state.data(), state.size(), &bytes), "pelage_sim_save");
+      write_sealed(state_path, id, Kind::SimState, uint32_t(f), kEvery, state.data(), bytes);
+      written += " simulation state,";
+    }
+    if (written.empty()) {
+      std::printf("sim: frame %d: already good, stepped through: %.2f s\n", f, clock.seconds());
+    } else {
+      written.pop_back();
+      std::printf("sim: frame %d: wrote%s: %.2f s\n", f, written.c_str(), clock.seconds());
+    }
   }
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # CTest farm_faults: a shot on the local Slurm cluster survives what a farm
 # does to it. It kills the simulation halfway through writing a file, then
-# (resumed) kills one render task halfway through writing its image and
+# (resumed: the simulation goes on from its saved state) kills one render task halfway through writing its image and
 # another mid-run, cancels the render array, requeues a killed task and
 # resumes again. Every output must then equal an undisturbed run's bit for
 # bit, a watcher polling the shot's folder all along must never have seen a
@@ -116,6 +116,8 @@ wait_for "render task 3 stalled in frame_0003.png" temp_of frame_0003.png
 scancel "$(tail -n 1 "$run/logs/jobs")"
 if wait "$submitter"; then fail "shot.sh succeeded with its render array cancelled"; fi
 ! temp_of frame_0003.png || fail "the cancelled task left its temporary file"
+grep -q "going on from the state saved after frame 0" "$run"/logs/sim-*.log ||
+  fail "the resumed simulation did not go on from frame 0's saved state"
 grep -q "render: frame 2: " "$run"/logs/render-*_2.log && fail "render task 2 was not killed mid-run"
 grep -q "shot: SHOT_FAULT_STALL: stalled halfway" "$run"/logs/render-*_1.log || fail "task 1's log lost its lines"
 
