@@ -102,12 +102,17 @@ void remove_stale_temps(const std::string& dir, const std::string& base) {
   closedir(d);
 }
 
-// The fault test's hook: SHOT_FAULT_STALL=<file name>[,<file name>...] makes
-// the writer of those files stop halfway through the temporary file, flushed,
-// until it is killed.
-bool stall_here(const std::string& base) {
+// The fault test's hook: SHOT_FAULT_STALL=<entry>[,<entry>...] makes the
+// writer of a file named by an entry stop until it is killed: `NAME` halfway
+// through its temporary file (flushed), `NAME:before` before making it.
+bool stall_here(const std::string& entry) {
   const char* stall = std::getenv("SHOT_FAULT_STALL");
-  return stall && ("," + std::string(stall) + ",").find("," + base + ",") != std::string::npos;
+  return stall && ("," + std::string(stall) + ",").find("," + entry + ",") != std::string::npos;
+}
+
+[[noreturn]] void stall(const std::string& what) {
+  std::fprintf(stderr, "shot: SHOT_FAULT_STALL: stalled %s\n", what.c_str());
+  for (;;) pause();
 }
 
 // What open(2) would give a new file: mkstemp makes it 0600, but a shot's
@@ -236,6 +241,7 @@ void write_atomic(const std::string& path, const unsigned char* data, size_t siz
   const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash + (slash == 0));
   const std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
   remove_stale_temps(dir, base);
+  if (stall_here(base + ":before")) stall("before writing " + path);
   std::string temp = path + ".part-XXXXXX";
   if (temp.size() >= sizeof temp_path) throw std::runtime_error("cannot write " + path + ": path too long");
   const int fd = mkstemp(&temp[0]);
@@ -247,8 +253,7 @@ void write_atomic(const std::string& path, const unsigned char* data, size_t siz
     if (stall_here(base)) {
       write_fully(fd, data, size / 2);
       fsync(fd);
-      std::fprintf(stderr, "shot: SHOT_FAULT_STALL: stalled halfway through %s\n", temp.c_str());
-      for (;;) pause();
+      stall("halfway through " + temp);
     }
     write_fully(fd, data, size);
     if (fsync(fd) != 0) throw std::runtime_error(errno_text());
