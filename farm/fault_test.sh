@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # CTest farm_faults: a shot on the local Slurm cluster survives what a farm
 # does to it. It kills the simulation halfway through writing a file, then
-# (resumed: the simulation goes on from its saved state) kills one render task halfway through writing its image and
-# another mid-run, cancels the render array, requeues a killed task and
-# resumes again. Every output must then equal an undisturbed run's bit for
+# (resumed: the simulation goes on from its saved state) kills one render
+# task halfway through writing its image and another mid-run, cancels the
+# render array while a third writes, requeues a finished task and resumes
+# again. Every output must then equal an undisturbed run's bit for
 # bit, a watcher polling the shot's folder all along must never have seen a
 # file at a final path that is not the undisturbed run's (a partial file)
 # nor one written twice (a good file rewritten), and a file from another
@@ -177,7 +178,7 @@ full=$work/full
 mkdir -p "$full" "$work/ref2"
 mount -t tmpfs -o size=5m tmpfs "$full" || fail "cannot mount a tmpfs for the full disk (needs root with CAP_SYS_ADMIN)"
 "$shot" local "$obj" "$work/ref2" 2 "$hairs" >"$work/ref2.log"
-if "$here/shot.sh" "$shot" "$obj" "$full" 2 "$hairs" >>"$work/submits.log" 2>&1; then
+if timeout 120 "$here/shot.sh" "$shot" "$obj" "$full" 2 "$hairs" >>"$work/submits.log" 2>&1; then
   fail "a shot on a full disk succeeded"
 fi
 grep -q "No space left on device" "$full"/logs/sim-*.log || fail "the simulation did not run out of space"
@@ -186,7 +187,7 @@ for f in "$full"/*; do
 done
 [ -z "$(find "$full" -name '*.part-*')" ] || fail "a temporary file left on the full disk"
 mount -o remount,size=64m "$full"
-"$here/shot.sh" resume "$full" >>"$work/submits.log" 2>&1 || fail "the shot did not resume"
+timeout 120 "$here/shot.sh" resume "$full" >>"$work/submits.log" 2>&1 || fail "the shot did not resume"
 for f in "$work"/ref2/*; do cmp "$f" "$full/$(basename "$f")" || fail "$f differs after the full disk"; done
 echo "farm_faults: a full disk failed the simulation cleanly; resumed on a larger one: done at $SECONDS s"
 
