@@ -473,3 +473,81 @@ fn an_origin_that_follows_the_character_gives_the_answers_at_the_origin() {
         );
     }
 }
+
+/// How far each guide's tip moves, in guide lengths, when the mesh is
+/// turned by `turn` and stretched along x by `stretch`, from where the
+/// rest frame's tip taken through the same motion lies: 0 for root frames
+/// that follow the mesh exactly.
+fn tip_moves(e: &CorpusMesh, turn: DQuat, stretch: f32) -> Vec<f32> {
+    use pelage_core::arena::{Arena, ArenaLayout};
+    use pelage_core::guides::{CvLayout, Guides};
+    use pelage_core::interp::posed::PosedFrame;
+    let mesh = e.view();
+    let (roots, _, _) = e.stamp(3000, 5);
+    let length = 0.05 * size(e);
+    let points = combed_guides(&mesh, &roots, 8, length);
+    let guides = Guides {
+        roots: &roots,
+        points: pelage_core::Strided::from_slice(&points),
+        layout: CvLayout::Fixed(8),
+    };
+    let mut layout = ArenaLayout::new();
+    PosedFrame::layout(&mut layout, mesh.positions.len(), roots.len(), 8);
+    let mut rest_memory = vec![0u8; layout.bytes()];
+    let rest = PosedFrame::with_guides(mesh, &guides, 8, &mut Arena::new(&mut rest_memory))
+        .expect("rest frame");
+    let mut moved = corpus::turned_about_centre(&e.mesh, turn, DVec3::ZERO);
+    for p in moved.positions.iter_mut() {
+        p[0] *= stretch;
+    }
+    let view = corpus::mesh_view(&moved);
+    let mut memory = vec![0u8; layout.bytes()];
+    let frame = PosedFrame::new(view, roots.len(), 8, &mut Arena::new(&mut memory)).expect("frame");
+    let motion = |w: Vec3| {
+        let w = turn.as_quat() * w;
+        Vec3::new(w.x * stretch, w.y, w.z)
+    };
+    roots
+        .iter()
+        .enumerate()
+        .map(|(g, r)| {
+            let (now, then) = (
+                frame.root_frame(r.face as usize, r.u, r.v),
+                rest.root_frame(r.face as usize, r.u, r.v),
+            );
+            let tip = rest.local_point(g, 7);
+            let want = motion(then.to_world(tip) - then.origin);
+            ((now.to_world(tip) - now.origin) - want).length() / length
+        })
+        .collect()
+}
+
+/// Root frames follow the mesh without UVs as with them: under a rigid
+/// turn no guide's tip moves by more than 1e-3 of its length from where
+/// the turn takes it (every representative mesh, relative to an origin
+/// near it, as a host far from the origin gives it), and under a 1%
+/// stretch along x the frames without UVs move tips no more than those
+/// with UVs (a stretch turns the skin itself, so the tips move either way).
+#[test]
+fn root_frames_without_uvs_follow_the_mesh() {
+    let turn = DQuat::from_rotation_y(0.7) * DQuat::from_rotation_x(0.3);
+    for e in &corpus::representative() {
+        let home = CorpusMesh::new(e.name.clone(), e.about, e.recipe.at_origin());
+        let worst = tip_moves(&home, turn, 1.0)
+            .into_iter()
+            .fold(0.0f32, f32::max);
+        println!("{}: a turn moves a tip by at most {worst:.1e} L", e.name);
+        assert!(worst <= 1e-3, "{}: {worst}", e.name);
+    }
+    let list = corpus::representative();
+    let (with, without) = (&list[0], &list[1]);
+    assert!(with.has_uvs() && !without.has_uvs());
+    let worst = |e: &CorpusMesh| {
+        tip_moves(e, DQuat::IDENTITY, 1.01)
+            .into_iter()
+            .fold(0.0f32, f32::max)
+    };
+    let (uv, no_uv) = (worst(with), worst(without));
+    println!("a 1% stretch moves a tip by at most {uv:.1e} L with UVs, {no_uv:.1e} L without");
+    assert!(no_uv <= uv + 1e-3, "{no_uv} without UVs, {uv} with");
+}
