@@ -282,12 +282,20 @@ void simulate(const std::string& obj, const std::string& dir, int frames, uint32
   for (int f = 0; f < frames && done[size_t(f)]; ++f) {
     if (farm::sealed_ok(frame_path(dir, f, ".psim"), id, Kind::SimState, uint32_t(f), kEvery)) start = f + 1;
   }
-  if (start > 0) {
+  // A state the library refuses (another state format, a damaged file the
+  // seal did not catch) does not stop the shot: the one before it is
+  // tried, down to stepping again from frame 0, which rewrites nothing good.
+  while (start > 0) {
     const std::vector<unsigned char> state =
         farm::read_sealed(frame_path(dir, start - 1, ".psim"), id, Kind::SimState, uint32_t(start - 1), kEvery);
-    check(pelage_sim_restore(sim.get(), state.data(), state.size()), "pelage_sim_restore");
-    std::printf("sim: frames 0 to %d already good: going on from the state saved after frame %d\n", start - 1,
-                start - 1);
+    if (pelage_sim_restore(sim.get(), state.data(), state.size()) == PELAGE_STATUS_OK) {
+      std::printf("sim: frames 0 to %d already good: going on from the state saved after frame %d\n", start - 1,
+                  start - 1);
+      break;
+    }
+    std::fprintf(stderr, "sim: the state saved after frame %d is refused (%s); trying an earlier one\n", start - 1,
+                 pelage_last_error());
+    --start;
   }
   check(pelage_guide_cache_size(set.guide_count, kCvs, kSamples, 0, &bytes), "pelage_guide_cache_size");
   std::vector<unsigned char> cache(bytes);

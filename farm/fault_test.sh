@@ -23,6 +23,12 @@ export POLL_SECONDS=0.2
 
 mkdir -p "$work"
 work=$(realpath "$work")
+# The test empties its folder before it runs (as root): only a folder it
+# made itself, marked so, or an empty one.
+if [ ! -e "$work/.farm_faults" ] && [ -n "$(ls -A "$work")" ]; then
+  echo "farm_faults: $work is not empty and not this test's folder; give a new or empty one" >&2
+  exit 2
+fi
 was_up=1
 "$here/cluster.sh" status >/dev/null || was_up=0
 # Whatever happened, nothing of the test goes on: its background shells,
@@ -47,6 +53,7 @@ trap cleanup EXIT
 
 umount "$work/full" 2>/dev/null || true
 rm -rf "${work:?}"/*
+touch "$work/.farm_faults"
 mkdir -p "$work/ref" "$work/run"
 run=$work/run
 fail() {

@@ -47,11 +47,14 @@
  * PelageRun is every core, no callback.
  *
  * Coordinates. Points are float32, in one space per frame: a frame's mesh,
- * guides and colliders, and all that is read from it or from a simulation
- * stepped on it, are relative to the frame's origin (double precision,
- * pelage_frame_set_origin; zero by default). A host whose character is far
- * from its world's origin gives them relative to an origin near the
- * character and adds the origin back to the outputs.
+ * guides and colliders, every point a call takes beside a frame (a step's
+ * colliders and external curves, trimming's cloth and colliders, the points
+ * of pelage_frame_inside and pelage_frame_signed_distance, a distance
+ * callback's points), and all that is read from the frame or from a
+ * simulation stepped on it, are relative to the frame's origin (double
+ * precision, pelage_frame_set_origin; zero by default). A host whose
+ * character is far from its world's origin gives them relative to an
+ * origin near the character and adds the origin back to the outputs.
  *
  * Names. pelage_<object>_<verb>; a stage of the pipeline (stamp, bind,
  * settle, expand, trim) is its own object, so its entry point is
@@ -725,8 +728,9 @@ typedef struct PelageStepParams {
   float dt;
   // What the guides collide with (NULL: nothing).
   const struct PelageColliders *colliders;
-  // Another simulator's curves (NULL: none): float3 world points
-  // `external_stride` bytes apart, points_per_guide per guide; the
+  // Another simulator's curves (NULL: none): float3 points, relative to
+  // the frame's origin, `external_stride` bytes apart, points_per_guide
+  // per guide; the
   // guides the simulation's `external` map selects take their shape
   // from them (blended, lengths kept).
   const void *external_points;
@@ -1022,9 +1026,9 @@ enum PelageStatus pelage_frame_inside(PelageFrame frame, const void *points, siz
 // it while the distance is to the skin (the rim). Writes `distances[i]`.
 // Uses the frame's body as pelage_frame_inside does; the nearest-point
 // tree is built for the call (progress: the body's build, when the call
-// makes one, then the tree, a fifth each, then the share of points). On
-// failure `distances` is untouched, but for CANCELLED and PANIC (then
-// unspecified).
+// makes one, as the first fifth; then the tree, a quarter of what is
+// left; then the share of points). On failure `distances` is untouched,
+// but for CANCELLED and PANIC (then unspecified).
 //
 // Returns OK, NULL_PARAMETER, NON_FINITE (a point), INVALID_ARGUMENT (a
 // point beyond 1e9, the stride, a body of this frame's mesh too large, a
@@ -1398,17 +1402,20 @@ enum PelageStatus pelage_sim_step(PelageSim sim, PelageFrame frame, const struct
 // then pelage_frame_set_guides (with the simulation's roots), in less
 // time. The frame must be of the simulation's mesh (its counts) with the
 // simulation's points_per_guide points per strand, made for as many
-// guides as the simulation has; `sim` must have stepped since it was
-// created, reset or restored (after a PANIC from pelage_sim_step, reset
-// or restore it first: a half-made step is not refused here). Runs as
+// guides as the simulation has, with the origin of the frame the
+// simulation last stepped on (pelage_sim_origin: set the frame's origin
+// first; pelage_frame_set_origin only relabels a frame, it moves nothing
+// already in it); `sim` must have stepped since it was created, reset or
+// restored (after a PANIC from pelage_sim_step, reset or restore it
+// first: a half-made step is not refused here). Runs as
 // `run` says (progress: the share of guides posed). The guides are
 // checked as they are written: when one is refused or the call is
 // cancelled, the frame has no guides (expansions from it are refused)
 // until guides are set again; when the frame or the simulation is refused
-// (the counts, no step yet), the frame keeps the guides it had.
+// (the counts, the origin, no step yet), the frame keeps the guides it had.
 //
 // Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
-// another point or guide count, no step yet; a simulated guide with a
+// another point or guide count, another origin, no step yet; a simulated guide with a
 // point beyond 1e9 or of zero length, on a collapsed root triangle, as
 // pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
 // step), CANCELLED, PANIC (also when a worker thread cannot start: the
@@ -1434,7 +1441,7 @@ enum PelageStatus pelage_sim_read(PelageSim sim, void *points, size_t point_stri
 // Writes the origin the simulation's state and posed guides are relative
 // to, 3 doubles: that of the frame it last stepped on (see
 // pelage_frame_set_origin), or of the step a restored state was saved
-// after; zero before any step.
+// after; zero before any step and after pelage_sim_reset.
 //
 // Returns OK, NULL_PARAMETER, MISALIGNED, PANIC.
 //
@@ -1473,7 +1480,8 @@ enum PelageStatus pelage_sim_save(PelageSim sim, void *out, size_t capacity, siz
 // same rest mesh's guides, maps and parameters (the state's fingerprint
 // of them must match). Everything is checked first (framing, checksum,
 // counts, fingerprint, values); on failure nothing changes. Afterwards
-// pelage_sim_read gives the posed guides of the step saved.
+// pelage_sim_read gives the posed guides of the step saved, and
+// pelage_sim_origin the origin they are relative to.
 //
 // Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values),
 // VERSION_MISMATCH (magic or format version; 0.11's states are version

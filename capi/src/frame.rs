@@ -492,9 +492,9 @@ pub extern "C" fn pelage_frame_inside(
 /// it while the distance is to the skin (the rim). Writes `distances[i]`.
 /// Uses the frame's body as pelage_frame_inside does; the nearest-point
 /// tree is built for the call (progress: the body's build, when the call
-/// makes one, then the tree, a fifth each, then the share of points). On
-/// failure `distances` is untouched, but for CANCELLED and PANIC (then
-/// unspecified).
+/// makes one, as the first fifth; then the tree, a quarter of what is
+/// left; then the share of points). On failure `distances` is untouched,
+/// but for CANCELLED and PANIC (then unspecified).
 ///
 /// Returns OK, NULL_PARAMETER, NON_FINITE (a point), INVALID_ARGUMENT (a
 /// point beyond 1e9, the stride, a body of this frame's mesh too large, a
@@ -522,19 +522,19 @@ pub extern "C" fn pelage_frame_signed_distance(
         Nearest::layout(&mut layout, mesh);
         let mut bytes = zeroed(layout.bytes(), "the nearest-point tree")?;
         let nearest = Nearest::new(mesh, &mut Arena::new(&mut bytes))?;
+        // a body needs a triangle of area, and so does every distance being
+        // finite: checked again here, as the frame's body is not the tree's
+        if nearest.is_empty() {
+            return Err(Failure::new(PelageStatus::InvalidArgument, "the frame's mesh has no triangle of area"));
+        }
         rest.within(0.0, 0.25).report(1.0)?;
-        let mut found = vec![0.0f32; count];
-        split_with_progress(count, run.thread_count, &mut found, 1, rest.within(0.25, 1.0), |range, part| {
+        split_with_progress(count, run.thread_count, out, 1, rest.within(0.25, 1.0), |range, part| {
             for (o, i) in part.iter_mut().zip(range) {
                 let p = Vec3::from(points.get(i));
                 let d = nearest.distance(p);
                 *o = if body.contains(p) { -d } else { d };
             }
         })?;
-        if found.iter().any(|d| !d.is_finite()) {
-            return Err(Failure::new(PelageStatus::InvalidArgument, "the frame's mesh has no triangle of area"));
-        }
-        out.copy_from_slice(&found);
         Ok(())
     }
 }

@@ -246,8 +246,9 @@ pub struct PelageStepParams {
     pub dt: f32,
     /// What the guides collide with (NULL: nothing).
     pub colliders: *const PelageColliders,
-    /// Another simulator's curves (NULL: none): float3 world points
-    /// `external_stride` bytes apart, points_per_guide per guide; the
+    /// Another simulator's curves (NULL: none): float3 points, relative to
+    /// the frame's origin, `external_stride` bytes apart, points_per_guide
+    /// per guide; the
     /// guides the simulation's `external` map selects take their shape
     /// from them (blended, lengths kept).
     pub external_points: *const c_void,
@@ -553,17 +554,20 @@ fn step_beside_body(
 /// then pelage_frame_set_guides (with the simulation's roots), in less
 /// time. The frame must be of the simulation's mesh (its counts) with the
 /// simulation's points_per_guide points per strand, made for as many
-/// guides as the simulation has; `sim` must have stepped since it was
-/// created, reset or restored (after a PANIC from pelage_sim_step, reset
-/// or restore it first: a half-made step is not refused here). Runs as
+/// guides as the simulation has, with the origin of the frame the
+/// simulation last stepped on (pelage_sim_origin: set the frame's origin
+/// first; pelage_frame_set_origin only relabels a frame, it moves nothing
+/// already in it); `sim` must have stepped since it was created, reset or
+/// restored (after a PANIC from pelage_sim_step, reset or restore it
+/// first: a half-made step is not refused here). Runs as
 /// `run` says (progress: the share of guides posed). The guides are
 /// checked as they are written: when one is refused or the call is
 /// cancelled, the frame has no guides (expansions from it are refused)
 /// until guides are set again; when the frame or the simulation is refused
-/// (the counts, no step yet), the frame keeps the guides it had.
+/// (the counts, the origin, no step yet), the frame keeps the guides it had.
 ///
 /// Returns OK, NULL_PARAMETER, INVALID_ARGUMENT (another mesh's counts,
-/// another point or guide count, no step yet; a simulated guide with a
+/// another point or guide count, another origin, no step yet; a simulated guide with a
 /// point beyond 1e9 or of zero length, on a collapsed root triangle, as
 /// pelage_frame_set_guides refuses them), NON_FINITE (only after a failed
 /// step), CANCELLED, PANIC (also when a worker thread cannot start: the
@@ -638,7 +642,7 @@ pub extern "C" fn pelage_sim_read(
 /// Writes the origin the simulation's state and posed guides are relative
 /// to, 3 doubles: that of the frame it last stepped on (see
 /// pelage_frame_set_origin), or of the step a restored state was saved
-/// after; zero before any step.
+/// after; zero before any step and after pelage_sim_reset.
 ///
 /// Returns OK, NULL_PARAMETER, MISALIGNED, PANIC.
 ///
@@ -716,7 +720,8 @@ pub extern "C" fn pelage_sim_save(
 /// same rest mesh's guides, maps and parameters (the state's fingerprint
 /// of them must match). Everything is checked first (framing, checksum,
 /// counts, fingerprint, values); on failure nothing changes. Afterwards
-/// pelage_sim_read gives the posed guides of the step saved.
+/// pelage_sim_read gives the posed guides of the step saved, and
+/// pelage_sim_origin the origin they are relative to.
 ///
 /// Returns OK, NULL_PARAMETER, CORRUPT_DATA (truncated, checksum, values),
 /// VERSION_MISMATCH (magic or format version; 0.11's states are version

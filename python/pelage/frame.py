@@ -166,18 +166,19 @@ class Frame(Handle):
     @property
     def origin(self) -> Tuple[float, float, float]:
         """Where the frame's local space sits in the host's world
-        (``pelage_frame_origin``): world = origin + local, in doubles."""
+        (``pelage_frame_origin``; set with ``pelage_frame_set_origin``):
+        world = origin + local, in doubles. The frame's mesh, guides,
+        colliders and outputs are relative to it: a character far from the
+        world's origin keeps float32's precision relative to an origin near
+        it, and a simulation carries its state across frames whose origins
+        differ. Setting it relabels the frame; it moves nothing already in
+        it."""
         out = ffi.new("double[3]")
         check(lib.pelage_frame_origin(self._get(), out), "pelage_frame_origin")
         return (out[0], out[1], out[2])
 
     @origin.setter
     def origin(self, origin: Sequence[float]) -> None:
-        """Sets the origin (``pelage_frame_set_origin``): the frame's mesh,
-        guides, colliders and outputs are relative to it; a character far
-        from the world's origin keeps float32's precision relative to an
-        origin near it, and a simulation carries its state across frames
-        whose origins differ."""
         values = [float(c) for c in origin]
         if len(values) != 3:
             raise ValueError("origin: 3 values")

@@ -73,7 +73,11 @@ fn main() {
                 let arena = &mut Arena::new(&mut memory);
                 let rim = Rim::new(&mesh, arena).expect("rims");
                 let plan = BodyPlan::of(&mesh, &rim).expect("plan");
-                black_box(Body::build(&plan, &mesh, &rim, arena).is_ok());
+                black_box(
+                    Body::build(&plan, &mesh, &rim, arena)
+                        .expect("body")
+                        .contains(glam::Vec3::ZERO),
+                );
             });
             let ms = |d: Duration| d.as_secs_f64() * 1e3;
             let best = (ms(whole) - ms(kept)) / ms(whole);

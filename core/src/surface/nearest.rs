@@ -106,6 +106,12 @@ impl<'a> Nearest<'a> {
         })
     }
 
+    /// True when the mesh has no triangle with area: every distance is
+    /// infinite.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
     /// The distance from `p` to the nearest point of the mesh's triangles
     /// with area (infinite without one).
     pub fn distance(&self, p: Vec3) -> f32 {

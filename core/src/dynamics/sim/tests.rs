@@ -1207,6 +1207,24 @@ fn an_origin_that_follows_the_character_gives_the_answers_at_the_world_origin() 
     );
     // float32 world points at 1e4 cannot do it: the test can tell
     assert!(worst_world > 10.0 * 1e-4 * length, "world: {worst_world}");
+    // the posed guides go only to a frame of the simulation's origin
+    let mesh = placed_relative(&s.rest, Quat::IDENTITY, [0.0; 3], [0.0; 3]);
+    let mut layout = ArenaLayout::new();
+    PosedFrame::layout(&mut layout, mesh.p.len(), s.guide_roots.len(), JOINTS);
+    let mut buf = vec![0u8; layout.bytes()];
+    let mut frame = PosedFrame::new(
+        mesh.mesh(),
+        s.guide_roots.len(),
+        JOINTS,
+        &mut Arena::new(&mut buf),
+    )
+    .unwrap();
+    assert!(matches!(
+        followed.posing(&mut frame),
+        Err(Error::InvalidArgument(what)) if what.contains("origin")
+    ));
+    frame.set_origin(followed.origin()).unwrap();
+    assert!(followed.posing(&mut frame).is_ok());
     // the saved origin comes back with the state
     let mut b3 = vec![];
     let mut restored = s.sim(&params(), &mut b3);
