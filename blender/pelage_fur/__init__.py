@@ -119,7 +119,8 @@ def _material() -> bpy.types.Material:
     material = bpy.data.materials.get(MATERIAL)
     if material is None:
         material = bpy.data.materials.new(MATERIAL)
-        material.use_nodes = True
+        if bpy.app.version < (5, 0, 0):  # always on from 5.0, and deprecated
+            material.use_nodes = True
         nodes = material.node_tree.nodes
         nodes.clear()
         hair = nodes.new("ShaderNodeBsdfHairPrincipled")

@@ -23,7 +23,7 @@ from pelage_fur import convert  # noqa: E402
 GUIDES = 160
 GUIDE_POINTS = 16
 GUIDE_LENGTH = 0.12
-HAIRS = 12000
+HAIRS = 30000
 FRAMES = (1, 6)
 EYE_RADIUS = 0.085
 NECK_THETA = 0.82 * np.pi
@@ -128,10 +128,14 @@ def head() -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def comb(positions: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """Guides that leave along the normal and lie back and down: (g, points, 3)."""
+    """Guides that leave the skin at a low angle and lie down the head, as
+    a groomer combs them: (g, points, 3)."""
+    down = np.array([0.0, 0.3, -1.0], np.float32)
+    tangent = down - (normals @ down)[:, None] * normals
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
     t = np.linspace(0.0, 1.0, GUIDE_POINTS, dtype=np.float32)[None, :, None]
-    back = np.array([0.0, 0.6, -0.5], np.float32)
-    return (positions[:, None] + GUIDE_LENGTH * (t * normals[:, None] + t * t * back)).astype(np.float32)
+    shape = 0.35 * t * normals[:, None] + (0.9 * t - 0.2 * t * t) * tangent[:, None]
+    return (positions[:, None] + GUIDE_LENGTH * shape).astype(np.float32)
 
 
 @dataclass
@@ -182,8 +186,8 @@ def build_scene() -> Head:
     settings.seed = 3
     settings.length = 0.1
     settings.length_attribute = "length"
-    settings.root_width = 0.003
-    settings.tip_width = 0.001
+    settings.root_width = 0.004
+    settings.tip_width = 0.0015
     settings.clump = 0.3
     settings.kink_amplitude = 0.004
     bpy.context.scene.frame_start, bpy.context.scene.frame_end = FRAMES
@@ -208,6 +212,8 @@ def animate(obj: bpy.types.Object) -> None:
     bend.keyframe_insert("angle", frame=first)
     bend.angle = 0.5
     bend.keyframe_insert("angle", frame=last)
+    # the keys hold the last values set until a frame is evaluated
+    bpy.context.scene.frame_set(first)
 
 
 @pytest.fixture(scope="session", autouse=True)
