@@ -60,7 +60,7 @@ def _outward(positions: np.ndarray, tris: np.ndarray, centre: np.ndarray) -> np.
     return tris
 
 
-def _sphere(rings: int, segments: int) -> Tuple[np.ndarray, np.ndarray]:
+def sphere(rings: int, segments: int) -> Tuple[np.ndarray, np.ndarray]:
     """A closed unit UV sphere."""
     theta = np.linspace(0.0, np.pi, rings + 1)[1:-1]
     phi = np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False)
@@ -102,7 +102,7 @@ def head() -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     parts = []
     positions, tris = _shell()
     parts.append((positions, _outward(positions, tris, np.zeros(3))))
-    unit, sphere_tris = _sphere(12, 24)
+    unit, sphere_tris = sphere(12, 24)
     for eye in EYES:
         centre = eye * (skull_radius(eye) - 0.06)
         parts.append((centre + EYE_RADIUS * unit, _outward(centre + EYE_RADIUS * unit, sphere_tris, centre)))

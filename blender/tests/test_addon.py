@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import pelage
-from conftest import FRAMES, GUIDE_POINTS, HAIRS, Head, animate
+from conftest import FRAMES, GUIDE_POINTS, HAIRS, Head, animate, sphere
 from pelage_fur import convert, fur
 
 HERE = Path(__file__).resolve().parent
@@ -217,3 +217,28 @@ def test_cycles_render_covers_the_skin(scene: Head, tmp_path: Path) -> None:
     assert shares["bald"] > 0.1
     # measured 0.125 against 0.275 (16 samples, 30,000 hairs at 128 px)
     assert shares["fur"] < 0.6 * shares["bald"]
+
+
+def test_colliders_from_objects_push_the_guides(scene: Head) -> None:
+    # a ball on the crown and a floor under the chin, in the colliders' collection
+    unit, tris = sphere(12, 24)
+    ball = bpy.data.meshes.new("ball")
+    ball.from_pydata(unit.tolist(), [], tris.tolist())
+    floor = bpy.data.meshes.new("floor")
+    floor.from_pydata([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [], [(0, 1, 2, 3)])
+    colliders = bpy.data.collections.new("colliders")
+    bpy.context.scene.collection.children.link(colliders)
+    centre, radius, floor_z = np.array([0.0, 0.05, 0.53]), 0.08, -0.36
+    for name, data, location, scale in (("ball", ball, centre, radius), ("floor", floor, (0, 0, floor_z), 1.0)):
+        obj = bpy.data.objects.new(name, data)
+        obj.location, obj.scale = tuple(location), (scale,) * 3
+        colliders.objects.link(obj)
+    scene.obj.pelage_fur.colliders = colliders
+    rest = scene.guide_points
+    assert (np.linalg.norm(rest - centre, axis=-1) < radius - 0.01).any()
+    assert (rest[..., 2] < floor_z - 0.01).any()
+    grow(scene)
+    assert bpy.ops.pelage.animate() == {"FINISHED"}
+    posed = fur.get(scene.obj).sim.read()
+    assert np.linalg.norm(posed - centre, axis=-1).min() > radius - 2e-3
+    assert posed[..., 2].min() > floor_z - 2e-3
