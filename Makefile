@@ -17,7 +17,7 @@ EMBEDDED_TARGET := thumbv7em-none-eabihf
 
 .PHONY: demo farm-demo test deps deps-demo deps-farm deps-test docs-check rust-test rust-lint \
         rust-miri rust-fuzz cmake-test header-check bench perf python-venv python-test \
-        blender-venv blender-test
+        blender-venv blender-test blender-extension
 
 # A build tree that is already configured keeps its settings (after `make
 # test` it has the tests on, and their packages are installed); a new one is
@@ -139,9 +139,25 @@ blender-venv: deps-test
 	@$(BL_PIP) install -q --no-index --find-links $(BL_WHEELS) -r blender/requirements-test.txt 2>/dev/null || \
 	  { $(BL_PIP) download -q -d $(BL_WHEELS) -r blender/requirements-test.txt && \
 	    $(BL_PIP) install -q --no-index --find-links $(BL_WHEELS) -r blender/requirements-test.txt; }
-blender-test: blender-venv
+blender-test: blender-venv blender-extension
 	$(BL_PIP) install -q --no-build-isolation --force-reinstall --no-deps ./python
 	$(BL_VENV)/bin/pytest -q -p no:cacheprovider blender/tests
+
+# The add-on packed as a Blender 4.2+ extension, build/blender/pelage_fur.zip:
+# its files and the wheels its manifest lists (the package built from the
+# working tree, cffi and pycparser), then installed with Blender's own
+# installer into an empty user directory and used once there.
+BL_EXT := $(BL_DIR)/extension/pelage_fur
+blender-extension: blender-venv
+	rm -rf $(BL_EXT) $(BL_DIR)/pelage_fur.zip $(BL_DIR)/extension-user
+	mkdir -p $(BL_EXT)/wheels
+	cp blender/pelage_fur/*.py blender/pelage_fur/blender_manifest.toml $(BL_EXT)/
+	$(BL_PIP) wheel -q --no-build-isolation --no-deps -w $(BL_EXT)/wheels ./python
+	cp $(BL_WHEELS)/cffi-*.whl $(BL_WHEELS)/pycparser-*.whl $(BL_EXT)/wheels/
+	cd $(BL_EXT) && $(abspath $(BL_VENV))/bin/python -m zipfile -c $(abspath $(BL_DIR))/pelage_fur.zip \
+	  blender_manifest.toml $$(ls *.py) wheels
+	BLENDER_USER_RESOURCES=$(abspath $(BL_DIR))/extension-user \
+	  $(BL_VENV)/bin/python blender/tests/install_extension.py $(BL_DIR)/pelage_fur.zip
 
 # The committed header, and its declarations for cffi, must be exactly what
 # the build generates.
