@@ -62,7 +62,8 @@ class PelageFurSettings(bpy.types.PropertyGroup):
     settle: BoolProperty(name="Settle", default=True, description="Lift hairs out of the body at rest")
     viewport_fraction: FloatProperty(
         name="Viewport", default=0.25, min=0.0, max=1.0, subtype="FACTOR",
-        description="Share of the hairs drawn in the viewport (an evenly spread subset; renders draw all)")
+        description="Share of the hairs drawn in the viewport (an evenly spread subset; renders draw all)",
+        update=lambda self, _: self.output and set_viewport_fraction(self.output, self.viewport_fraction))
     animate: BoolProperty(name="Animate", default=False,
                           description="Pose, simulate and expand the hairs on every frame change")
     body_collision: BoolProperty(name="Body", default=True, description="Guides collide with the mesh itself")

@@ -136,6 +136,8 @@ def grow(obj: bpy.types.Object, depsgraph: Any) -> np.ndarray:
     if settings.settle:
         pelage.settle(mesh, guides, roots, bindings, grooms, params, threads=_threads())
     forget(obj)
+    # a bake holds the strands grown before
+    settings.use_bake = False
     fur = Fur(
         triangles, guide_roots, roots, bindings, grooms, pelage.Groom(roots, bindings, grooms), params,
         rest_mesh=mesh, rest_guides=guides,
@@ -153,6 +155,8 @@ def _colliders(settings: Any) -> pelage.Colliders:
     spheres, planes = [], []
     if settings.colliders is not None:
         for obj in settings.colliders.all_objects:
+            if obj.type != "MESH":
+                continue
             m = np.asarray(obj.matrix_world, np.float64)
             corners = np.asarray([m @ (*c, 1.0) for c in obj.bound_box])[:, :3]
             low, high = corners.min(0), corners.max(0)

@@ -70,6 +70,9 @@ def test_grow_writes_the_librarys_curves(scene: Head) -> None:
     assert np.array_equal(np.sort(rank), np.arange(HAIRS))
     shown = out.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
     assert len(shown.curves) == round(0.25 * HAIRS)
+    scene.obj.pelage_fur.viewport_fraction = 0.5
+    shown = out.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+    assert len(shown.curves) == HAIRS // 2
 
 
 def test_grow_is_deterministic(scene: Head) -> None:
