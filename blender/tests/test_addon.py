@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import pelage
-from conftest import FRAMES, GUIDE_POINTS, HAIRS, Head, animate, sphere
+from conftest import FRAMES, GUIDE_POINTS, HAIRS, Head, animate, build_scene, sphere
 from pelage_fur import convert, fur
 
 HERE = Path(__file__).resolve().parent
@@ -79,8 +79,6 @@ def test_grow_is_deterministic(scene: Head) -> None:
     first = points(grow(scene)).tobytes()
     again = points(grow(scene)).tobytes()
     assert again == first
-    from conftest import build_scene
-
     assert points(grow(build_scene())).tobytes() == first
 
 
