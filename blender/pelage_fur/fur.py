@@ -150,20 +150,23 @@ def grow(obj: bpy.types.Object, depsgraph: Any) -> np.ndarray:
 
 def _colliders(settings: Any) -> pelage.Colliders:
     """The step's colliders: the body, when chosen, and each mesh object of
-    the collider collection as a plane (a flat object: its world z axis is
-    the normal) or as its bounding sphere."""
+    the collider collection: a flat one as the plane through its box, along
+    its flat axis; any other as the sphere at its box's centre with half the
+    box's largest side (a sphere object's own)."""
     spheres, planes = [], []
     if settings.colliders is not None:
         for obj in settings.colliders.all_objects:
             if obj.type != "MESH":
                 continue
             m = np.asarray(obj.matrix_world, np.float64)
-            corners = np.asarray([m @ (*c, 1.0) for c in obj.bound_box])[:, :3]
+            box = np.asarray(obj.bound_box, np.float64)
+            corners = box @ m[:3, :3].T + m[:3, 3]
             low, high = corners.min(0), corners.max(0)
-            local = np.ptp(np.asarray(obj.bound_box), axis=0)
-            if local.min() <= 1e-6 * max(local.max(), 1e-30):
-                normal = m[:3, 2] / np.linalg.norm(m[:3, 2])
-                planes.append([*normal, float(normal @ m[:3, 3])])
+            extent = np.ptp(box, axis=0)
+            if extent.min() <= 1e-6 * max(extent.max(), 1e-30):
+                normal = m[:3, int(np.argmin(extent))]
+                normal = normal / np.linalg.norm(normal)
+                planes.append([*normal, float(normal @ corners.mean(0))])
             else:
                 spheres.append([*(0.5 * (low + high)), 0.5 * float((high - low).max())])
     return pelage.Colliders(
