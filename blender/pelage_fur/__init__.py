@@ -140,6 +140,8 @@ def set_viewport_fraction(out: bpy.types.Object, fraction: float) -> None:
         modifier.show_render = False
     keep = modifier.node_group.interface.items_tree["Keep"].identifier
     modifier[keep] = int(round(fraction * len(out.data.curves)))
+    # keeping every curve would still cost the modifier a pass over them
+    modifier.show_viewport = fraction < 1.0
     out.update_tag()
 
 

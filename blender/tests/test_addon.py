@@ -73,6 +73,9 @@ def test_grow_writes_the_librarys_curves(scene: Head) -> None:
     scene.obj.pelage_fur.viewport_fraction = 0.5
     shown = out.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
     assert len(shown.curves) == HAIRS // 2
+    scene.obj.pelage_fur.viewport_fraction = 1.0
+    shown = out.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+    assert len(shown.curves) == HAIRS
 
 
 def test_grow_is_deterministic(scene: Head) -> None:
