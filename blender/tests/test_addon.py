@@ -169,15 +169,43 @@ def test_usd_export_reads_back(scene: Head, tmp_path: Path) -> None:
     assert np.array_equal(usd["widths"], 2.0 * mine[:, 3])
 
 
-def _skin_seen(path: Path) -> float:
-    """How much of the picture is the skin's emission (pure green): the
-    green above the other channels, summed over the pixels, so a pixel
-    half covered by hair counts half."""
+def _cycles(head: Head, size: int, samples: int) -> None:
+    """The render setup: a camera on the face, a sun, Cycles on the CPU,
+    PNG files in the standard view transform, the guides hidden."""
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    camera.location = (0.0, -2.2, 0.1)
+    camera.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    sun.rotation_euler = (0.6, 0.0, 0.4)
+    for obj in (camera, sun):
+        bpy.context.scene.collection.objects.link(obj)
+    s = bpy.context.scene
+    s.camera = camera
+    s.render.engine = "CYCLES"
+    s.cycles.device = "CPU"
+    s.cycles.samples = samples
+    s.cycles.use_denoising = False
+    s.render.resolution_x = s.render.resolution_y = size
+    s.render.resolution_percentage = 100
+    s.render.image_settings.file_format = "PNG"
+    s.view_settings.view_transform = "Standard"
+    head.guides.hide_render = True
+
+
+def _pixels(path: Path) -> np.ndarray:
+    """An image file's float RGBA pixels, (pixels, 4)."""
     image = bpy.data.images.load(str(path))
     pixels = np.empty(image.size[0] * image.size[1] * 4, np.float32)
     image.pixels.foreach_get(pixels)
     bpy.data.images.remove(image)
-    rgb = pixels.reshape(-1, 4)[:, :3]
+    return pixels.reshape(-1, 4)
+
+
+def _skin_seen(path: Path) -> float:
+    """How much of the picture is the skin's emission (pure green): the
+    green above the other channels, summed over the pixels, so a pixel
+    half covered by hair counts half."""
+    rgb = _pixels(path)[:, :3]
     return float(np.clip(rgb[:, 1] - rgb[:, [0, 2]].max(1), 0.0, 1.0).mean())
 
 
@@ -192,25 +220,9 @@ def test_cycles_render_covers_the_skin(scene: Head, tmp_path: Path) -> None:
     emission.inputs["Color"].default_value = (0.0, 1.0, 0.0, 1.0)
     skin.node_tree.links.new(emission.outputs[0], nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
     scene.obj.data.materials.append(skin)
-    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    camera.location = (0.0, -2.2, 0.1)
-    camera.rotation_euler = (np.pi / 2, 0.0, 0.0)
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.rotation_euler = (0.6, 0.0, 0.4)
-    for obj in (camera, sun):
-        bpy.context.scene.collection.objects.link(obj)
+    # the standard view transform keeps the skin's emission pure green
+    _cycles(scene, 128, 16)
     s = bpy.context.scene
-    s.camera = camera
-    s.render.engine = "CYCLES"
-    s.cycles.device = "CPU"
-    s.cycles.samples = 16
-    s.cycles.use_denoising = False
-    s.render.resolution_x = s.render.resolution_y = 128
-    s.render.resolution_percentage = 100
-    s.render.image_settings.file_format = "PNG"
-    # the skin's emission stays pure green in the file
-    s.view_settings.view_transform = "Standard"
-    scene.guides.hide_render = True
     shares = {}
     for name, hidden in (("bald", True), ("fur", False)):
         out.hide_render = hidden
@@ -246,3 +258,20 @@ def test_colliders_from_objects_push_the_guides(scene: Head) -> None:
     posed = fur.get(scene.obj).sim.read()
     assert np.linalg.norm(posed - centre, axis=-1).min() > radius - 2e-3
     assert posed[..., 2].min() > floor_z - 2e-3
+
+
+def test_animation_render_has_each_frames_hair(scene: Head, tmp_path: Path) -> None:
+    # the handler writes the hair before each frame of an animation render
+    animate(scene.obj)
+    grow(scene)
+    assert bpy.ops.pelage.animate() == {"FINISHED"}
+    _cycles(scene, 64, 4)
+    s = bpy.context.scene
+    s.render.filepath = str(tmp_path / "frame_")
+    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+    for number in FRAMES:
+        s.frame_set(number)
+        s.render.filepath = str(tmp_path / f"still_{number}.png")
+        bpy.ops.render.render(write_still=True)
+        assert np.array_equal(_pixels(tmp_path / f"frame_{number:04d}.png"), _pixels(tmp_path / f"still_{number}.png"))
+    assert not np.array_equal(_pixels(tmp_path / "still_1.png"), _pixels(tmp_path / "still_6.png"))
