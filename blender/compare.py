@@ -3,6 +3,7 @@ guides and the same hair count: wall time and peak memory of growing and
 of a frame's update, and a Cycles render of each (docs/BLENDER.md).
 
     python blender/compare.py OUT_DIR [HAIRS ...]     (default 100000 1000000)
+    python blender/compare.py --stages HAIRS          (the add-on's Grow, stage by stage)
 
 Each measurement runs in a process of its own (``--case SIDE HAIRS``), so
 its peak resident set is its own: Python, bpy and the scene are in the
@@ -193,7 +194,69 @@ def _skin_seen(path: Path) -> float:
     return float(np.clip(rgb[:, 1] - rgb[:, [0, 2]].max(1), 0.0, 1.0).mean())
 
 
+def _stages(hairs: int) -> None:
+    """Prints the wall time of each stage of the add-on's Grow, as
+    :func:`pelage_fur.fur.grow` and :func:`pelage_fur.write_output` run
+    them, and of Blender's evaluation of the object written."""
+    import bpy
+
+    import conftest
+    import pelage
+    import pelage_fur
+    from pelage_fur import convert, fur
+
+    pelage_fur.register()
+    head = conftest.build_scene()
+    settings = head.obj.pelage_fur
+    settings.count, settings.length, settings.viewport_fraction = hairs, conftest.GUIDE_LENGTH, 1.0
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    threads = fur._threads()
+    clock = [time.perf_counter()]
+
+    def lap(name: str) -> None:
+        now = time.perf_counter()
+        print(f"{name:<28} {now - clock[0]:7.3f} s")
+        clock[0] = now
+
+    positions, triangles = convert.mesh_arrays(head.obj, depsgraph)
+    mesh = pelage.Mesh(positions, triangles)
+    density = convert.vertex_values(head.obj, depsgraph, settings.density_attribute)
+    lap("mesh and density from Blender")
+    roots, _ = pelage.stamp(mesh, hairs, seed=settings.seed, density=density, bald_below=settings.bald_below)
+    lap("stamp")
+    points, offsets = convert.curves_points(settings.guides, depsgraph)
+    guides = pelage.Guides(convert.project_roots(positions, triangles, points[offsets[:-1]]),
+                           points.reshape(len(offsets) - 1, -1, 3))
+    lap("guides from Blender")
+    bindings, _ = pelage.bind(mesh, guides, roots, seed=settings.seed, threads=threads)
+    lap("bind")
+    grooms = pelage.groom_evaluate(
+        mesh, roots, seed=settings.seed, **{n: fur._map(head.obj, depsgraph, settings, n) for n in fur.MAPS}
+    )
+    lap("groom maps")
+    params = pelage.ExpandParams(points_per_strand=settings.points, pinned=False)
+    pelage.settle(mesh, guides, roots, bindings, grooms, params, threads=threads)
+    lap("settle")
+    with pelage.Groom(roots, bindings, grooms) as groom, pelage.Frame(mesh, len(guides), settings.points) as frame:
+        frame.set_guides(guides, threads=threads)
+        lap("groom and frame")
+        curves = groom.expand(frame, params=params, threads=threads)
+        lap("expand")
+    data = convert.new_curves("stages", len(curves), settings.points)
+    convert.set_curve_ints(data, "pelage_id", roots["id"])
+    convert.set_curve_ints(data, "pelage_rank", roots["rank"])
+    convert.set_curves_points(data, curves)
+    lap("Curves data-block written")
+    obj = bpy.data.objects.new("stages", data)
+    bpy.context.scene.collection.objects.link(obj)
+    len(obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.curves)
+    lap("Blender evaluates the object")
+
+
 def main() -> None:
+    if sys.argv[1] == "--stages":
+        _stages(int(sys.argv[2]))
+        return
     if sys.argv[1] == "--case":
         side, hairs, out = sys.argv[2], int(sys.argv[3]), Path(sys.argv[4])
         print("RESULT " + json.dumps(_case(side, hairs, out)))
