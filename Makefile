@@ -126,12 +126,13 @@ python-test: python-venv
 # The Blender add-on (blender/): bpy from PyPI in a virtual environment of
 # its own (bpy wants CPython 3.11 and numpy < 2, so not python-test's). The
 # pinned wheels, bpy's ~374 MB among them, are downloaded once into the
-# build tree and installed from there on later runs, offline; then the
+# build tree (or BL_WHEELS: a directory outside it keeps them across
+# clones) and installed from there on later runs, offline; then the
 # package from the working tree, as python-test installs it, and the
 # add-on's headless suite.
 BL_DIR := $(BUILD)/blender
 BL_VENV := $(BL_DIR)/venv
-BL_WHEELS := $(BL_DIR)/wheels
+BL_WHEELS ?= $(BL_DIR)/wheels
 BL_PYTHON ?= python3.11
 BL_PIP = $(BL_VENV)/bin/pip --disable-pip-version-check --cache-dir $(abspath $(BL_DIR))/pip-cache
 blender-venv: deps-test
