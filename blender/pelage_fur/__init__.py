@@ -145,9 +145,10 @@ def set_viewport_fraction(out: bpy.types.Object, fraction: float) -> None:
     out.update_tag()
 
 
-def write_output(obj: bpy.types.Object, curves: np.ndarray) -> bpy.types.Object:
+def write_output(obj: bpy.types.Object, curves: np.ndarray, radii: bool = True) -> bpy.types.Object:
     """Writes render curves into ``obj``'s output ``Curves`` object: the
-    points in place when the counts match, else new curves (with the
+    points in place when the counts match (their radii only when ``radii``:
+    a frame of the same groom keeps them), else new curves (with the
     strands' ``pelage_id`` and ``pelage_rank`` as curve attributes, the
     hair material and the viewport fraction)."""
     from . import convert, fur
@@ -173,7 +174,8 @@ def write_output(obj: bpy.types.Object, curves: np.ndarray) -> bpy.types.Object:
                 bpy.data.hair_curves.remove(old)
         out.matrix_world.identity()
         set_viewport_fraction(out, settings.viewport_fraction)
-    convert.set_curves_points(out.data, curves)
+        radii = True
+    convert.set_curves_points(out.data, curves, radii)
     return out
 
 
@@ -199,6 +201,7 @@ class PELAGE_OT_grow(bpy.types.Operator):
             self.report({"ERROR"}, obj.pelage_fur.status)
             return {"CANCELLED"}
         write_output(obj, curves)
+        fur.get(obj).radii_written = True
         obj.pelage_fur.status = f"grew {curves.shape[0]} hairs"
         self.report({"INFO"}, obj.pelage_fur.status)
         return {"FINISHED"}
@@ -304,7 +307,9 @@ def _update(obj: bpy.types.Object, scene: bpy.types.Scene, depsgraph: Any) -> No
         print(f"pelage fur: {obj.name}: {obj.pelage_fur.status}")
         return
     if curves is not None:
-        write_output(obj, curves)
+        live = fur.get(obj)
+        write_output(obj, curves, radii=not live.radii_written)
+        live.radii_written = True
 
 
 @persistent

@@ -136,14 +136,15 @@ def new_curves(name: str, curve_count: int, points_per_curve: int) -> bpy.types.
     return data
 
 
-def set_curves_points(data: bpy.types.Curves, points: np.ndarray) -> None:
+def set_curves_points(data: bpy.types.Curves, points: np.ndarray, radii: bool = True) -> None:
     """Writes pelage's float4 control points (x, y, z, radius), one row per
-    point of ``data`` in order, into its positions and radii."""
+    point of ``data`` in order, into its positions and (``radii``) radii."""
     flat = points.reshape(-1, 4)
     if flat.shape[0] != len(data.points):
         raise ValueError(f"{data.name}: {len(data.points)} points, {flat.shape[0]} given")
     data.attributes["position"].data.foreach_set("vector", np.ascontiguousarray(flat[:, :3]).ravel())
-    data.attributes["radius"].data.foreach_set("value", np.ascontiguousarray(flat[:, 3]))
+    if radii:
+        data.attributes["radius"].data.foreach_set("value", np.ascontiguousarray(flat[:, 3]))
     data.update_tag()
 
 

@@ -64,6 +64,9 @@ class Fur:
     states: Dict[int, bytes] = field(default_factory=dict)
     guide_set: Optional[pelage.GuideSet] = None
     frame: Optional[pelage.Frame] = None
+    #: Whether the output holds this groom's radii (the frames then write
+    #: only positions).
+    radii_written: bool = False
 
     @property
     def points(self) -> int:
