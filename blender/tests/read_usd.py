@@ -15,6 +15,12 @@ found = [p for p in stage.Traverse() if p.IsA(UsdGeom.BasisCurves)]
 assert len(found) == 1, [str(p.GetPath()) for p in found]
 curves = UsdGeom.BasisCurves(found[0])
 world = UsdGeom.Xformable(found[0]).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+primvars = UsdGeom.PrimvarsAPI(found[0])
+per_curve = {
+    name: np.asarray(primvars.GetPrimvar(name).Get(), np.int64)
+    for name in ("pelage_id", "pelage_rank")
+    if primvars.GetPrimvar(name) and primvars.GetPrimvar(name).GetInterpolation() == UsdGeom.Tokens.uniform
+}
 np.savez(
     sys.argv[1] + ".npz",
     type=str(curves.GetTypeAttr().Get()),
@@ -25,4 +31,5 @@ np.savez(
     widths=np.asarray(curves.GetWidthsAttr().Get(), np.float32),
     world=np.asarray(world, np.float64),
     version=str(Usd.GetVersion()),
+    **per_curve,
 )

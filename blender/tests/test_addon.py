@@ -160,13 +160,17 @@ def test_usd_export_reads_back(scene: Head, tmp_path: Path) -> None:
     assert bpy.ops.wm.usd_export(filepath=str(path), selected_objects_only=True, export_materials=False) == {"FINISHED"}
     subprocess.run([sys.executable, str(HERE / "read_usd.py"), str(path)], check=True)
     usd = np.load(str(path) + ".npz")
-    assert (str(usd["type"]), str(usd["basis"])) == ("cubic", "catmullRom")
+    # pinned: the curves run from the first point (the root) to the last
+    assert (str(usd["type"]), str(usd["basis"]), str(usd["wrap"])) == ("cubic", "catmullRom", "pinned")
     assert np.array_equal(usd["counts"], np.full(HAIRS, GUIDE_POINTS))
     mine = points(out)
     world = usd["world"]
     moved = usd["points"].astype(np.float64) @ world[:3, :3] + world[3, :3]
     assert np.abs(moved - mine[:, :3]).max() < 1e-5
     assert np.array_equal(usd["widths"], 2.0 * mine[:, 3])
+    # the strands' ids and LOD ranks as uniform primvars
+    live = fur.get(scene.obj).roots
+    assert np.array_equal(usd["pelage_id"], live["id"]) and np.array_equal(usd["pelage_rank"], live["rank"])
 
 
 def _cycles(head: Head, size: int, samples: int) -> None:
