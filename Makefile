@@ -11,7 +11,8 @@ FUZZ_SECONDS ?= 60
 DEPS_demo := cmake g++ binutils libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev
 DEPS_farm := $(DEPS_demo) slurm-wlm munge
 DEPS_test := $(DEPS_farm) pkg-config libopenvdb-dev libboost-dev valgrind python3-venv \
-  libx11-6 libxrender1 libxxf86vm1 libxfixes3 libxi6 libxkbcommon0 libsm6 libgl1 libegl1
+  libx11-6 libxrender1 libxxf86vm1 libxfixes3 libxi6 libxkbcommon0 libsm6 libgl1 libegl1 \
+  libegl-mesa0 libgl1-mesa-dri
 RUST_TARGETS_test := thumbv7em-none-eabihf
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
