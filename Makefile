@@ -10,12 +10,15 @@ FUZZ_SECONDS ?= 60
 # The demo configures CMake with the tests off, so it needs no test package.
 DEPS_demo := cmake g++ binutils libembree-dev libtbb-dev libpng-dev libtinyobjloader-dev
 DEPS_farm := $(DEPS_demo) slurm-wlm munge
-DEPS_test := $(DEPS_farm) pkg-config libopenvdb-dev libboost-dev valgrind python3-venv
+DEPS_test := $(DEPS_farm) pkg-config libopenvdb-dev libboost-dev valgrind python3-venv \
+  libx11-6 libxrender1 libxxf86vm1 libxfixes3 libxi6 libxkbcommon0 libsm6 libgl1 libegl1 \
+  libegl-mesa0 libgl1-mesa-dri
 RUST_TARGETS_test := thumbv7em-none-eabihf
 EMBEDDED_TARGET := thumbv7em-none-eabihf
 
 .PHONY: demo farm-demo test deps deps-demo deps-farm deps-test docs-check rust-test rust-lint \
-        rust-miri rust-fuzz cmake-test header-check bench perf python-venv python-test
+        rust-miri rust-fuzz cmake-test header-check bench perf python-venv python-test \
+        blender-venv blender-test blender-extension
 
 # A build tree that is already configured keeps its settings (after `make
 # test` it has the tests on, and their packages are installed); a new one is
@@ -47,7 +50,8 @@ farm-demo: deps-farm
 	else farm/cluster.sh stop && echo "farm-demo: cluster stopped"; fi; \
 	exit $$rc
 
-test: deps-test docs-check rust-lint rust-test rust-miri rust-fuzz cmake-test python-test header-check
+test: deps-test docs-check rust-lint rust-test rust-miri rust-fuzz cmake-test python-test blender-test \
+  header-check
 
 # Installs the Debian packages and rustup targets of DEPS_<name> and
 # RUST_TARGETS_<name> that are missing (the one recipe for every list).
@@ -119,6 +123,43 @@ python-venv: deps-test
 python-test: python-venv
 	$(PY_PIP) install -q --no-build-isolation --force-reinstall --no-deps ./python
 	$(PY_VENV)/bin/pytest -q -p no:cacheprovider python/tests
+
+# The Blender add-on (blender/): bpy from PyPI in a virtual environment of
+# its own (bpy wants CPython 3.11 and numpy < 2, so not python-test's). The
+# pinned wheels, bpy's ~374 MB among them, are downloaded once into the
+# build tree (or BL_WHEELS: a directory outside it keeps them across
+# clones) and installed from there on later runs, offline; then the
+# package from the working tree, as python-test installs it, and the
+# add-on's headless suite.
+BL_DIR := $(BUILD)/blender
+BL_VENV := $(BL_DIR)/venv
+BL_WHEELS ?= $(BL_DIR)/wheels
+BL_PYTHON ?= python3.11
+BL_PIP = $(BL_VENV)/bin/pip --disable-pip-version-check --cache-dir $(abspath $(BL_DIR))/pip-cache
+blender-venv: deps-test
+	@test -x $(BL_VENV)/bin/python || $(BL_PYTHON) -m venv $(BL_VENV)
+	@$(BL_PIP) install -q --no-index --find-links $(BL_WHEELS) -r blender/requirements-test.txt 2>/dev/null || \
+	  { $(BL_PIP) download -q -d $(BL_WHEELS) -r blender/requirements-test.txt && \
+	    $(BL_PIP) install -q --no-index --find-links $(BL_WHEELS) -r blender/requirements-test.txt; }
+blender-test: blender-venv blender-extension
+	$(BL_PIP) install -q --no-build-isolation --force-reinstall --no-deps ./python
+	$(BL_VENV)/bin/pytest -q -p no:cacheprovider blender/tests
+
+# The add-on packed as a Blender 4.2+ extension, build/blender/pelage_fur.zip:
+# its files and the wheels its manifest lists (the package built from the
+# working tree, cffi and pycparser), then installed with Blender's own
+# installer into an empty user directory and used once there.
+BL_EXT := $(BL_DIR)/extension/pelage_fur
+blender-extension: blender-venv
+	rm -rf $(BL_EXT) $(BL_DIR)/pelage_fur.zip $(BL_DIR)/extension-user
+	mkdir -p $(BL_EXT)/wheels
+	cp blender/pelage_fur/*.py blender/pelage_fur/blender_manifest.toml $(BL_EXT)/
+	$(BL_PIP) wheel -q --no-build-isolation --no-deps -w $(BL_EXT)/wheels ./python
+	cp $(BL_WHEELS)/cffi-*.whl $(BL_WHEELS)/pycparser-*.whl $(BL_EXT)/wheels/
+	cd $(BL_EXT) && $(abspath $(BL_VENV))/bin/python -m zipfile -c $(abspath $(BL_DIR))/pelage_fur.zip \
+	  blender_manifest.toml $$(ls *.py) wheels
+	BLENDER_USER_RESOURCES=$(abspath $(BL_DIR))/extension-user \
+	  $(BL_VENV)/bin/python blender/tests/install_extension.py $(BL_DIR)/pelage_fur.zip
 
 # The committed header, and its declarations for cffi, must be exactly what
 # the build generates.
