@@ -534,7 +534,13 @@ typedef struct PelageGroomMaps {
   struct PelageMap kink_frequency;
   // Pull of the tip toward the clump centre guide, 0..1 (default 0).
   struct PelageMap clump;
-  // Seed of the per-strand kink phase.
+  // Random variation of the length, 0..1 (default 0): each strand keeps
+  // `1 - v u` of its length, `u` uniform in [0, 1) per strand id.
+  struct PelageMap length_random;
+  // Random variation of the clump pull, 0..1 (default 0), likewise:
+  // soft clump borders.
+  struct PelageMap clump_random;
+  // Seed of the per-strand random values (kink phase, the variations).
   uint64_t seed;
 } PelageGroomMaps;
 

@@ -82,6 +82,8 @@ class PelageFurSettings(bpy.types.PropertyGroup):
     __annotations__.update(_map_props("kink_amplitude", 0.0, 0.1, "Kink amplitude"))
     __annotations__.update(_map_props("kink_frequency", 3.0, 10.0, "Kink waves along the hair"))
     __annotations__.update(_map_props("clump", 0.0, 1.0, "Pull toward the clump's guide"))
+    __annotations__.update(_map_props("length_random", 0.0, 1.0, "Share of the length each hair may lose at random"))
+    __annotations__.update(_map_props("clump_random", 0.0, 1.0, "Share of the clump pull each hair may lose at random"))
 
 
 def _viewport_group() -> bpy.types.NodeTree:

@@ -25,7 +25,17 @@ __all__ = ["Fur", "grow", "pose", "bake", "groom_path", "cache_path", "forget", 
 
 #: The groom maps, each a constant optionally scaled by a per-vertex
 #: attribute or vertex group (the settings' ``<name>`` and ``<name>_attribute``).
-MAPS = ("length", "root_width", "tip_width", "bend", "kink_amplitude", "kink_frequency", "clump")
+MAPS = (
+    "length",
+    "root_width",
+    "tip_width",
+    "bend",
+    "kink_amplitude",
+    "kink_frequency",
+    "clump",
+    "length_random",
+    "clump_random",
+)
 
 GROOM_FILE = "groom.pgf"
 

@@ -25,7 +25,13 @@ pub struct PelageGroomMaps {
     pub kink_frequency: PelageMap,
     /// Pull of the tip toward the clump centre guide, 0..1 (default 0).
     pub clump: PelageMap,
-    /// Seed of the per-strand kink phase.
+    /// Random variation of the length, 0..1 (default 0): each strand keeps
+    /// `1 - v u` of its length, `u` uniform in [0, 1) per strand id.
+    pub length_random: PelageMap,
+    /// Random variation of the clump pull, 0..1 (default 0), likewise:
+    /// soft clump borders.
+    pub clump_random: PelageMap,
+    /// Seed of the per-strand random values (kink phase, the variations).
     pub seed: u64,
 }
 
@@ -93,6 +99,8 @@ pub extern "C" fn pelage_groom_maps_defaults() -> PelageGroomMaps {
         kink_amplitude: constant(&d.kink_amplitude),
         kink_frequency: constant(&d.kink_frequency),
         clump: constant(&d.clump),
+        length_random: constant(&d.length_random),
+        clump_random: constant(&d.clump_random),
         seed: 0,
     }
 }
@@ -127,6 +135,8 @@ pub extern "C" fn pelage_groom_evaluate(
             kink_amplitude: m.kink_amplitude.view(nv, "kink amplitude map")?,
             kink_frequency: m.kink_frequency.view(nv, "kink frequency map")?,
             clump: m.clump.view(nv, "clump map")?,
+            length_random: m.length_random.view(nv, "length random map")?,
+            clump_random: m.clump_random.view(nv, "clump random map")?,
         };
         let roots: &[Root] = bytemuck::cast_slice(slice(roots, root_count, "roots")?);
         if grooms_capacity < root_count {

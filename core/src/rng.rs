@@ -23,6 +23,10 @@ pub enum Purpose {
     KinkPhase = 8,
     /// Darts of the stamp's fill pass.
     FillDart = 9,
+    /// A strand's share of its length's random variation.
+    LengthRandom = 10,
+    /// A strand's share of its clump pull's random variation.
+    ClumpRandom = 11,
 }
 
 /// Mixes (seed, id, purpose, counter) into 64 well-distributed bits.

@@ -215,6 +215,8 @@ typedef struct PelageGroomMaps {
   struct PelageMap kink_amplitude;
   struct PelageMap kink_frequency;
   struct PelageMap clump;
+  struct PelageMap length_random;
+  struct PelageMap clump_random;
   uint64_t seed;
 } PelageGroomMaps;
 

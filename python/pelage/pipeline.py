@@ -254,13 +254,17 @@ def groom_evaluate(
     kink_amplitude: Optional[MapLike] = None,
     kink_frequency: Optional[MapLike] = None,
     clump: Optional[MapLike] = None,
+    length_random: Optional[MapLike] = None,
+    clump_random: Optional[MapLike] = None,
     seed: Optional[int] = None,
 ) -> np.ndarray:
     """Samples the groom maps at the roots (``pelage_groom_evaluate``).
 
     Each map is a :class:`Map`, a number, a per-vertex 1-D array or a UV
     texture 2-D array; None keeps the default (length 1, root width 0.002,
-    tip width 0.0005, bend 0, kink 0 at 3 waves, clump 0).
+    tip width 0.0005, bend 0, kink 0 at 3 waves, clump 0, no random
+    variation of length or clump: ``length_random`` and ``clump_random``,
+    0 to 1, let each strand keep ``1 - v u`` of it, ``u`` uniform per strand id).
 
     Returns:
         The groom records (:data:`GROOM_DTYPE`), one per root.
@@ -275,6 +279,8 @@ def groom_evaluate(
         ("kink_amplitude", kink_amplitude),
         ("kink_frequency", kink_frequency),
         ("clump", clump),
+        ("length_random", length_random),
+        ("clump_random", clump_random),
     ):
         if value is not None:
             Map.of(value).fill(getattr(maps, name), keep)

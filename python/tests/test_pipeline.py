@@ -58,6 +58,12 @@ def test_groom_evaluate_maps(scene):
     assert np.allclose(pelage.groom_evaluate(scene.mesh, scene.roots, clump=pelage.Map.uniform(0.25))["clump"], 0.25)
     with pytest.raises(pelage.InvalidArgument, match="needs mesh UVs"):
         pelage.groom_evaluate(scene.mesh, scene.roots, bend=texture)
+    # random variations: each strand keeps 1 - v u of its length and pull
+    varied = pelage.groom_evaluate(scene.mesh, scene.roots, clump=0.8, length_random=0.5, clump_random=1.0)
+    assert ((varied["length"] > 0.5) & (varied["length"] <= 1.0)).all()
+    assert abs(varied["length"].mean() - 0.75) < 0.03 and abs(varied["clump"].mean() - 0.4) < 0.04
+    plain = pelage.groom_evaluate(scene.mesh, scene.roots, clump=0.8)
+    assert (plain["length"] == 1.0).all() and (plain["clump"] == np.float32(0.8)).all()
 
 
 def test_expand_shapes_and_values(scene, frame):

@@ -21,6 +21,14 @@ pub struct GroomMaps<'a> {
     pub kink_frequency: ScalarMap<'a>,
     /// Pull of the tip toward the clump centre guide, 0 (none) to 1 (onto it).
     pub clump: ScalarMap<'a>,
+    /// Random variation of the length, 0 to 1: each strand keeps `1 - v u`
+    /// of its length, `u` uniform in [0, 1) and keyed by its id, so the
+    /// tips do not end on one surface (0, the default: every strand its
+    /// interpolated length).
+    pub length_random: ScalarMap<'a>,
+    /// Random variation of the clump pull, 0 to 1, likewise: clumps whose
+    /// hairs gather by different amounts have soft borders, not one edge.
+    pub clump_random: ScalarMap<'a>,
 }
 
 /// Every default is a constant map (the C API hands them out as constants).
@@ -34,6 +42,8 @@ impl Default for GroomMaps<'_> {
             kink_amplitude: ScalarMap::Constant(0.0),
             kink_frequency: ScalarMap::Constant(3.0),
             clump: ScalarMap::Constant(0.0),
+            length_random: ScalarMap::Constant(0.0),
+            clump_random: ScalarMap::Constant(0.0),
         }
     }
 }
@@ -75,11 +85,15 @@ impl GroomMaps<'_> {
         self.bend.validate(mesh, "bend map")?;
         self.kink_amplitude.validate(mesh, "kink amplitude map")?;
         self.kink_frequency.validate(mesh, "kink frequency map")?;
-        self.clump.validate(mesh, "clump map")
+        self.clump.validate(mesh, "clump map")?;
+        self.length_random.validate(mesh, "length random map")?;
+        self.clump_random.validate(mesh, "clump random map")
     }
 
     /// Evaluates the maps at each root into `out` (same length as `roots`).
-    /// Negative widths and lengths clamp to 0, clump to [0, 1].
+    /// Negative widths and lengths clamp to 0, clump and the random
+    /// variations to [0, 1]. Every random value is keyed by `seed` and the
+    /// strand's id, so a strand keeps its look in any order or patch.
     pub fn evaluate(
         &self,
         mesh: &Mesh,
@@ -98,8 +112,14 @@ impl GroomMaps<'_> {
         crate::root::check_roots(mesh, roots, "strand roots")?;
         for (r, g) in roots.iter().zip(out.iter_mut()) {
             let at = |m: &ScalarMap| m.sample(mesh, r.face as usize, r.u, r.v);
+            // a variation of 0 multiplies by exactly 1: the values without
+            // one keep their bits
+            let kept = |m: &ScalarMap, purpose| {
+                1.0 - at(m).clamp(0.0, 1.0) * rng::unit(seed, r.id as u64, purpose, 0)
+            };
             *g = StrandGroom {
-                length: at(&self.length).max(0.0),
+                length: at(&self.length).max(0.0)
+                    * kept(&self.length_random, Purpose::LengthRandom),
                 root_radius: 0.5 * at(&self.root_width).max(0.0),
                 tip_radius: 0.5 * at(&self.tip_width).max(0.0),
                 bend: at(&self.bend),
@@ -111,7 +131,8 @@ impl GroomMaps<'_> {
                     let (sin, cos) = libm::sincosf(angle);
                     [cos, sin]
                 },
-                clump: at(&self.clump).clamp(0.0, 1.0),
+                clump: at(&self.clump).clamp(0.0, 1.0)
+                    * kept(&self.clump_random, Purpose::ClumpRandom),
                 lift: [0.0; 2],
             };
         }
@@ -163,6 +184,7 @@ mod tests {
             kink_amplitude: ScalarMap::Constant(0.02),
             kink_frequency: ScalarMap::Constant(4.0),
             clump: ScalarMap::PerVertex(Strided::from_slice(&per_vertex)),
+            ..GroomMaps::default()
         };
         let rs = roots(mesh, 2000, 4);
         let mut out = vec![StrandGroom::default(); rs.len()];
@@ -234,5 +256,48 @@ mod tests {
             && g.root_radius == 0.0
             && g.tip_radius == 0.0
             && g.clump == 0.0));
+    }
+
+    #[test]
+    fn random_variations_spread_length_and_clump_by_strand_id() {
+        let m = graded_plane(8, 1.0);
+        let mesh = m.mesh();
+        let rs = roots(mesh, 4000, 2);
+        let plain = GroomMaps {
+            clump: ScalarMap::Constant(0.8),
+            ..GroomMaps::default()
+        };
+        let varied = GroomMaps {
+            length_random: ScalarMap::Constant(0.5),
+            clump_random: ScalarMap::Constant(1.0),
+            ..plain
+        };
+        let mut base = vec![StrandGroom::default(); rs.len()];
+        let mut out = base.clone();
+        plain.evaluate(&mesh, &rs, 3, &mut base).unwrap();
+        varied.evaluate(&mesh, &rs, 3, &mut out).unwrap();
+        // lengths in (0.5, 1], uniform: mean 0.75; clump in (0, 0.8]
+        let n = rs.len() as f32;
+        let mean = |f: &dyn Fn(&StrandGroom) -> f32| out.iter().map(f).sum::<f32>() / n;
+        assert!(out.iter().all(|g| g.length > 0.5 && g.length <= 1.0));
+        assert!(out.iter().all(|g| g.clump > 0.0 && g.clump <= 0.8));
+        assert!((mean(&|g| g.length) - 0.75).abs() < 0.01);
+        assert!((mean(&|g| g.clump) - 0.4).abs() < 0.015);
+        // independent streams: length and clump do not move together
+        let cov = mean(&|g| (g.length - 0.75) * (g.clump - 0.4));
+        assert!(cov.abs() < 0.003, "{cov}");
+        // everything else as without the variations, which change nothing
+        for (a, b) in out.iter().zip(&base) {
+            assert_eq!(
+                (a.root_radius, a.tip_radius, a.kink_phase),
+                (b.root_radius, b.tip_radius, b.kink_phase)
+            );
+            assert_eq!((b.length, b.clump), (1.0, 0.8));
+        }
+        // keyed by id: the same strand, listed elsewhere, varies alike
+        let reversed: Vec<Root> = rs.iter().rev().copied().collect();
+        let mut again = vec![StrandGroom::default(); rs.len()];
+        varied.evaluate(&mesh, &reversed, 3, &mut again).unwrap();
+        assert!(again.iter().rev().zip(&out).all(|(a, b)| a == b));
     }
 }
