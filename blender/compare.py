@@ -141,57 +141,25 @@ def _case(side: str, hairs: int, out: Path) -> Dict[str, float]:
     frame_peak = _peak_mb()
     # the rest pose: Blender's guides, not attached, stay where they were groomed
     scene.frame_set(1)
-    _render(head, hair, out / f"{side}_{hairs}.png")
+    _render(head, out / f"{side}_{hairs}.png")
     return {
         "hairs": count, "grow_s": grow, "frame_s": sorted(times)[len(times) // 2],
         "base_mb": base, "grow_mb": grow_peak - base, "frame_mb": frame_peak - base,
-        "skin_seen": _skin_seen(out / f"{side}_{hairs}.png"),
+        "skin_seen": conftest.skin_seen(out / f"{side}_{hairs}.png"),
     }
 
 
-def _render(head, hair, path: Path) -> None:  # type: ignore[no-untyped-def]
-    """The test's Cycles setup: green emissive skin, a sun,
-    the hair's own Principled Hair BSDF."""
+def _render(head, path: Path) -> None:  # type: ignore[no-untyped-def]
+    """The suite's Cycles setup (green emissive skin, a camera on the face,
+    a sun), at this comparison's size and samples; the hair keeps its own
+    Principled Hair BSDF."""
     import bpy
-    import numpy as np
+    import conftest
 
-    skin = bpy.data.materials.new("skin")
-    nodes = skin.node_tree.nodes
-    nodes.clear()
-    emission = nodes.new("ShaderNodeEmission")
-    emission.inputs["Color"].default_value = (0.0, 1.0, 0.0, 1.0)
-    skin.node_tree.links.new(emission.outputs[0], nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    head.obj.data.materials.append(skin)
-    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    camera.location, camera.rotation_euler = (0.0, -2.2, 0.1), (np.pi / 2, 0.0, 0.0)
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.rotation_euler = (0.6, 0.0, 0.4)
-    for obj in (camera, sun):
-        bpy.context.scene.collection.objects.link(obj)
-    head.guides.hide_render = True
-    s = bpy.context.scene
-    s.camera = camera
-    s.render.engine = "CYCLES"
-    s.cycles.device = "CPU"
-    s.cycles.samples = SAMPLES
-    s.cycles.use_denoising = False
-    s.render.resolution_x = s.render.resolution_y = SIZE
-    s.render.resolution_percentage = 100
-    s.render.image_settings.file_format = "PNG"
-    s.view_settings.view_transform = "Standard"
-    s.render.filepath = str(path)
+    conftest.green_skin(head)
+    conftest.render_setup(head, SIZE, SAMPLES)
+    bpy.context.scene.render.filepath = str(path)
     bpy.ops.render.render(write_still=True)
-
-
-def _skin_seen(path: Path) -> float:
-    import bpy
-    import numpy as np
-
-    image = bpy.data.images.load(str(path))
-    pixels = np.empty(image.size[0] * image.size[1] * 4, np.float32)
-    image.pixels.foreach_get(pixels)
-    rgb = pixels.reshape(-1, 4)[:, :3]
-    return float(np.clip(rgb[:, 1] - rgb[:, [0, 2]].max(1), 0.0, 1.0).mean())
 
 
 def _stages(hairs: int) -> None:

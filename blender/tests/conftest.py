@@ -227,3 +227,54 @@ def addon() -> Iterator[None]:
 def scene() -> Head:
     return build_scene()
 
+
+def green_skin(head: Head) -> None:
+    """Gives the head an emissive pure green skin, which the standard view
+    transform keeps pure green: what :func:`skin_seen` counts."""
+    skin = bpy.data.materials.new("skin")
+    nodes = skin.node_tree.nodes
+    nodes.clear()
+    emission = nodes.new("ShaderNodeEmission")
+    emission.inputs["Color"].default_value = (0.0, 1.0, 0.0, 1.0)
+    skin.node_tree.links.new(emission.outputs[0], nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    head.obj.data.materials.append(skin)
+
+
+def render_setup(head: Head, size: int, samples: int) -> None:
+    """The render setup: a camera on the face, a sun, Cycles on the CPU,
+    PNG files in the standard view transform, the guides hidden."""
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    camera.location = (0.0, -2.2, 0.1)
+    camera.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    sun.rotation_euler = (0.6, 0.0, 0.4)
+    for obj in (camera, sun):
+        bpy.context.scene.collection.objects.link(obj)
+    s = bpy.context.scene
+    s.camera = camera
+    s.render.engine = "CYCLES"
+    s.cycles.device = "CPU"
+    s.cycles.samples = samples
+    s.cycles.use_denoising = False
+    s.render.resolution_x = s.render.resolution_y = size
+    s.render.resolution_percentage = 100
+    s.render.image_settings.file_format = "PNG"
+    s.view_settings.view_transform = "Standard"
+    head.guides.hide_render = True
+
+
+def pixels(path: Path) -> np.ndarray:
+    """An image file's float RGBA pixels, (pixels, 4)."""
+    image = bpy.data.images.load(str(path))
+    pixels = np.empty(image.size[0] * image.size[1] * 4, np.float32)
+    image.pixels.foreach_get(pixels)
+    bpy.data.images.remove(image)
+    return pixels.reshape(-1, 4)
+
+
+def skin_seen(path: Path) -> float:
+    """How much of the picture is the skin's emission (pure green): the
+    green above the other channels, summed over the pixels, so a pixel
+    half covered by hair counts half."""
+    rgb = pixels(path)[:, :3]
+    return float(np.clip(rgb[:, 1] - rgb[:, [0, 2]].max(1), 0.0, 1.0).mean())

@@ -14,7 +14,19 @@ import numpy as np
 import pytest
 
 import pelage
-from conftest import FRAMES, GUIDE_POINTS, HAIRS, Head, animate, build_scene, sphere
+from conftest import (
+    FRAMES,
+    GUIDE_POINTS,
+    HAIRS,
+    Head,
+    animate,
+    build_scene,
+    green_skin,
+    pixels,
+    render_setup,
+    skin_seen,
+    sphere,
+)
 from pelage_fur import convert, fur
 
 HERE = Path(__file__).resolve().parent
@@ -173,60 +185,13 @@ def test_usd_export_reads_back(scene: Head, tmp_path: Path) -> None:
     assert np.array_equal(usd["pelage_id"], live["id"]) and np.array_equal(usd["pelage_rank"], live["rank"])
 
 
-def _cycles(head: Head, size: int, samples: int) -> None:
-    """The render setup: a camera on the face, a sun, Cycles on the CPU,
-    PNG files in the standard view transform, the guides hidden."""
-    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    camera.location = (0.0, -2.2, 0.1)
-    camera.rotation_euler = (np.pi / 2, 0.0, 0.0)
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.rotation_euler = (0.6, 0.0, 0.4)
-    for obj in (camera, sun):
-        bpy.context.scene.collection.objects.link(obj)
-    s = bpy.context.scene
-    s.camera = camera
-    s.render.engine = "CYCLES"
-    s.cycles.device = "CPU"
-    s.cycles.samples = samples
-    s.cycles.use_denoising = False
-    s.render.resolution_x = s.render.resolution_y = size
-    s.render.resolution_percentage = 100
-    s.render.image_settings.file_format = "PNG"
-    s.view_settings.view_transform = "Standard"
-    head.guides.hide_render = True
-
-
-def _pixels(path: Path) -> np.ndarray:
-    """An image file's float RGBA pixels, (pixels, 4)."""
-    image = bpy.data.images.load(str(path))
-    pixels = np.empty(image.size[0] * image.size[1] * 4, np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(-1, 4)
-
-
-def _skin_seen(path: Path) -> float:
-    """How much of the picture is the skin's emission (pure green): the
-    green above the other channels, summed over the pixels, so a pixel
-    half covered by hair counts half."""
-    rgb = _pixels(path)[:, :3]
-    return float(np.clip(rgb[:, 1] - rgb[:, [0, 2]].max(1), 0.0, 1.0).mean())
-
-
 @pytest.mark.parametrize("engine", ["CYCLES", "BLENDER_EEVEE"])
 def test_render_covers_the_skin(scene: Head, tmp_path: Path, engine: str) -> None:
     # longer hair than the other tests', lying down the head as combed
     scene.obj.pelage_fur.length = 0.16
     out = grow(scene)
-    skin = bpy.data.materials.new("skin")
-    nodes = skin.node_tree.nodes
-    nodes.clear()
-    emission = nodes.new("ShaderNodeEmission")
-    emission.inputs["Color"].default_value = (0.0, 1.0, 0.0, 1.0)
-    skin.node_tree.links.new(emission.outputs[0], nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    scene.obj.data.materials.append(skin)
-    # the standard view transform keeps the skin's emission pure green
-    _cycles(scene, 128, 16)
+    green_skin(scene)
+    render_setup(scene, 128, 16)
     s = bpy.context.scene
     if engine == "BLENDER_EEVEE":
         # software OpenGL without a GPU (Mesa's llvmpipe): 20 to 60 s, most
@@ -238,7 +203,7 @@ def test_render_covers_the_skin(scene: Head, tmp_path: Path, engine: str) -> Non
         out.hide_render = hidden
         s.render.filepath = str(tmp_path / f"{name}.png")
         bpy.ops.render.render(write_still=True)
-        shares[name] = _skin_seen(tmp_path / f"{name}.png")
+        shares[name] = skin_seen(tmp_path / f"{name}.png")
     print(f"{engine}: skin seen: bald {shares['bald']:.3f}, with fur {shares['fur']:.3f}")
     assert shares["bald"] > 0.1
     # measured 0.125 against 0.275 in Cycles (16 samples, 30,000 hairs at
@@ -276,7 +241,7 @@ def test_animation_render_has_each_frames_hair(scene: Head, tmp_path: Path) -> N
     animate(scene.obj)
     grow(scene)
     assert bpy.ops.pelage.animate() == {"FINISHED"}
-    _cycles(scene, 64, 4)
+    render_setup(scene, 64, 4)
     s = bpy.context.scene
     s.render.filepath = str(tmp_path / "frame_")
     assert bpy.ops.render.render(animation=True) == {"FINISHED"}
@@ -284,5 +249,5 @@ def test_animation_render_has_each_frames_hair(scene: Head, tmp_path: Path) -> N
         s.frame_set(number)
         s.render.filepath = str(tmp_path / f"still_{number}.png")
         bpy.ops.render.render(write_still=True)
-        assert np.array_equal(_pixels(tmp_path / f"frame_{number:04d}.png"), _pixels(tmp_path / f"still_{number}.png"))
-    assert not np.array_equal(_pixels(tmp_path / "still_1.png"), _pixels(tmp_path / "still_6.png"))
+        assert np.array_equal(pixels(tmp_path / f"frame_{number:04d}.png"), pixels(tmp_path / f"still_{number}.png"))
+    assert not np.array_equal(pixels(tmp_path / "still_1.png"), pixels(tmp_path / "still_6.png"))

@@ -189,14 +189,7 @@ class Frame(Handle):
     ) -> np.ndarray:
         """Whether each of the (n, 3) points is inside the body of the frame's
         mesh (``pelage_frame_inside``): a bool array of n."""
-        pts = rows(points, np.float32, 3, "points")
-        inside = np.zeros(pts.shape[0], np.uint8)
-        call = Call(threads, progress)
-        stride = int(pts.strides[0]) if pts.shape[0] > 1 else 12
-        status = lib.pelage_frame_inside(
-            self._get(), ptr(pts), stride, pts.shape[0], call.run(), ptr(inside, "uint8_t *")
-        )
-        call.check(status, "pelage_frame_inside")
+        inside = self._per_point("pelage_frame_inside", points, np.uint8, "uint8_t *", threads, progress)
         return inside.view(np.bool_)
 
     def signed_distance(
@@ -205,14 +198,24 @@ class Frame(Handle):
         """The signed distance from each of the (n, 3) points to the frame's
         mesh (``pelage_frame_signed_distance``): negative inside by the
         inside rule of :meth:`inside`; a float32 array of n."""
+        return self._per_point("pelage_frame_signed_distance", points, np.float32, "float *", threads, progress)
+
+    def _per_point(
+        self,
+        name: str,
+        points: Any,
+        dtype: Any,
+        c_type: str,
+        threads: Optional[int],
+        progress: Optional[ProgressFn],
+    ) -> np.ndarray:
+        """Calls the query ``name`` on the (n, 3) points; its answer per point."""
         pts = rows(points, np.float32, 3, "points")
-        out = np.zeros(pts.shape[0], np.float32)
+        out = np.zeros(pts.shape[0], dtype)
         call = Call(threads, progress)
         stride = int(pts.strides[0]) if pts.shape[0] > 1 else 12
-        status = lib.pelage_frame_signed_distance(
-            self._get(), ptr(pts), stride, pts.shape[0], call.run(), ptr(out, "float *")
-        )
-        call.check(status, "pelage_frame_signed_distance")
+        status = getattr(lib, name)(self._get(), ptr(pts), stride, pts.shape[0], call.run(), ptr(out, c_type))
+        call.check(status, name)
         return out
 
     def _release(self) -> None:
