@@ -363,35 +363,37 @@ fn cut_sockets(part: Part) -> Part {
 }
 
 /// A closed UV ellipsoid around `centre` with semi-axis `axes[0]` along the
-/// pole axis `p`, `axes[1]` along `e1` and `axes[2]` along `p x e1`;
+/// pole axis `pole`, `axes[1]` along `e1` and `axes[2]` along `pole x e1`;
 /// `rows` rings between single pole vertices, `cols` segments, no seam
-/// (`uv` maps a point, relative to the centre, to its UVs).
-fn ellipsoid(
+/// (`uv` maps a point, relative to the centre, to its UVs), wound outward:
+/// its points, their UVs and its triangles.
+pub(crate) fn ellipsoid_grid(
     centre: DVec3,
-    p: DVec3,
+    pole: DVec3,
     e1: DVec3,
     axes: [f64; 3],
     (rows, cols): (usize, usize),
     uv: impl Fn(DVec3) -> [f64; 2],
-) -> Part {
-    let e2 = p.cross(e1);
-    let mut part = Part::default();
-    let at = |part: &mut Part, theta: f64, phi: f64| {
-        let q = p * (axes[0] * theta.cos())
+) -> (Vec<DVec3>, Vec<[f64; 2]>, Vec<[u32; 3]>) {
+    let e2 = pole.cross(e1);
+    let (mut points, mut uvs) = (Vec::new(), Vec::new());
+    let mut at = |theta: f64, phi: f64| {
+        let q = pole * (axes[0] * theta.cos())
             + (e1 * (axes[1] * phi.cos()) + e2 * (axes[2] * phi.sin())) * theta.sin();
-        part.vertex(centre + q, uv(q))
+        points.push(centre + q);
+        uvs.push(uv(q));
+        points.len() as u32 - 1
     };
-    let north = at(&mut part, 0.0, 0.0);
-    let ring = |i: usize| 1 + (i - 1) * cols;
+    let north = at(0.0, 0.0);
     for i in 1..=rows {
         let theta = PI * i as f64 / (rows + 1) as f64;
         for j in 0..cols {
-            at(&mut part, theta, 2.0 * PI * j as f64 / cols as f64);
+            at(theta, 2.0 * PI * j as f64 / cols as f64);
         }
     }
-    let south = at(&mut part, PI, 0.0);
-    let v = |i: usize, j: usize| (ring(i) + j % cols) as u32;
-    let t = &mut part.triangles;
+    let south = at(PI, 0.0);
+    let v = |i: usize, j: usize| (1 + (i - 1) * cols + j % cols) as u32;
+    let mut t = Vec::with_capacity(2 * rows * cols);
     for j in 0..cols {
         t.push([north, v(1, j), v(1, j + 1)]);
         t.push([v(rows, j), south, v(rows, j + 1)]);
@@ -402,6 +404,24 @@ fn ellipsoid(
             t.push([v(i, j + 1), v(i + 1, j), v(i + 1, j + 1)]);
         }
     }
+    (points, uvs, t)
+}
+
+/// [`ellipsoid_grid`] as a part.
+fn ellipsoid(
+    centre: DVec3,
+    pole: DVec3,
+    e1: DVec3,
+    axes: [f64; 3],
+    rows_cols: (usize, usize),
+    uv: impl Fn(DVec3) -> [f64; 2],
+) -> Part {
+    let (points, uvs, triangles) = ellipsoid_grid(centre, pole, e1, axes, rows_cols, uv);
+    let mut part = Part::default();
+    for (p, uv) in points.into_iter().zip(uvs) {
+        part.vertex(p, uv);
+    }
+    part.triangles = triangles;
     part
 }
 

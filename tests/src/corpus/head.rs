@@ -18,7 +18,7 @@ use std::ops::Range;
 use glam::DVec3;
 
 use crate::creature::CreatureMesh;
-use crate::head::{bump, dir, smooth_normals, smoothstep};
+use crate::head::{bump, dir, ellipsoid_grid, smooth_normals, smoothstep};
 
 /// Resolution of a corpus head.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -431,46 +431,21 @@ fn add_fin(p: &mut Piece) {
     p.triangles.push([t[0], t[1], c]);
 }
 
-/// A closed UV ellipsoid around `centre` with semi-axis `axes[0]` along the
-/// pole axis `pole`, `axes[1]` along `e1` and `axes[2]` along `pole x e1`;
-/// `rows` rings between single pole vertices, `cols` segments, no seam
-/// (`uv` maps a point, relative to the centre, to its UVs). Outward.
+/// [`ellipsoid_grid`] (the legacy head's, outward) as a piece.
 fn ellipsoid(
     centre: DVec3,
     pole: DVec3,
     e1: DVec3,
     axes: [f64; 3],
-    (rows, cols): (usize, usize),
+    rows_cols: (usize, usize),
     uv: impl Fn(DVec3) -> [f64; 2],
 ) -> Piece {
-    let e2 = pole.cross(e1);
-    let mut part = Piece::default();
-    let at = |part: &mut Piece, theta: f64, phi: f64| {
-        let q = pole * (axes[0] * theta.cos())
-            + (e1 * (axes[1] * phi.cos()) + e2 * (axes[2] * phi.sin())) * theta.sin();
-        part.vertex(centre + q, uv(q))
-    };
-    let north = at(&mut part, 0.0, 0.0);
-    for i in 1..=rows {
-        let theta = PI * i as f64 / (rows + 1) as f64;
-        for j in 0..cols {
-            at(&mut part, theta, 2.0 * PI * j as f64 / cols as f64);
-        }
+    let (positions, uvs, triangles) = ellipsoid_grid(centre, pole, e1, axes, rows_cols, uv);
+    Piece {
+        positions,
+        uvs,
+        triangles,
     }
-    let south = at(&mut part, PI, 0.0);
-    let v = |i: usize, j: usize| (1 + (i - 1) * cols + j % cols) as u32;
-    let t = &mut part.triangles;
-    for j in 0..cols {
-        t.push([north, v(1, j), v(1, j + 1)]);
-        t.push([v(rows, j), south, v(rows, j + 1)]);
-    }
-    for i in 1..rows {
-        for j in 0..cols {
-            t.push([v(i, j), v(i + 1, j), v(i, j + 1)]);
-            t.push([v(i, j + 1), v(i + 1, j), v(i + 1, j + 1)]);
-        }
-    }
-    part
 }
 
 /// Eyeball `i` in socket `hole`: a sphere sunk [`EYE_SINK`] below the
